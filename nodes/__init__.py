@@ -1,0 +1,1 @@
+"""Zenroid nodes: the processes of the stack (simulator, controllers, state publisher, tools)."""

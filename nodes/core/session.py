@@ -1,0 +1,89 @@
+"""Zenoh session setup (DESIGN §3): explicit loopback endpoints, multicast scouting off, always closed."""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import zenoh
+
+DEFAULT_PORT = 7447
+ENV_CONNECT = "ZENOH_CONNECT"
+ENV_CONFIG = "ZENOH_CONFIG"
+
+
+def loopback_endpoint(port: int) -> str:
+    return f"tcp/127.0.0.1:{int(port)}"
+
+
+def default_endpoints() -> list[str]:
+    """Endpoints a node connects to: ``ZENOH_CONNECT`` (comma separated) or the local router."""
+    raw = os.environ.get(ENV_CONNECT, "").strip()
+    if raw:
+        return [e.strip() for e in raw.split(",") if e.strip()]
+    return [loopback_endpoint(DEFAULT_PORT)]
+
+
+def external_router_configured() -> bool:
+    """True when the environment points nodes at a router the launcher must not start itself."""
+    return bool(os.environ.get(ENV_CONFIG) or os.environ.get(ENV_CONNECT))
+
+
+def _base_config() -> zenoh.Config:
+    path = os.environ.get(ENV_CONFIG)
+    config = zenoh.Config.from_file(path) if path else zenoh.Config()
+    # Never discover peers by multicast: only the endpoints we are told about.
+    config.insert_json5("scouting/multicast/enabled", "false")
+    return config
+
+
+def peer_config(connect: list[str] | None = None) -> zenoh.Config:
+    """A peer session config that connects to ``connect`` (default: ``default_endpoints()``)."""
+    config = _base_config()
+    if os.environ.get(ENV_CONFIG) and connect is None:
+        return config
+    config.insert_json5("mode", json.dumps("peer"))
+    config.insert_json5("connect/endpoints", json.dumps(connect or default_endpoints()))
+    # Peers learn each other through the router (gossip) and connect directly, but only on loopback:
+    # zenoh's default peer listener binds every interface.
+    config.insert_json5("listen/endpoints", json.dumps(["tcp/127.0.0.1:0"]))
+    return config
+
+
+def router_config(port: int = DEFAULT_PORT, listen: list[str] | None = None) -> zenoh.Config:
+    """A router config listening on loopback ``port`` (or the given endpoints)."""
+    config = zenoh.Config()
+    config.insert_json5("mode", json.dumps("router"))
+    config.insert_json5("listen/endpoints", json.dumps(listen or [loopback_endpoint(port)]))
+    config.insert_json5("connect/endpoints", "[]")
+    config.insert_json5("scouting/multicast/enabled", "false")
+    return config
+
+
+def open_peer(connect: list[str] | None = None) -> zenoh.Session:
+    return zenoh.open(peer_config(connect))
+
+
+def open_router(port: int = DEFAULT_PORT, listen: list[str] | None = None) -> zenoh.Session:
+    """Open an embedded router (what the launcher hosts); close it with ``.close()``."""
+    return zenoh.open(router_config(port, listen))
+
+
+@contextmanager
+def peer_session(connect: list[str] | None = None) -> Iterator[zenoh.Session]:
+    session = open_peer(connect)
+    try:
+        yield session
+    finally:
+        session.close()
+
+
+@contextmanager
+def router_session(port: int = DEFAULT_PORT) -> Iterator[zenoh.Session]:
+    session = open_router(port)
+    try:
+        yield session
+    finally:
+        session.close()

@@ -1,0 +1,1 @@
+"""Command-line tools: the ``zenroid`` verbs (one module each)."""

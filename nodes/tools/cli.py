@@ -1,0 +1,76 @@
+"""``zenroid``: the ROS-style command line (DESIGN §8).
+
+Each verb lives in its own module exposing ``add_arguments(parser)`` and ``run(args) -> int``; modules are
+imported lazily so ``zenroid check_urdf`` never pays for zenoh or DART.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+# verb -> (module, one-line help)
+VERBS: dict[str, tuple[str, str]] = {
+    "launch": ("launch.cli", "run a YAML launch file"),
+    "topic": ("nodes.tools.topic", "list/echo/pub/hz/bw/info/type topics"),
+    "node": ("nodes.tools.node_cmd", "list/info nodes"),
+    "service": ("nodes.tools.service", "list/call services"),
+    "action": ("nodes.tools.action", "list actions, send goals"),
+    "control": ("nodes.tools.control", "controller manager commands and the spawner"),
+    "lifecycle": ("nodes.tools.lifecycle", "get/set lifecycle node states"),
+    "param": ("nodes.tools.param", "list/get/set node parameters"),
+    "spawn": ("nodes.tools.spawn", "spawn an entity in the simulator (spawn_entity.py)"),
+    "sim": ("nodes.tools.sim", "pause/unpause/reset/step/gravity"),
+    "check_urdf": ("nodes.tools.check_urdf", "validate a URDF and print its tree"),
+    "xacro": ("nodes.tools.xacro_cmd", "expand a xacro file to URDF"),
+    "graph": ("nodes.tools.graph", "print the node graph"),
+    "doctor": ("nodes.tools.doctor", "check the installation and the network"),
+    "bag": ("nodes.tools.bag", "record/play/info bags"),
+}
+
+
+class UsageError(Exception):
+    """Bad command-line input: printed as one line, exit status 2."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="zenroid", description="ROS-style tools for the zenroid stack")
+    sub = parser.add_subparsers(dest="verb", metavar="VERB")
+    for verb, (_, help_text) in VERBS.items():
+        sub.add_parser(verb, help=help_text, add_help=False)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] in ("-h", "--help") or argv[0] not in VERBS:
+        parser = build_parser()
+        if argv and argv[0] not in ("-h", "--help"):
+            print(f"zenroid: unknown verb '{argv[0]}' (choose from {', '.join(VERBS)})", file=sys.stderr)
+            return 2
+        parser.print_help()
+        return 0
+    verb, rest = argv[0], argv[1:]
+    module_name, help_text = VERBS[verb]
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as exc:
+        if exc.name and module_name.startswith(exc.name):
+            print(f"zenroid {verb}: not available in this build", file=sys.stderr)
+            return 2
+        raise
+    parser = argparse.ArgumentParser(prog=f"zenroid {verb}", description=help_text)
+    module.add_arguments(parser)
+    try:
+        args = parser.parse_args(rest)
+        return int(module.run(args) or 0)
+    except UsageError as exc:
+        print(f"zenroid {verb}: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
