@@ -1,0 +1,291 @@
+"""Generates the primitive-geometry URDFs in this folder (``python robots/build_robots.py``).
+
+Why a generator: masses, inertias and collision shapes must agree with each other; writing them by hand
+invites copy-paste errors. Inertias come from the solid box / cylinder / sphere formulas, so each link's
+inertia tensor is exactly that of its collision shape at its mass.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+COLOURS: dict[str, tuple[float, float, float, float]] = {
+    "grey": (0.55, 0.57, 0.60, 1.0),
+    "dark": (0.20, 0.22, 0.25, 1.0),
+    "blue": (0.20, 0.40, 0.80, 1.0),
+    "orange": (0.95, 0.55, 0.15, 1.0),
+    "white": (0.92, 0.92, 0.92, 1.0),
+    "red": (0.80, 0.20, 0.20, 1.0),
+    "green": (0.25, 0.70, 0.35, 1.0),
+    "skin": (0.95, 0.80, 0.65, 1.0),
+}
+
+
+def fmt(*values: float) -> str:
+    # Round to 6 decimals and drop "-0" so the files diff cleanly.
+    return " ".join(f"{0.0 if abs(v) < 5e-7 else round(v, 6):g}" for v in values)
+
+
+@dataclass
+class Shape:
+    kind: str  # box | cylinder | sphere
+    dims: tuple[float, ...]  # box (x, y, z); cylinder (radius, length); sphere (radius,)
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def geometry_xml(self) -> str:
+        if self.kind == "box":
+            return f'<box size="{fmt(*self.dims)}"/>'
+        if self.kind == "cylinder":
+            return f'<cylinder radius="{fmt(self.dims[0])}" length="{fmt(self.dims[1])}"/>'
+        return f'<sphere radius="{fmt(self.dims[0])}"/>'
+
+    def inertia(self, mass: float) -> tuple[float, float, float]:
+        """Principal moments (ixx, iyy, izz) of the solid shape in its own frame."""
+        if self.kind == "box":
+            x, y, z = self.dims
+            return (mass / 12 * (y * y + z * z), mass / 12 * (x * x + z * z), mass / 12 * (x * x + y * y))
+        if self.kind == "cylinder":
+            r, h = self.dims
+            side = mass / 12 * (3 * r * r + h * h)
+            return (side, side, mass * r * r / 2)
+        r = self.dims[0]
+        return (0.4 * mass * r * r,) * 3
+
+
+@dataclass
+class Link:
+    name: str
+    mass: float
+    shape: Shape
+    colour: str = "grey"
+
+    def xml(self) -> str:
+        s = self.shape
+        ixx, iyy, izz = s.inertia(self.mass)
+        # Shapes are either unrotated or rotated by ±90° about one axis: permute the moments accordingly.
+        if abs(s.rpy[0]) > 1e-9:  # about x: y <-> z
+            iyy, izz = izz, iyy
+        if abs(s.rpy[1]) > 1e-9:  # about y: x <-> z
+            ixx, izz = izz, ixx
+        origin = f'<origin xyz="{fmt(*s.xyz)}" rpy="{fmt(*s.rpy)}"/>'
+        return (
+            f'  <link name="{self.name}">\n'
+            f"    <inertial>\n"
+            f'      <origin xyz="{fmt(*s.xyz)}" rpy="0 0 0"/>\n'
+            f'      <mass value="{fmt(self.mass)}"/>\n'
+            f'      <inertia ixx="{fmt(ixx)}" ixy="0" ixz="0" iyy="{fmt(iyy)}" iyz="0" izz="{fmt(izz)}"/>\n'
+            f"    </inertial>\n"
+            f"    <visual>\n      {origin}\n      <geometry>{s.geometry_xml()}</geometry>\n"
+            f'      <material name="{self.colour}"/>\n    </visual>\n'
+            f"    <collision>\n      {origin}\n      <geometry>{s.geometry_xml()}</geometry>\n    </collision>\n"
+            f"  </link>\n"
+        )
+
+
+@dataclass
+class Joint:
+    name: str
+    kind: str  # revolute | continuous | fixed | prismatic
+    parent: str
+    child: str
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    lower: float = 0.0
+    upper: float = 0.0
+    effort: float = 0.0
+    velocity: float = 0.0
+    damping: float = 0.0
+    mimic: tuple[str, float, float] | None = None
+
+    def xml(self) -> str:
+        lines = [
+            f'  <joint name="{self.name}" type="{self.kind}">',
+            f'    <parent link="{self.parent}"/>',
+            f'    <child link="{self.child}"/>',
+            f'    <origin xyz="{fmt(*self.xyz)}" rpy="{fmt(*self.rpy)}"/>',
+        ]
+        if self.kind != "fixed":
+            lines.append(f'    <axis xyz="{fmt(*self.axis)}"/>')
+            if self.kind == "continuous":
+                lines.append(f'    <limit effort="{fmt(self.effort)}" velocity="{fmt(self.velocity)}"/>')
+            else:
+                lines.append(
+                    f'    <limit lower="{fmt(self.lower)}" upper="{fmt(self.upper)}" '
+                    f'effort="{fmt(self.effort)}" velocity="{fmt(self.velocity)}"/>'
+                )
+            if self.damping:
+                lines.append(f'    <dynamics damping="{fmt(self.damping)}" friction="0"/>')
+        if self.mimic:
+            joint, multiplier, offset = self.mimic
+            lines.append(f'    <mimic joint="{joint}" multiplier="{fmt(multiplier)}" offset="{fmt(offset)}"/>')
+        lines.append("  </joint>\n")
+        return "\n".join(lines)
+
+
+@dataclass
+class Robot:
+    name: str
+    header: str
+    links: list[Link] = field(default_factory=list)
+    joints: list[Joint] = field(default_factory=list)
+    ros2_control_joints: list[str] = field(default_factory=list)
+
+    def add(self, link: Link, joint: Joint | None = None) -> None:
+        self.links.append(link)
+        if joint is not None:
+            self.joints.append(joint)
+
+    def total_mass(self) -> float:
+        return sum(link.mass for link in self.links)
+
+    def xml(self) -> str:
+        used = sorted({link.colour for link in self.links})
+        out = ['<?xml version="1.0"?>', f"<!-- {self.header.strip()} -->", f'<robot name="{self.name}">', ""]
+        out += [f'  <material name="{c}"><color rgba="{fmt(*COLOURS[c])}"/></material>' for c in used]
+        out.append("")
+        for link in self.links:
+            out.append(link.xml())
+        for joint in self.joints:
+            out.append(joint.xml())
+        if self.ros2_control_joints:
+            out.append('  <ros2_control name="GazeboSystem" type="system">')
+            out.append("    <hardware>\n      <plugin>gazebo_ros2_control/GazeboSystem</plugin>\n    </hardware>")
+            for name in self.ros2_control_joints:
+                out.append(
+                    f'    <joint name="{name}">\n'
+                    '      <command_interface name="position"/>\n'
+                    '      <state_interface name="position"/>\n'
+                    '      <state_interface name="velocity"/>\n'
+                    "    </joint>"
+                )
+            out.append("  </ros2_control>\n")
+            out.append(
+                '  <gazebo>\n    <plugin filename="libgazebo_ros2_control.so" name="gazebo_ros2_control">\n'
+                "      <robot_param>robot_description</robot_param>\n"
+                "      <robot_param_node>robot_state_publisher</robot_param_node>\n"
+                "    </plugin>\n  </gazebo>\n"
+            )
+        out.append("</robot>\n")
+        return "\n".join(out)
+
+
+def box(x: float, y: float, z: float, at=(0.0, 0.0, 0.0)) -> Shape:
+    return Shape("box", (x, y, z), tuple(at))
+
+
+def cyl(radius: float, length: float, at=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> Shape:
+    return Shape("cylinder", (radius, length), tuple(at), tuple(rpy))
+
+
+def sphere(radius: float, at=(0.0, 0.0, 0.0)) -> Shape:
+    return Shape("sphere", (radius,), tuple(at))
+
+
+# --------------------------------------------------------------------------------------------- humanoid
+# Geometry (metres) of the main humanoid. Legs hang straight at zero pose; the sole is flat.
+HIP_Y, HIP_DROP, HIP_ROLL_DROP = 0.10, 0.10, 0.05
+THIGH, SHIN = 0.35, 0.35
+ANKLE_TO_SOLE = 0.06
+FOOT = (0.22, 0.10, 0.04)
+STANDING_PELVIS_HEIGHT = HIP_DROP + HIP_ROLL_DROP + THIGH + SHIN + ANKLE_TO_SOLE
+
+
+def humanoid() -> Robot:
+    r = Robot(
+        "humanoid",
+        f"22-joint primitive humanoid (floating base, root link pelvis). x forward, y left, z up. "
+        f"Standing pelvis height at zero pose (soles flat on z=0): {STANDING_PELVIS_HEIGHT:.3f} m. "
+        "Pitch axes are +y, so hip_pitch -0.2, knee +0.4, ankle_pitch -0.2 is a slight squat. "
+        "Generated by robots/build_robots.py: edit that, not this file.",
+    )
+    r.add(Link("pelvis", 8.0, box(0.16, 0.26, 0.12), "dark"))
+    r.add(
+        Link("torso", 14.0, box(0.18, 0.30, 0.35, at=(0, 0, 0.215)), "blue"),
+        Joint("waist_yaw", "revolute", "pelvis", "torso", (0, 0, 0.06), axis=(0, 0, 1),
+              lower=-1.0, upper=1.0, effort=150, velocity=6.0, damping=0.5),
+    )
+    r.add(
+        Link("head", 3.0, sphere(0.10, at=(0, 0, 0.12)), "skin"),
+        Joint("neck_pitch", "revolute", "torso", "head", (0, 0, 0.40), axis=(0, 1, 0),
+              lower=-0.8, upper=0.8, effort=20, velocity=6.0, damping=0.1),
+    )
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        leg_damping = 1.0
+        r.add(
+            Link(f"{side}_hip_yaw_link", 1.0, cyl(0.045, 0.05, at=(0, 0, -0.025)), "grey"),
+            Joint(f"{side}_hip_yaw", "revolute", "pelvis", f"{side}_hip_yaw_link", (0, sign * HIP_Y, -HIP_DROP + 0.04),
+                  axis=(0, 0, 1), lower=-0.8, upper=0.8, effort=150, velocity=10.0, damping=leg_damping),
+        )
+        # The hip_yaw joint sits 0.04 m below the pelvis origin... plus the 0.06 pelvis half-height,
+        # so the hip pitch/roll centre is HIP_DROP + HIP_ROLL_DROP below the pelvis origin.
+        r.add(
+            Link(f"{side}_hip_roll_link", 1.0, cyl(0.045, 0.08, at=(0, 0, 0), rpy=(0, math.pi / 2, 0)), "grey"),
+            Joint(f"{side}_hip_roll", "revolute", f"{side}_hip_yaw_link", f"{side}_hip_roll_link",
+                  (0, 0, -HIP_ROLL_DROP - 0.04), axis=(1, 0, 0), lower=-0.5, upper=0.5, effort=250,
+                  velocity=10.0, damping=leg_damping),
+        )
+        r.add(
+            Link(f"{side}_thigh", 5.0, cyl(0.055, THIGH - 0.04, at=(0, 0, -THIGH / 2)), "white"),
+            Joint(f"{side}_hip_pitch", "revolute", f"{side}_hip_roll_link", f"{side}_thigh", (0, 0, 0),
+                  axis=(0, 1, 0), lower=-2.0, upper=0.7, effort=250, velocity=10.0, damping=leg_damping),
+        )
+        r.add(
+            Link(f"{side}_shin", 3.0, cyl(0.045, SHIN - 0.04, at=(0, 0, -SHIN / 2)), "white"),
+            Joint(f"{side}_knee", "revolute", f"{side}_thigh", f"{side}_shin", (0, 0, -THIGH),
+                  axis=(0, 1, 0), lower=-0.05, upper=2.4, effort=300, velocity=10.0, damping=leg_damping),
+        )
+        r.add(
+            Link(f"{side}_ankle_pitch_link", 0.5, sphere(0.035), "grey"),
+            Joint(f"{side}_ankle_pitch", "revolute", f"{side}_shin", f"{side}_ankle_pitch_link", (0, 0, -SHIN),
+                  axis=(0, 1, 0), lower=-0.9, upper=0.9, effort=150, velocity=10.0, damping=leg_damping),
+        )
+        r.add(
+            Link(f"{side}_foot", 1.2, box(*FOOT, at=(0.03, 0, -ANKLE_TO_SOLE + FOOT[2] / 2)), "orange"),
+            Joint(f"{side}_ankle_roll", "revolute", f"{side}_ankle_pitch_link", f"{side}_foot", (0, 0, 0),
+                  axis=(1, 0, 0), lower=-0.4, upper=0.4, effort=150, velocity=10.0, damping=leg_damping),
+        )
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        r.add(
+            Link(f"{side}_shoulder_pitch_link", 0.5, sphere(0.045), "grey"),
+            Joint(f"{side}_shoulder_pitch", "revolute", "torso", f"{side}_shoulder_pitch_link",
+                  (0, sign * 0.21, 0.33), axis=(0, 1, 0), lower=-3.0, upper=1.2, effort=60, velocity=8.0,
+                  damping=0.2),
+        )
+        r.add(
+            Link(f"{side}_shoulder_roll_link", 0.5, cyl(0.04, 0.06, at=(0, 0, -0.03)), "grey"),
+            Joint(f"{side}_shoulder_roll", "revolute", f"{side}_shoulder_pitch_link", f"{side}_shoulder_roll_link",
+                  (0, 0, 0), axis=(1, 0, 0), lower=-0.5 if sign > 0 else -2.5, upper=2.5 if sign > 0 else 0.5,
+                  effort=60, velocity=8.0, damping=0.2),
+        )
+        r.add(
+            Link(f"{side}_upper_arm", 2.0, cyl(0.04, 0.22, at=(0, 0, -0.14)), "white"),
+            Joint(f"{side}_shoulder_yaw", "revolute", f"{side}_shoulder_roll_link", f"{side}_upper_arm",
+                  (0, 0, -0.06), axis=(0, 0, 1), lower=-1.5, upper=1.5, effort=40, velocity=8.0, damping=0.2),
+        )
+        r.add(
+            Link(f"{side}_forearm", 1.5, cyl(0.035, 0.25, at=(0, 0, -0.125)), "white"),
+            Joint(f"{side}_elbow", "revolute", f"{side}_upper_arm", f"{side}_forearm", (0, 0, -0.28),
+                  axis=(0, 1, 0), lower=-2.5, upper=0.5, effort=40, velocity=8.0, damping=0.2),
+        )
+    r.ros2_control_joints = [j.name for j in r.joints if j.kind != "fixed"]
+    return r
+
+
+BUILDERS = {"humanoid": humanoid}
+
+
+def main() -> None:
+    for name, build in BUILDERS.items():
+        robot = build()
+        (HERE / f"{name}.urdf").write_text(robot.xml())
+        print(f"{name}.urdf: {len(robot.links)} links, {len(robot.joints)} joints, {robot.total_mass():.1f} kg")
+
+
+if __name__ == "__main__":
+    main()
