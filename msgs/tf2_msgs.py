@@ -1,0 +1,14 @@
+"""Message types of the ROS package ``tf2_msgs`` (``from msgs.tf2_msgs import Name``)."""
+
+from typing import Any
+
+from msgs.registry import get_type
+
+
+def __getattr__(name: str) -> Any:
+    if name.startswith("_"):
+        raise AttributeError(name)
+    try:
+        return get_type("tf2_msgs/" + name)
+    except KeyError as exc:
+        raise AttributeError(str(exc)) from None

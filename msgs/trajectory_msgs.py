@@ -1,0 +1,14 @@
+"""Message types of the ROS package ``trajectory_msgs`` (``from msgs.trajectory_msgs import Name``)."""
+
+from typing import Any
+
+from msgs.registry import get_type
+
+
+def __getattr__(name: str) -> Any:
+    if name.startswith("_"):
+        raise AttributeError(name)
+    try:
+        return get_type("trajectory_msgs/" + name)
+    except KeyError as exc:
+        raise AttributeError(str(exc)) from None
