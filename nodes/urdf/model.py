@@ -1,0 +1,267 @@
+"""A small, strict URDF model: links, joints, inertials, mimic and the ``<ros2_control>`` block.
+
+Why our own parser (and not only yourdfpy): the CLI must report *why* a broken file is broken (missing links,
+bad numbers, limits), the input may be untrusted (entity attacks), and the kinematics code needs exactly the
+joint origins/axes/mimic data in plain numpy form. Structural checks live in ``validate``; this module only
+refuses what it cannot represent (bad numbers, unknown joint types, missing required elements).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from lxml import etree
+
+from nodes.urdf.xml_safety import UnsafeXmlError, parse_xml
+
+JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+MOVABLE_TYPES = ("revolute", "continuous", "prismatic")
+
+
+class UrdfError(ValueError):
+    """The robot description cannot be parsed; the message names the element and the reason."""
+
+
+@dataclass
+class Inertial:
+    mass: float
+    origin: np.ndarray  # 4x4, centre of mass frame in the link frame
+    inertia: np.ndarray  # 3x3 symmetric, about the centre of mass
+
+
+@dataclass
+class Link:
+    name: str
+    inertial: Inertial | None = None
+    has_visual: bool = False
+    has_collision: bool = False
+
+
+@dataclass
+class Mimic:
+    joint: str
+    multiplier: float = 1.0
+    offset: float = 0.0
+
+
+@dataclass
+class Joint:
+    name: str
+    type: str
+    parent: str
+    child: str
+    origin: np.ndarray  # 4x4 parent link frame -> joint frame at q = 0
+    axis: np.ndarray  # unit 3-vector in the joint frame
+    lower: float | None = None
+    upper: float | None = None
+    effort: float | None = None
+    velocity: float | None = None
+    mimic: Mimic | None = None
+
+    @property
+    def movable(self) -> bool:
+        return self.type in MOVABLE_TYPES
+
+
+@dataclass
+class Ros2ControlJoint:
+    name: str
+    command_interfaces: list[str]
+    state_interfaces: list[str]
+    params: dict[str, dict[str, str]] = field(default_factory=dict)  # interface -> {param: value}
+
+
+@dataclass
+class RobotModel:
+    name: str
+    links: dict[str, Link]
+    joints: dict[str, Joint]
+    ros2_control: list[Ros2ControlJoint] = field(default_factory=list)
+    duplicate_links: list[str] = field(default_factory=list)
+    duplicate_joints: list[str] = field(default_factory=list)
+
+    def roots(self) -> list[str]:
+        children = {j.child for j in self.joints.values()}
+        return [name for name in self.links if name not in children]
+
+    @property
+    def root(self) -> str:
+        roots = self.roots()
+        if len(roots) != 1:
+            raise UrdfError(f"robot '{self.name}' has {len(roots)} root links ({', '.join(roots) or 'none'})")
+        return roots[0]
+
+    def children_of(self, link: str) -> list[Joint]:
+        return [j for j in self.joints.values() if j.parent == link]
+
+    def movable_joints(self) -> list[Joint]:
+        return [j for j in self.joints.values() if j.movable]
+
+    def total_mass(self) -> float:
+        return sum(link.inertial.mass for link in self.links.values() if link.inertial)
+
+
+def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """URDF fixed-axis rpy: R = Rz(yaw) @ Ry(pitch) @ Rx(roll)."""
+    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch),
+                              math.cos(yaw), math.sin(yaw))
+    return np.array([
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ])
+
+
+def _where(element: etree._Element) -> str:
+    tag = element.tag
+    name = element.get("name")
+    line = f" (line {element.sourceline})" if element.sourceline else ""
+    return f"<{tag} name='{name}'>{line}" if name is not None else f"<{tag}>{line}"
+
+
+def _floats(element: etree._Element, attribute: str, count: int, default: str | None, owner: str) -> list[float]:
+    text = element.get(attribute, default)
+    if text is None:
+        raise UrdfError(f"{owner}: <{element.tag}> is missing attribute '{attribute}'")
+    parts = text.split()
+    if len(parts) != count:
+        raise UrdfError(f"{owner}: <{element.tag} {attribute}='{text}'> needs {count} numbers, got {len(parts)}")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise UrdfError(f"{owner}: <{element.tag} {attribute}='{text}'> is not a number") from None
+    if not all(math.isfinite(v) for v in values):
+        raise UrdfError(f"{owner}: <{element.tag} {attribute}='{text}'> is not finite")
+    return values
+
+
+def _origin(parent: etree._Element, owner: str) -> np.ndarray:
+    transform = np.eye(4)
+    element = parent.find("origin")
+    if element is not None:
+        transform[:3, 3] = _floats(element, "xyz", 3, "0 0 0", owner)
+        transform[:3, :3] = rpy_matrix(*_floats(element, "rpy", 3, "0 0 0", owner))
+    return transform
+
+
+def _parse_inertial(element: etree._Element, owner: str) -> Inertial:
+    mass_el = element.find("mass")
+    if mass_el is None:
+        raise UrdfError(f"{owner}: <inertial> has no <mass>")
+    mass = _floats(mass_el, "value", 1, None, owner)[0]
+    inertia = np.zeros((3, 3))
+    inertia_el = element.find("inertia")
+    if inertia_el is None:
+        raise UrdfError(f"{owner}: <inertial> has no <inertia>")
+    values = {k: _floats(inertia_el, k, 1, "0", owner)[0] for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+    inertia[0, 0], inertia[1, 1], inertia[2, 2] = values["ixx"], values["iyy"], values["izz"]
+    inertia[0, 1] = inertia[1, 0] = values["ixy"]
+    inertia[0, 2] = inertia[2, 0] = values["ixz"]
+    inertia[1, 2] = inertia[2, 1] = values["iyz"]
+    return Inertial(mass=mass, origin=_origin(element, owner), inertia=inertia)
+
+
+def _parse_joint(element: etree._Element) -> Joint:
+    owner = f"joint '{element.get('name')}'"
+    joint_type = element.get("type")
+    if joint_type not in JOINT_TYPES:
+        raise UrdfError(f"{owner}: unknown type '{joint_type}' (expected one of {', '.join(JOINT_TYPES)})")
+    ends: dict[str, str] = {}
+    for end in ("parent", "child"):
+        end_el = element.find(end)
+        if end_el is None or not end_el.get("link"):
+            raise UrdfError(f"{owner}: missing <{end} link='...'>")
+        ends[end] = end_el.get("link")
+    axis = np.array([1.0, 0.0, 0.0])
+    axis_el = element.find("axis")
+    if axis_el is not None:
+        axis = np.array(_floats(axis_el, "xyz", 3, None, owner))
+    norm = float(np.linalg.norm(axis))
+    if joint_type in MOVABLE_TYPES and norm < 1e-12:
+        raise UrdfError(f"{owner}: <axis xyz> is the zero vector")
+    if norm > 0:
+        axis = axis / norm
+    joint = Joint(element.get("name"), joint_type, ends["parent"], ends["child"], _origin(element, owner), axis)
+    limit = element.find("limit")
+    if limit is not None:
+        joint.lower = _floats(limit, "lower", 1, "0", owner)[0]
+        joint.upper = _floats(limit, "upper", 1, "0", owner)[0]
+        joint.effort = _floats(limit, "effort", 1, None, owner)[0] if limit.get("effort") is not None else None
+        joint.velocity = (
+            _floats(limit, "velocity", 1, None, owner)[0] if limit.get("velocity") is not None else None
+        )
+        if joint_type == "continuous":
+            joint.lower = joint.upper = None
+    elif joint_type in ("revolute", "prismatic"):
+        raise UrdfError(f"{owner}: a {joint_type} joint needs a <limit> element")
+    mimic = element.find("mimic")
+    if mimic is not None:
+        if not mimic.get("joint"):
+            raise UrdfError(f"{owner}: <mimic> has no joint attribute")
+        joint.mimic = Mimic(
+            mimic.get("joint"),
+            _floats(mimic, "multiplier", 1, "1", owner)[0],
+            _floats(mimic, "offset", 1, "0", owner)[0],
+        )
+    return joint
+
+
+def _parse_ros2_control(root: etree._Element) -> list[Ros2ControlJoint]:
+    out: list[Ros2ControlJoint] = []
+    for block in root.findall("ros2_control"):
+        for joint_el in block.findall("joint"):
+            params: dict[str, dict[str, str]] = {}
+            commands = []
+            for ci in joint_el.findall("command_interface"):
+                commands.append(ci.get("name", ""))
+                params[ci.get("name", "")] = {p.get("name", ""): (p.text or "").strip() for p in ci.findall("param")}
+            states = [si.get("name", "") for si in joint_el.findall("state_interface")]
+            out.append(Ros2ControlJoint(joint_el.get("name", ""), commands, states, params))
+    return out
+
+
+def parse_urdf(xml: str | bytes) -> RobotModel:
+    """Parse URDF text into a RobotModel; raises UrdfError naming the element and the reason."""
+    try:
+        root = parse_xml(xml)
+    except UnsafeXmlError as exc:
+        raise UrdfError(str(exc)) from None
+    except ValueError as exc:
+        raise UrdfError(str(exc)) from None
+    if root.tag != "robot":
+        raise UrdfError(f"root element is <{root.tag}>, expected <robot>")
+    name = root.get("name")
+    if not name:
+        raise UrdfError("<robot> has no name attribute")
+    links: dict[str, Link] = {}
+    joints: dict[str, Joint] = {}
+    duplicate_links: list[str] = []
+    duplicate_joints: list[str] = []
+    for element in root.findall("link"):
+        link_name = element.get("name")
+        if not link_name:
+            raise UrdfError(f"{_where(element)}: link without a name")
+        if link_name in links:
+            duplicate_links.append(link_name)
+            continue
+        inertial_el = element.find("inertial")
+        owner = f"link '{link_name}'"
+        links[link_name] = Link(
+            link_name,
+            _parse_inertial(inertial_el, owner) if inertial_el is not None else None,
+            element.find("visual") is not None,
+            element.find("collision") is not None,
+        )
+    for element in root.findall("joint"):
+        if not element.get("name"):
+            raise UrdfError(f"{_where(element)}: joint without a name")
+        joint = _parse_joint(element)
+        if joint.name in joints:
+            duplicate_joints.append(joint.name)
+            continue
+        joints[joint.name] = joint
+    if not links:
+        raise UrdfError(f"robot '{name}' has no links")
+    return RobotModel(name, links, joints, _parse_ros2_control(root), duplicate_links, duplicate_joints)
