@@ -1,0 +1,133 @@
+"""Simulator settings that are more than scalars: per-joint gains and the entities to spawn at start.
+
+Both come from node parameters (``config/sim.yaml`` is a ROS params file) and are validated here so a
+bad file fails with the parameter path and the reason instead of a traceback deep in DART.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from nodes.core.paths import CONFIG_DIR, ROBOTS_DIR
+from nodes.sim.hardware import Gains
+
+DEFAULT_CONFIG = CONFIG_DIR / "sim.yaml"
+# Used when no pattern matches: stiff enough to hold the humanoid's legs (FACTS: Kp ~1000+ on legs).
+FALLBACK_GAINS = Gains(kp=2000.0, kd=20.0)
+
+
+class ConfigError(ValueError):
+    """A simulator setting that cannot be used; the message names it."""
+
+
+def _number(where: str, value: Any, minimum: float = 0.0) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ConfigError(f"{where}: expected a finite number, got {value!r}")
+    if value < minimum:
+        raise ConfigError(f"{where}: must be >= {minimum}, got {value}")
+    return float(value)
+
+
+def parse_gains(table: Mapping[str, Any] | None) -> Callable[[str], Gains]:
+    """``{pattern: {p: .., d: ..}}`` → a lookup; the first pattern (fnmatch) matching a joint wins."""
+    rules: list[tuple[str, Gains]] = []
+    for pattern, entry in (table or {}).items():
+        where = f"gains.{pattern}"
+        if not isinstance(entry, Mapping):
+            raise ConfigError(f"{where}: expected a map with p and d, got {entry!r}")
+        unknown = set(entry) - {"p", "d"}
+        if unknown:
+            raise ConfigError(f"{where}: unknown keys {sorted(unknown)} (use p and d)")
+        if "p" not in entry:
+            raise ConfigError(f"{where}: missing p")
+        rules.append((str(pattern), Gains(_number(f"{where}.p", entry["p"]), _number(f"{where}.d", entry.get("d", 0.0)))))
+
+    def gains_for(joint: str) -> Gains:
+        for pattern, gains in rules:
+            if fnmatch.fnmatchcase(joint, pattern):
+                return gains
+        return FALLBACK_GAINS
+
+    return gains_for
+
+
+@dataclass
+class StartupEntity:
+    """One entry of the ``entities`` parameter: what to spawn when the simulator starts."""
+
+    name: str
+    file: str = ""
+    topic: str = ""
+    namespace: str = ""
+    xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    fixed: bool = False
+    joints: dict[str, float] = field(default_factory=dict)
+
+
+ENTITY_KEYS = {"name", "file", "topic", "namespace", "x", "y", "z", "R", "P", "Y", "fixed", "joints"}
+
+
+def parse_entities(items: Any) -> list[StartupEntity]:
+    if items in (None, ""):
+        return []
+    if not isinstance(items, list):
+        raise ConfigError(f"entities: expected a list, got {items!r}")
+    result: list[StartupEntity] = []
+    for i, item in enumerate(items):
+        where = f"entities[{i}]"
+        if not isinstance(item, Mapping):
+            raise ConfigError(f"{where}: expected a map, got {item!r}")
+        unknown = set(item) - ENTITY_KEYS
+        if unknown:
+            raise ConfigError(f"{where}: unknown keys {sorted(unknown)} (allowed: {sorted(ENTITY_KEYS)})")
+        name = item.get("name")
+        if not isinstance(name, str) or not name:
+            raise ConfigError(f"{where}.name: required, a non-empty string")
+        file, topic = str(item.get("file") or ""), str(item.get("topic") or "")
+        if bool(file) == bool(topic):
+            raise ConfigError(f"{where}: give exactly one of file and topic")
+        coords = [_number(f"{where}.{k}", item.get(k, 0.0), -math.inf) for k in ("x", "y", "z", "R", "P", "Y")]
+        joints = item.get("joints") or {}
+        if not isinstance(joints, Mapping):
+            raise ConfigError(f"{where}.joints: expected a map joint -> position, got {joints!r}")
+        fixed = item.get("fixed", False)
+        if not isinstance(fixed, bool):
+            raise ConfigError(f"{where}.fixed: expected true or false, got {fixed!r}")
+        result.append(StartupEntity(
+            name=name, file=file, topic=topic, namespace=str(item.get("namespace") or ""),
+            xyz=tuple(coords[:3]), rpy=tuple(coords[3:]), fixed=fixed,  # type: ignore[arg-type]
+            joints={str(k): _number(f"{where}.joints.{k}", v, -math.inf) for k, v in joints.items()},
+        ))
+    return result
+
+
+def resolve_robot_file(file: str) -> Path:
+    """A path as given, else a robot name from ``robots/`` (``humanoid`` → robots/humanoid.urdf)."""
+    path = Path(file).expanduser()
+    if path.is_file():
+        return path.resolve()
+    for candidate in (ROBOTS_DIR / file, ROBOTS_DIR / f"{file}.urdf", ROBOTS_DIR / f"{file}.urdf.xacro"):
+        if candidate.is_file():
+            return candidate
+    raise ConfigError(f"robot file {file!r} not found (neither a path nor a robot in {ROBOTS_DIR})")
+
+
+def read_robot_xml(path: Path) -> str:
+    """URDF text of a file; xacro files are expanded first."""
+    if path.name.endswith(".xacro"):
+        import xacro  # only needed for xacro sources
+
+        try:
+            return xacro.process_file(str(path)).toprettyxml(indent="  ")
+        except Exception as exc:  # xacro raises many exception types; report them uniformly
+            raise ConfigError(f"{path}: xacro failed: {exc}") from None
+    try:
+        return path.read_text()
+    except OSError as exc:
+        raise ConfigError(f"{path}: {exc.strerror}") from None

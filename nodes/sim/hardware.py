@@ -1,0 +1,208 @@
+"""The hardware interface of one robot: command/state interfaces per joint, limits, and the joint servo.
+
+Position commands are tracked with DART's implicit joint springs (stiffness = kp, damping = kd, rest
+position = target): integrated implicitly they stay stable at gains where an explicit PD diverged
+(FACTS). The spring torque is kept inside the URDF effort limit by moving the rest position no further
+than effort/kp from the current position. Velocity commands use DART's SERVO actuator (a velocity
+constraint bounded by the effort limit), effort commands a clamped FORCE. Velocity limits are enforced
+after each step, position limits by DART's joint limit constraint.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import dartpy as dart
+import numpy as np
+
+from nodes.sim.entity import Entity
+from nodes.sim.urdf_info import INTERFACES
+
+# Stand-in for an infinite effort limit where DART needs a number (SERVO force bounds).
+UNLIMITED_EFFORT = 1e6
+
+
+@dataclass(frozen=True)
+class Gains:
+    kp: float
+    kd: float
+
+
+class CommandError(ValueError):
+    """A hardware command that cannot be applied at all (wrong lengths, unknown interface...)."""
+
+
+class HardwareInterface:
+    """Joints of one entity in URDF order, their active command interface and current command."""
+
+    def __init__(self, entity: Entity, gains_for: Callable[[str], Gains],
+                 warn_once: Callable[[str], None] | None = None) -> None:
+        self.entity = entity
+        self.skeleton = entity.skeleton
+        self.joints = entity.info.joints
+        self.names = [j.name for j in self.joints]
+        self.index = {name: i for i, name in enumerate(self.names)}
+        self.dofs = np.array([entity.dof_index[name] for name in self.names], dtype=int)
+        self.dart_joints = [self.skeleton.getJoint(name) for name in self.names]
+        self.gains = [gains_for(name) for name in self.names]
+        self._warn_once = warn_once or (lambda message: None)
+        self._warned: set[str] = set()
+        n = len(self.names)
+        self.max_velocity = np.array([j.max_velocity for j in self.joints])
+        self.max_effort = np.array([j.max_effort for j in self.joints])
+        self.kp = np.array([g.kp for g in self.gains])
+        self.kd = np.array([g.kd for g in self.gains])
+        self.position_bounds = np.array([j.bounds("position") for j in self.joints]).reshape(n, 2)
+        self.mode: list[str] = ["position"] * n
+        self.target = np.zeros(n)          # command value per joint, in its active interface's unit
+        self._rest = np.full(n, np.nan)    # rest positions last given to DART (skip redundant calls)
+        self.last_effort = np.zeros(n)
+        self.hold_position()
+
+    # -- state ------------------------------------------------------------------------------------------
+    def positions(self) -> np.ndarray:
+        return np.asarray(self.skeleton.getPositions())[self.dofs]
+
+    def velocities(self) -> np.ndarray:
+        return np.asarray(self.skeleton.getVelocities())[self.dofs]
+
+    def efforts(self) -> np.ndarray:
+        return self.last_effort.copy()
+
+    # -- commands ---------------------------------------------------------------------------------------
+    def hold_position(self) -> None:
+        """Every joint back to position control at its current position (no controller / timeout)."""
+        current = self.positions()
+        for i in range(len(self.names)):
+            self._set_mode(i, "position")
+        self.target = np.clip(current, self.position_bounds[:, 0], self.position_bounds[:, 1])
+
+    def _warn(self, key: str, message: str) -> None:
+        if key not in self._warned:
+            self._warned.add(key)
+            self._warn_once(message)
+
+    def apply_command(self, names: Sequence[str], interfaces: Sequence[str], values: Sequence[float]) -> int:
+        """Take a HardwareCommand; returns how many entries were applied.
+
+        Entries with an unknown joint, an interface the joint does not have, or a non-finite value are
+        skipped (logged once each); values outside the limits are clamped (logged once per joint).
+        """
+        if not (len(names) == len(interfaces) == len(values)):
+            raise CommandError(f"name ({len(names)}), interface ({len(interfaces)}) and value ({len(values)}) "
+                               "must have the same length")
+        applied = 0
+        for name, interface, value in zip(names, interfaces, values, strict=True):
+            i = self.index.get(name)
+            if i is None:
+                self._warn(f"unknown:{name}", f"{self.entity.name}: command for unknown joint {name!r} ignored")
+                continue
+            joint = self.joints[i]
+            if interface not in joint.command_interfaces:
+                self._warn(f"iface:{name}:{interface}",
+                           f"{self.entity.name}: joint {name!r} has no {interface!r} command interface "
+                           f"(has {joint.command_interfaces}); command ignored")
+                continue
+            if not isinstance(value, (int, float)) or not math.isfinite(value):
+                self._warn(f"nan:{name}", f"{self.entity.name}: non-finite {interface} command {value!r} "
+                                          f"for joint {name!r} rejected")
+                continue
+            lo, hi = joint.bounds(interface)
+            if not lo <= value <= hi:
+                self._warn(f"range:{name}:{interface}",
+                           f"{self.entity.name}: {interface} command {value:.4g} for joint {name!r} is outside "
+                           f"[{lo:.4g}, {hi:.4g}]; clamped")
+                value = min(max(value, lo), hi)
+            if self.mode[i] != interface:
+                self._set_mode(i, interface)
+            self.target[i] = float(value)
+            applied += 1
+        return applied
+
+    def _set_mode(self, i: int, interface: str) -> None:
+        assert interface in INTERFACES
+        joint = self.dart_joints[i]
+        if interface == "position":
+            joint.setActuatorType(dart.dynamics.ActuatorType.FORCE)
+            joint.setSpringStiffness(0, float(self.kp[i]))
+            joint.setDampingCoefficient(0, float(self.kd[i]))
+        elif interface == "velocity":
+            joint.setActuatorType(dart.dynamics.ActuatorType.SERVO)
+            limit = min(float(self.max_effort[i]), UNLIMITED_EFFORT)
+            joint.setForceLowerLimit(0, -limit)
+            joint.setForceUpperLimit(0, limit)
+            joint.setSpringStiffness(0, 0.0)
+            joint.setDampingCoefficient(0, 0.0)
+        else:
+            joint.setActuatorType(dart.dynamics.ActuatorType.FORCE)
+            joint.setSpringStiffness(0, 0.0)
+            joint.setDampingCoefficient(0, 0.0)
+        self._rest[i] = np.nan
+        self.mode[i] = interface
+
+    # -- physics-rate servo -----------------------------------------------------------------------------
+    def before_step(self) -> None:
+        """Feed the current commands to DART (forces and servo commands are cleared by every step)."""
+        q = self.positions()
+        qd = self.velocities()
+        for i, mode in enumerate(self.mode):
+            dof = int(self.dofs[i])
+            if mode == "position":
+                kp = self.kp[i]
+                # keep |kp * (rest - q)| within the effort limit: the spring itself is not clamped by DART
+                reach = self.max_effort[i] / kp if kp > 0 else math.inf
+                rest = min(max(self.target[i], q[i] - reach), q[i] + reach)
+                if rest != self._rest[i]:
+                    self.dart_joints[i].setRestPosition(0, float(rest))
+                    self._rest[i] = rest
+                self.last_effort[i] = kp * (rest - q[i]) - self.kd[i] * qd[i]
+            elif mode == "velocity":
+                self.skeleton.setCommand(dof, float(self.target[i]))
+                self.last_effort[i] = 0.0
+            else:
+                self.skeleton.setForce(dof, float(self.target[i]))
+                self.last_effort[i] = self.target[i]
+
+    def after_step(self) -> None:
+        """Enforce the URDF velocity limits, which DART ignores."""
+        qd = self.velocities()
+        too_fast = np.abs(qd) > self.max_velocity
+        if np.any(too_fast):
+            for i in np.nonzero(too_fast)[0]:
+                self.skeleton.setVelocity(int(self.dofs[i]), float(np.sign(qd[i]) * self.max_velocity[i]))
+
+    # -- kinematic mode ---------------------------------------------------------------------------------
+    def set_kinematic(self, dt: float) -> None:
+        """No dynamics: joints jump to their position commands (clamped); velocities are the finite difference."""
+        q = self.positions()
+        new_q = q.copy()
+        for i, mode in enumerate(self.mode):
+            if mode == "position":
+                new_q[i] = self.target[i]
+            elif mode == "velocity":
+                new_q[i] = q[i] + self.target[i] * dt
+        new_q = np.clip(new_q, self.position_bounds[:, 0], self.position_bounds[:, 1])
+        positions = np.array(self.skeleton.getPositions())
+        velocities = np.zeros(self.skeleton.getNumDofs())
+        positions[self.dofs] = new_q
+        velocities[self.dofs] = (new_q - q) / dt if dt > 0 else 0.0
+        self.skeleton.setPositions(positions)
+        self.skeleton.setVelocities(velocities)
+        self.last_effort[:] = 0.0
+
+    def joint_table(self) -> list[dict]:
+        """The ``hardware/info`` joint list (infinite limits as ±inf are replaced by 0 = "none")."""
+        rows = []
+        for joint in self.joints:
+            rows.append({
+                "name": joint.name,
+                "command_interfaces": list(joint.command_interfaces),
+                "state_interfaces": list(joint.state_interfaces),
+                "min_position": joint.bounds("position")[0] if math.isfinite(joint.lower) else 0.0,
+                "max_position": joint.bounds("position")[1] if math.isfinite(joint.upper) else 0.0,
+                "max_velocity": joint.max_velocity if math.isfinite(joint.max_velocity) else 0.0,
+                "max_effort": joint.max_effort if math.isfinite(joint.max_effort) else 0.0,
+            })
+        return rows

@@ -1,0 +1,108 @@
+"""The DART world: time step, gravity, collision detector and the optional ground plane."""
+
+from __future__ import annotations
+
+import math
+
+import dartpy as dart
+import numpy as np
+
+GROUND_NAME = "ground_plane"
+GROUND_THICKNESS = 0.1
+COLLISION_DETECTORS = ("fcl", "dart", "bullet", "ode")
+
+
+def _make_detector(kind: str):
+    factories = {
+        "fcl": dart.collision.FCLCollisionDetector,
+        "dart": dart.collision.DARTCollisionDetector,
+        "bullet": getattr(dart.collision, "BulletCollisionDetector", None),
+        "ode": getattr(dart.collision, "OdeCollisionDetector", None),
+    }
+    factory = factories.get(kind)
+    if factory is None:
+        raise ValueError(f"collision_detector {kind!r} is not available (choose from {', '.join(COLLISION_DETECTORS)})")
+    return factory()
+
+
+class PhysicsWorld:
+    """One DART world plus the settings Gazebo exposes as physics properties."""
+
+    def __init__(self, physics_rate: float = 1000.0, gravity: tuple[float, float, float] = (0.0, 0.0, -9.81),
+                 collision_detector: str = "fcl") -> None:
+        if not (math.isfinite(physics_rate) and physics_rate > 0):
+            raise ValueError(f"physics_rate must be a positive number, got {physics_rate}")
+        self.world = dart.simulation.World()
+        self.world.setTimeStep(1.0 / physics_rate)
+        self.collision_detector = collision_detector
+        self.world.getConstraintSolver().setCollisionDetector(_make_detector(collision_detector))
+        self.set_gravity(gravity)
+        self.ground: dart.dynamics.Skeleton | None = None
+        self.ground_size = 0.0
+        self.ground_friction = 1.0
+
+    # -- time -------------------------------------------------------------------------------------------
+    @property
+    def time_step(self) -> float:
+        return self.world.getTimeStep()
+
+    @property
+    def physics_rate(self) -> float:
+        return 1.0 / self.world.getTimeStep()
+
+    @property
+    def time(self) -> float:
+        return self.world.getTime()
+
+    def step(self) -> None:
+        self.world.step()
+
+    # -- gravity ----------------------------------------------------------------------------------------
+    def set_gravity(self, gravity) -> None:
+        vector = np.asarray(gravity, dtype=float).reshape(-1)
+        if vector.shape != (3,) or not np.all(np.isfinite(vector)):
+            raise ValueError(f"gravity must be three finite numbers, got {list(np.ravel(gravity))}")
+        self.world.setGravity(vector)
+
+    @property
+    def gravity(self) -> tuple[float, float, float]:
+        g = self.world.getGravity()
+        return float(g[0]), float(g[1]), float(g[2])
+
+    # -- ground -----------------------------------------------------------------------------------------
+    def add_ground(self, size: float = 50.0, friction: float = 1.0) -> None:
+        """A static box whose top face is z = 0 (Gazebo's ``ground_plane`` model)."""
+        if not (math.isfinite(size) and size > 0):
+            raise ValueError(f"ground size must be positive, got {size}")
+        if not (math.isfinite(friction) and friction >= 0):
+            raise ValueError(f"ground friction must be >= 0, got {friction}")
+        self.remove_ground()
+        ground = dart.dynamics.Skeleton(GROUND_NAME)
+        _, body = ground.createWeldJointAndBodyNodePair()
+        body.setName("link")
+        shape = dart.dynamics.BoxShape([size, size, GROUND_THICKNESS])
+        node = body.createShapeNode(shape)
+        node.createVisualAspect()
+        node.createCollisionAspect()
+        node.createDynamicsAspect().setFrictionCoeff(friction)
+        offset = dart.math.Isometry3()
+        offset.set_translation([0.0, 0.0, -GROUND_THICKNESS / 2])
+        body.getParentJoint().setTransformFromParentBodyNode(offset)
+        self.world.addSkeleton(ground)
+        self.ground, self.ground_size, self.ground_friction = ground, size, friction
+
+    def remove_ground(self) -> bool:
+        if self.ground is None:
+            return False
+        self.world.removeSkeleton(self.ground)
+        self.ground = None
+        return True
+
+    @property
+    def has_ground(self) -> bool:
+        return self.ground is not None
+
+    # -- contacts ---------------------------------------------------------------------------------------
+    def contacts(self):
+        """Contacts found by the last step's collision detection."""
+        return self.world.getLastCollisionResult().getContacts()
