@@ -1,0 +1,210 @@
+"""``python -m launch FILE.yaml [name:=value ...]`` and ``zenroid launch``: the ros2 launch of this stack."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+
+import yaml
+
+from launch.description import parse_file
+from launch.resolve import LaunchPlan, find_launch_file, resolve
+from launch.yaml_source import LaunchError, Source
+
+PROJECT_ROOT = Path(__file__).resolve().parents[1]
+
+
+class LaunchUsageError(Exception):
+    """Bad input to the launcher (exit status 2); ``nodes.tools.cli`` maps it like its UsageError."""
+
+
+def _usage_error(message: str) -> Exception:
+    try:
+        from nodes.tools.cli import UsageError
+    except ImportError:
+        return LaunchUsageError(message)
+    return UsageError(message)
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("file", help="launch file: a path, or a bare name in launch/ (humanoid.yaml)")
+    # REMAINDER so options may also follow the name:=value pairs (run() picks them out).
+    parser.add_argument("arguments", nargs=argparse.REMAINDER, metavar="name:=value", help="launch argument values")
+    parser.add_argument("--show-args", action="store_true", help="print the declared arguments and exit")
+    parser.add_argument("--print", dest="print_only", action="store_true",
+                        help="print the fully resolved description and exit (nothing is started)")
+    parser.add_argument("--log-dir", type=Path, default=None,
+                        help="where per-node logs go (default: $ZENROID_LOG_DIR or ~/.zenroid/log/<run>)")
+
+
+def parse_assignments(items: list[str]) -> dict[str, str]:
+    values: dict[str, str] = {}
+    for item in items:
+        name, sep, value = item.partition(":=")
+        if not sep or not name.strip():
+            raise _usage_error(f"launch arguments look like name:=value, got '{item}'")
+        values[name.strip()] = value
+    return values
+
+
+def show_args(path: Path) -> str:
+    lines = []
+    for arg in parse_file(path).declared_args():
+        lines.append(f"'{arg.name}':")
+        lines.append(f"    {arg.description or 'no description given'}")
+        if arg.choices:
+            lines.append(f"    Valid choices are: {arg.choices}")
+        lines.append(f"    (default: '{arg.default}')" if arg.default is not None else "    (required)")
+    return "\n".join(lines) if lines else "(this launch file declares no arguments)"
+
+
+def zenoh_port_of(plan: LaunchPlan) -> int:
+    text = plan.args.get("zenoh_port", "7447")
+    try:
+        port = int(text)
+    except ValueError:
+        port = -1
+    if not 1 <= port <= 65535:
+        raise LaunchError(f"argument 'zenoh_port' must be a TCP port 1..65535, got '{text}'", Source(plan.file, 1))
+    return port
+
+
+def default_log_dir(path: Path) -> Path:
+    base = Path(os.environ.get("ZENROID_LOG_DIR") or Path.home() / ".zenroid" / "log")
+    return base / f"{path.stem}-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
+
+
+def child_environment(endpoint: str | None) -> dict[str, str]:
+    """What every node inherits: our environment, unbuffered output, the project importable, the router."""
+    env = dict(os.environ)
+    env["PYTHONUNBUFFERED"] = "1"
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(PROJECT_ROOT), env.get("PYTHONPATH", "")) if p)
+    if endpoint is not None:  # embedded router: children connect to it and nothing else
+        env["ZENOH_CONNECT"] = endpoint
+        env.pop("ZENOH_CONFIG", None)
+    return env
+
+
+def _late_options(args: argparse.Namespace) -> None:
+    """Options written after the file or the name:=value pairs (argparse leaves them in the remainder)."""
+    rest: list[str] = []
+    items = iter(args.arguments)
+    for item in items:
+        if item == "--show-args":
+            args.show_args = True
+        elif item == "--print":
+            args.print_only = True
+        elif item == "--log-dir" or item.startswith("--log-dir="):
+            value = item.partition("=")[2] if "=" in item else next(items, None)
+            if not value:
+                raise _usage_error("--log-dir needs a directory")
+            args.log_dir = Path(value)
+        elif item.startswith("-"):
+            raise _usage_error(f"unknown option '{item}' (options: --show-args, --print, --log-dir DIR)")
+        else:
+            rest.append(item)
+    args.arguments = rest
+
+
+def load_plan(args: argparse.Namespace) -> tuple[Path, LaunchPlan | None]:
+    _late_options(args)
+    try:
+        path = find_launch_file(args.file)
+    except FileNotFoundError:
+        raise _usage_error(f"launch file not found: {args.file} (bare names are looked up in launch/)") from None
+    values = parse_assignments(args.arguments)
+    try:
+        if args.show_args:
+            return path, None
+        return path, resolve(path, values)
+    except LaunchError as exc:
+        raise _usage_error(str(exc)) from None
+
+
+def execute(plan: LaunchPlan, log_dir: Path) -> int:
+    """Host the router (unless an external one is configured), supervise the nodes, clean up."""
+    from launch.readiness import NodeReadiness
+    from launch.reaper import Reaper
+    from launch.supervisor import Supervisor
+    from nodes.core import session as zsession
+
+    port = zenoh_port_of(plan)
+    log_dir.mkdir(parents=True, exist_ok=True)
+    reaper = Reaper()
+    session = None
+    readiness = None
+    try:
+        if zsession.external_router_configured():
+            endpoint = None
+            session = zsession.open_peer()
+            where = "external router (ZENOH_CONNECT / ZENOH_CONFIG)"
+        else:
+            endpoint = zsession.loopback_endpoint(port)
+            try:
+                session = zsession.open_router(port)
+            except Exception as exc:  # zenoh raises a plain ZError when the port is taken
+                print(f"[launch] [ERROR] cannot host the Zenoh router on {endpoint}: {exc} "
+                      f"(is another launch running? pick another with zenoh_port:=N)", flush=True)
+                return 1
+            where = f"embedded router on {endpoint}"
+        print(f"[launch] [INFO] zenoh: {where}", flush=True)
+        readiness = NodeReadiness(session)
+        supervisor = Supervisor(plan, log_dir, child_environment(endpoint), readiness, reaper=reaper)
+        previous = {sig: signal.signal(sig, supervisor.handle_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+        try:
+            return supervisor.run()
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+    finally:
+        if readiness is not None:
+            readiness.close()
+        if session is not None:
+            session.close()
+        reaper.close()
+
+
+def run(args: argparse.Namespace) -> int:
+    path, plan = load_plan(args)
+    if args.show_args:
+        try:
+            print(show_args(path))
+        except LaunchError as exc:
+            raise _usage_error(str(exc)) from None
+        return 0
+    if args.print_only:
+        description = plan.describe()
+        try:
+            port = zenoh_port_of(plan)
+        except LaunchError as exc:
+            raise _usage_error(str(exc)) from None
+        from nodes.core.session import external_router_configured, loopback_endpoint
+
+        description["zenoh"] = ("external (ZENOH_CONNECT / ZENOH_CONFIG)" if external_router_configured()
+                                else f"embedded router on {loopback_endpoint(port)}")
+        description["commands"] = {n.name: n.command(sys.executable, Path("<generated params>") if n.params else None)
+                                   for n in plan.nodes}
+        print(yaml.safe_dump(description, sort_keys=False), end="")
+        return 0
+    try:
+        zenoh_port_of(plan)
+    except LaunchError as exc:
+        raise _usage_error(str(exc)) from None
+    return execute(plan, args.log_dir or default_log_dir(path))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m launch", description="run a YAML launch file")
+    add_arguments(parser)
+    args = parser.parse_args(argv)
+    try:
+        return run(args)
+    except Exception as exc:
+        if type(exc).__name__ in ("UsageError", "LaunchUsageError"):
+            print(f"launch: error: {exc}", file=sys.stderr)
+            return 2
+        raise

@@ -1,0 +1,446 @@
+"""Resolve an inert launch description into a plan: arguments bound, substitutions done, includes
+expanded, conditions applied, every value checked. Nothing is started here."""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+import shlex
+import shutil
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from launch.description import (
+    Action,
+    ArgDecl,
+    GroupDecl,
+    IncludeDecl,
+    LaunchDescription,
+    NodeDecl,
+    OnExitDecl,
+    OnShutdownDecl,
+    parse_file,
+)
+from launch.substitutions import SubstitutionContext, has_substitution, substitute
+from launch.yaml_source import LaunchError, LocatedDict, LocatedList, Source
+
+LAUNCH_DIR = Path(__file__).resolve().parent
+_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_MODULE_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)*$")
+_TRUE = {"true", "1", "yes", "on"}
+_FALSE = {"false", "0", "no", "off", ""}
+DEFAULT_RESPAWN_MAX = 5
+DEFAULT_WAIT_TIMEOUT = 60.0
+
+
+@dataclass
+class NodeSpec:
+    """One process to run, fully resolved."""
+
+    name: str
+    namespace: str
+    module: str | None
+    executable: str | None
+    args: list[str]
+    params: dict[str, Any]
+    param_files: list[str]
+    remaps: list[tuple[str, str]]
+    env: dict[str, str]
+    respawn: bool
+    respawn_delay: float
+    respawn_max: int
+    required: bool
+    output: str
+    wait_for: list[str]
+    wait_timeout: float
+    source: str
+
+    @property
+    def full_name(self) -> str:
+        return f"{self.namespace}/{self.name}" if self.namespace else self.name
+
+    def command(self, python: str, generated_params: Path | None) -> list[str]:
+        """The argv of this node (no shell): ``python -m MODULE`` with the shared node CLI, or the program."""
+        if self.executable is not None:
+            return [self.executable, *self.args]
+        argv = [python, "-m", str(self.module), "--name", self.name]
+        if self.namespace:
+            argv += ["--ns", self.namespace]
+        for param_file in self.param_files:
+            argv += ["--params-file", param_file]
+        if generated_params is not None:
+            argv += ["--params-file", str(generated_params)]
+        for src, dst in self.remaps:
+            argv += ["--remap", f"{src}:={dst}"]
+        return argv + self.args
+
+    def describe(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"name": self.name, "namespace": self.namespace}
+        out["module" if self.module else "exec"] = self.module or self.executable
+        for key in ("args", "params", "param_files", "env", "wait_for"):
+            if getattr(self, key):
+                out[key] = getattr(self, key)
+        if self.remaps:
+            out["remap"] = [f"{a}:={b}" for a, b in self.remaps]
+        if self.respawn:
+            out["respawn"] = {"delay": self.respawn_delay, "max": self.respawn_max}
+        if self.required:
+            out["required"] = True
+        if self.output != "screen":
+            out["output"] = self.output
+        out["source"] = self.source
+        return out
+
+
+@dataclass
+class ExitHandler:
+    node: str
+    log: str | None
+    shutdown: bool
+    source: str
+
+
+@dataclass
+class LaunchPlan:
+    file: Path
+    args: dict[str, str]
+    nodes: list[NodeSpec] = field(default_factory=list)
+    on_exit: list[ExitHandler] = field(default_factory=list)
+    on_shutdown: list[str] = field(default_factory=list)
+
+    def describe(self) -> dict[str, Any]:
+        return {
+            "file": str(self.file),
+            "args": dict(self.args),
+            "nodes": [n.describe() for n in self.nodes],
+            "on_exit": [{"node": h.node, "log": h.log, "shutdown": h.shutdown} for h in self.on_exit],
+            "on_shutdown": list(self.on_shutdown),
+        }
+
+
+def find_launch_file(name: str, base: Path | None = None) -> Path:
+    """A path as given (absolute or relative to ``base``/cwd), else a bare name in ``launch/``."""
+    candidate = Path(name).expanduser()
+    if not candidate.is_absolute() and base is not None:
+        candidate = base / candidate
+    if candidate.is_file():
+        return candidate
+    if not Path(name).is_absolute() and (LAUNCH_DIR / name).is_file():
+        return LAUNCH_DIR / name
+    raise FileNotFoundError(name)
+
+
+def parse_bool(text: str, what: str, source: Source) -> bool:
+    lowered = text.strip().lower()
+    if lowered in _TRUE:
+        return True
+    if lowered in _FALSE:
+        return False
+    raise LaunchError(f"{what} must be true or false, got '{text}'", source)
+
+
+def join_namespace(parent: str, child: str | None) -> str:
+    if not child:
+        return parent
+    if child.startswith("/"):
+        return child.strip("/")
+    return "/".join(part for part in (parent, child.strip("/")) if part)
+
+
+def _typed(text: str) -> Any:
+    """A substituted parameter value gets its YAML scalar type back ("0.5" -> 0.5, "true" -> True)."""
+    try:
+        value = yaml.safe_load(text)
+    except yaml.YAMLError:
+        return text
+    return value if isinstance(value, (bool, int, float, str)) else text
+
+
+@dataclass
+class _Scope:
+    variables: dict[str, str]
+    namespace: str
+    file: Path
+
+    def ctx(self) -> SubstitutionContext:
+        return SubstitutionContext(variables=self.variables, current_file=self.file)
+
+
+class _Resolver:
+    def __init__(self, cli_args: Mapping[str, str]) -> None:
+        self.cli_args = dict(cli_args)
+        self.declared: set[str] = set()
+        self.plan: LaunchPlan | None = None
+        self.include_stack: list[Path] = []
+        self.pending_exit: list[tuple[ExitHandler, Source]] = []
+
+    # -- values ---------------------------------------------------------------------------------
+    def text(self, value: Any, scope: _Scope, source: Source, what: str) -> str:
+        if isinstance(value, (LocatedDict, LocatedList, dict, list)):
+            raise LaunchError(f"{what} must be a scalar, not a {'list' if isinstance(value, list) else 'mapping'}",
+                              source)
+        if value is None:
+            raise LaunchError(f"{what} must have a value", source)
+        if isinstance(value, bool):
+            return "true" if value else "false"
+        return substitute(str(value), scope.ctx(), source)
+
+    def param_value(self, value: Any, scope: _Scope, source: Source) -> Any:
+        if isinstance(value, str):
+            return _typed(substitute(value, scope.ctx(), source)) if has_substitution(value) else value
+        if isinstance(value, list):
+            return [self.param_value(v, scope, source) for v in value]
+        if isinstance(value, dict):
+            return {str(k): self.param_value(v, scope, _line(value, k, source)) for k, v in value.items()}
+        return value
+
+    def condition(self, action: Action, scope: _Scope) -> bool:
+        if action.condition_if is not None:
+            if not parse_bool(self.text(action.condition_if, scope, action.source, "'if'"), "'if'", action.source):
+                return False
+        if action.condition_unless is not None:
+            if parse_bool(self.text(action.condition_unless, scope, action.source, "'unless'"), "'unless'",
+                          action.source):
+                return False
+        return True
+
+    # -- actions --------------------------------------------------------------------------------
+    def run_file(self, description: LaunchDescription, scope: _Scope) -> None:
+        self.walk(description.actions, scope)
+
+    def walk(self, actions: list[Action], scope: _Scope) -> None:
+        for action in actions:
+            if isinstance(action, ArgDecl):
+                self.declare(action, scope)
+            elif not self.condition(action, scope):
+                continue
+            elif isinstance(action, NodeDecl):
+                self.add_node(action, scope)
+            elif isinstance(action, GroupDecl):
+                # A group scopes its namespace, not its arguments (like ROS 2's GroupAction).
+                inner = _Scope(scope.variables, join_namespace(scope.namespace, self.maybe_text(
+                    action.namespace, scope, action.source, "group 'namespace'")), scope.file)
+                _check_namespace(inner.namespace, action.source)
+                self.walk(action.actions, inner)
+            elif isinstance(action, IncludeDecl):
+                self.include(action, scope)
+            elif isinstance(action, OnExitDecl):
+                handler = ExitHandler(
+                    node=self.text(action.node, scope, action.source, "on_exit 'node'"),
+                    log=self.maybe_text(action.log, scope, action.source, "'log'"),
+                    shutdown=parse_bool(self.text(action.shutdown, scope, action.source, "'shutdown'"),
+                                        "on_exit 'shutdown'", action.source),
+                    source=str(action.source),
+                )
+                self.pending_exit.append((handler, action.source))
+            elif isinstance(action, OnShutdownDecl):
+                log = self.maybe_text(action.log, scope, action.source, "'log'")
+                if log:
+                    self.plan.on_shutdown.append(log)
+
+    def maybe_text(self, value: Any, scope: _Scope, source: Source, what: str) -> str | None:
+        return None if value is None else self.text(value, scope, source, what)
+
+    def declare(self, decl: ArgDecl, scope: _Scope, given: Mapping[str, str] | None = None) -> None:
+        if not _NAME_RE.match(decl.name):
+            raise LaunchError(f"arg name '{decl.name}' must be letters, digits and '_'", decl.source)
+        self.declared.add(decl.name)
+        if decl.name in scope.variables:  # given by an include, the command line, or the parent
+            value = scope.variables[decl.name]
+        elif decl.default is not None:
+            value = substitute(decl.default, scope.ctx(), decl.source)
+        else:
+            raise LaunchError(f"missing required argument '{decl.name}' (give it as {decl.name}:=VALUE)",
+                              decl.source)
+        if decl.choices is not None and value not in decl.choices:
+            raise LaunchError(f"argument '{decl.name}' is '{value}', must be one of: {', '.join(decl.choices)}",
+                              decl.source)
+        scope.variables[decl.name] = value
+
+    def include(self, action: IncludeDecl, scope: _Scope) -> None:
+        name = self.text(action.file, scope, action.source, "include 'file'")
+        try:
+            path = find_launch_file(name, scope.file.parent)
+        except FileNotFoundError:
+            raise LaunchError(f"included launch file not found: {name}", action.source) from None
+        if path.resolve() in self.include_stack:
+            raise LaunchError(f"include cycle: {path} includes itself", action.source)
+        given: dict[str, str] = {}
+        for key, value in (action.args or {}).items():
+            given[str(key)] = self.text(value, scope, _line(action.args, key, action.source), f"include arg '{key}'")
+        description = parse_file(path)
+        declared = {a.name for a in description.declared_args()}
+        for key in given:
+            if key not in declared:
+                raise LaunchError(f"include passes argument '{key}' that {path.name} does not declare "
+                                  f"(declared: {', '.join(sorted(declared)) or 'none'})", action.source)
+        # Precedence: the include's own args, then the command line, then the including file's values.
+        variables = {k: v for k, v in scope.variables.items() if k in declared}
+        variables.update({k: v for k, v in self.cli_args.items() if k in declared})
+        variables.update(given)
+        self.include_stack.append(path.resolve())
+        self.run_file(description, _Scope(variables, scope.namespace, path))
+        self.include_stack.pop()
+
+    def add_node(self, decl: NodeDecl, scope: _Scope) -> None:
+        f = decl.fields
+        at = decl.line_source
+        name = self.text(f["name"], scope, at("name"), "node 'name'")
+        if not _NAME_RE.match(name):
+            raise LaunchError(f"node name '{name}' must be letters, digits and '_'", at("name"))
+        namespace = join_namespace(scope.namespace, self.maybe_text(f.get("namespace"), scope, at("namespace"),
+                                                                    "node 'namespace'"))
+        _check_namespace(namespace, at("namespace"))
+        module = executable = None
+        if "module" in f:
+            module = self.text(f["module"], scope, at("module"), "node 'module'")
+            _check_module(module, at("module"))
+        else:
+            program = self.text(f["exec"], scope, at("exec"), "node 'exec'")
+            executable = shutil.which(program)
+            if executable is None:
+                raise LaunchError(f"node '{name}': program '{program}' not found", at("exec"))
+        args = self.word_list(f.get("args"), scope, decl, "args", split=True)
+        params = {}
+        if "params" in f:
+            params = {str(k): self.param_value(v, scope, _line(f["params"], k, at("params")))
+                      for k, v in f["params"].items()}
+        param_files = []
+        for entry in self.word_list(f.get("param_file"), scope, decl, "param_file"):
+            path = Path(entry).expanduser()
+            path = path if path.is_absolute() else scope.file.resolve().parent / path
+            if not path.is_file():
+                raise LaunchError(f"node '{name}': parameter file not found: {entry}", at("param_file"))
+            param_files.append(str(path))
+        remaps = self.remaps(f.get("remap"), scope, decl)
+        env = {}
+        for key, value in (f.get("env") or {}).items():
+            env[str(key)] = self.text(value, scope, _line(f["env"], key, at("env")), f"env '{key}'")
+        respawn = parse_bool(self.text(f.get("respawn", False), scope, at("respawn"), "respawn"), "node 'respawn'",
+                             at("respawn"))
+        respawn_delay = self.number(f.get("respawn_delay", 1.0), scope, at("respawn_delay"), "respawn_delay")
+        respawn_max = int(self.number(f.get("respawn_max", DEFAULT_RESPAWN_MAX), scope, at("respawn_max"),
+                                      "respawn_max", integer=True))
+        required = parse_bool(self.text(f.get("required", False), scope, at("required"), "required"),
+                              "node 'required'", at("required"))
+        output = self.text(f.get("output", "screen"), scope, at("output"), "output")
+        if output not in ("screen", "log"):
+            raise LaunchError(f"node 'output' must be 'screen' or 'log', got '{output}'", at("output"))
+        wait_for = self.word_list(f.get("wait_for"), scope, decl, "wait_for", split=True)
+        wait_timeout = self.number(f.get("wait_timeout", DEFAULT_WAIT_TIMEOUT), scope, at("wait_timeout"),
+                                   "wait_timeout")
+        spec = NodeSpec(name=name, namespace=namespace, module=module, executable=executable, args=args,
+                        params=params, param_files=param_files, remaps=remaps, env=env, respawn=respawn,
+                        respawn_delay=respawn_delay, respawn_max=respawn_max, required=required, output=output,
+                        wait_for=wait_for, wait_timeout=wait_timeout, source=str(decl.source))
+        for other in self.plan.nodes:
+            if other.name == name:
+                raise LaunchError(f"duplicate node name '{name}' (also at {other.source})", at("name"))
+        self.plan.nodes.append(spec)
+
+    def word_list(self, value: Any, scope: _Scope, decl: NodeDecl, key: str, split: bool = False) -> list[str]:
+        if value is None:
+            return []
+        source = decl.line_source(key)
+        if isinstance(value, list):
+            return [self.text(v, scope, _line(value, i, source), f"'{key}' item") for i, v in enumerate(value)]
+        text = self.text(value, scope, source, f"'{key}'")
+        if not split:
+            return [text]
+        try:
+            return shlex.split(text)  # tokenising only: nothing ever goes through a shell
+        except ValueError as exc:
+            raise LaunchError(f"'{key}': {exc}", source) from None
+
+    def remaps(self, value: Any, scope: _Scope, decl: NodeDecl) -> list[tuple[str, str]]:
+        source = decl.line_source("remap")
+        pairs: list[tuple[str, str]] = []
+        if value is None:
+            return pairs
+        if isinstance(value, dict):
+            for key, dst in value.items():
+                at = _line(value, key, source)
+                pairs.append((self.text(key, scope, at, "remap"), self.text(dst, scope, at, "remap target")))
+        else:
+            for i, item in enumerate(value):
+                text = self.text(item, scope, _line(value, i, source), "remap")
+                if ":=" not in text:
+                    raise LaunchError(f"remap '{text}' must look like from:=to", _line(value, i, source))
+                src, dst = text.split(":=", 1)
+                pairs.append((src, dst))
+        for src, dst in pairs:
+            if not src or not dst:
+                raise LaunchError(f"remap '{src}:={dst}' needs both names", source)
+        return pairs
+
+    def number(self, value: Any, scope: _Scope, source: Source, what: str, integer: bool = False) -> float:
+        text = self.text(value, scope, source, what)
+        try:
+            number = int(text) if integer else float(text)
+        except ValueError:
+            kind = "an integer" if integer else "a number"
+            raise LaunchError(f"node '{what}' must be {kind}, got '{text}'", source) from None
+        if number != number or number < 0 or number == float("inf"):
+            raise LaunchError(f"node '{what}' must be a finite number >= 0, got '{text}'", source)
+        return number
+
+
+def _line(container: Any, key: Any, fallback: Source) -> Source:
+    if isinstance(container, (LocatedDict, LocatedList)):
+        return Source(fallback.file, container.line_of(key))
+    return fallback
+
+
+def _check_namespace(namespace: str, source: Source) -> None:
+    if namespace and not all(_NAME_RE.match(part) for part in namespace.split("/")):
+        raise LaunchError(f"namespace '{namespace}' must be '/'-separated names of letters, digits and '_'", source)
+
+
+def _check_module(module: str, source: Source) -> None:
+    if not _MODULE_RE.match(module):
+        raise LaunchError(f"'{module}' is not a Python module name", source)
+    try:
+        found = importlib.util.find_spec(module) is not None
+    except (ImportError, ValueError):
+        found = False
+    if not found:
+        raise LaunchError(f"Python module '{module}' not found", source)
+
+
+def resolve(path: Path, cli_args: Mapping[str, str]) -> LaunchPlan:
+    """Parse ``path`` and resolve it with ``name:=value`` command-line arguments."""
+    description = parse_file(path)
+    resolver = _Resolver(cli_args)
+    top_declared = {a.name for a in description.declared_args()}
+    scope = _Scope({k: v for k, v in cli_args.items() if k in top_declared}, "", path)
+    resolver.plan = LaunchPlan(file=path, args={})
+    resolver.include_stack.append(path.resolve())
+    resolver.run_file(description, scope)
+    unknown = sorted(set(cli_args) - resolver.declared)
+    if unknown:
+        raise LaunchError(f"unknown launch argument(s): {', '.join(unknown)} "
+                          f"(declared: {', '.join(sorted(resolver.declared)) or 'none'}; see --show-args)",
+                          Source(path, 1))
+    names = {n.name for n in resolver.plan.nodes}
+    for handler, source in resolver.pending_exit:
+        if handler.node not in names:
+            raise LaunchError(f"on_exit watches node '{handler.node}', which this launch does not start", source)
+        resolver.plan.on_exit.append(handler)
+    for node in resolver.plan.nodes:
+        for target in node.wait_for:
+            if target not in names:
+                raise LaunchError(f"node '{node.name}' waits for '{target}', which this launch does not start",
+                                  Source(path, 0) if not node.source else _source_from(node.source))
+            if target == node.name:
+                raise LaunchError(f"node '{node.name}' waits for itself", _source_from(node.source))
+    resolver.plan.args = {k: scope.variables[k] for k in top_declared if k in scope.variables}
+    return resolver.plan
+
+
+def _source_from(text: str) -> Source:
+    file, _, line = text.rpartition(":")
+    return Source(Path(file), int(line) if line.isdigit() else 0)

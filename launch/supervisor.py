@@ -1,0 +1,285 @@
+"""Runs a resolved launch plan: starts nodes in readiness order, prefixes and logs their output,
+respawns, honours ``required``, and shuts everything down (SIGINT → SIGTERM after 5 s → SIGKILL after 10 s).
+
+Every node runs in its own process group so signals reach its children too; the reaper guards against
+orphans if the launcher itself is killed.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import IO, Protocol
+
+import yaml
+
+from launch.reaper import Reaper
+from launch.resolve import LaunchPlan, NodeSpec
+
+SIGTERM_AFTER_S = 5.0
+SIGKILL_AFTER_S = 10.0
+POLL_S = 0.02
+_COLOURS = (32, 36, 33, 35, 34, 91, 92, 93, 94, 95, 96)
+
+
+class Readiness(Protocol):
+    def is_alive(self, full_name: str) -> bool: ...
+
+
+@dataclass
+class Managed:
+    """A node and its current process."""
+
+    spec: NodeSpec
+    colour: int
+    state: str = "waiting"  # waiting | running | respawn_pending | exited | skipped
+    proc: subprocess.Popen | None = None
+    pgid: int | None = None
+    restarts: int = 0
+    exit_code: int | None = None
+    next_start: float = 0.0
+    waiting_since: float = field(default_factory=time.monotonic)
+    reader: threading.Thread | None = None
+
+
+class Supervisor:
+    def __init__(self, plan: LaunchPlan, log_dir: Path, child_env: dict[str, str],
+                 readiness: Readiness | None, out: IO[str] | None = None, colour: bool | None = None,
+                 python: str = sys.executable, reaper: Reaper | None = None) -> None:
+        self.plan = plan
+        self.log_dir = log_dir
+        self.child_env = child_env
+        self.readiness = readiness
+        self.out = out or sys.stdout
+        self.colour = self.out.isatty() if colour is None else colour
+        self.python = python
+        self.reaper = reaper
+        self.nodes = [Managed(spec, _COLOURS[i % len(_COLOURS)]) for i, spec in enumerate(plan.nodes)]
+        self.by_name = {m.spec.name: m for m in self.nodes}
+        self.exit_status = 0
+        self._print_lock = threading.Lock()
+        self._stop_reason: str | None = None
+        self._signals = 0
+        self._shutdown_started: float | None = None
+        self._escalation = 0  # 0 SIGINT sent, 1 SIGTERM sent, 2 SIGKILL sent
+
+    # -- output ---------------------------------------------------------------------------------
+    def say(self, text: str, level: str = "INFO") -> None:
+        line = f"[launch] [{level}] {text}"
+        if self.colour and level in ("WARN", "ERROR"):
+            line = f"\x1b[{33 if level == 'WARN' else 31}m{line}\x1b[0m"
+        with self._print_lock:
+            self.out.write(line + "\n")
+            self.out.flush()
+
+    def _pump(self, managed: Managed, stream: IO[bytes]) -> None:
+        """Copy one process's output to its log file and (output: screen) to our stdout, prefixed."""
+        prefix = f"[{managed.spec.name}] "
+        if self.colour:
+            prefix = f"\x1b[{managed.colour}m{prefix}\x1b[0m"
+        with open(self.log_dir / f"{managed.spec.name}.log", "ab") as log:
+            for raw in iter(stream.readline, b""):
+                log.write(raw)
+                log.flush()
+                if managed.spec.output == "screen":
+                    text = raw.decode("utf-8", errors="replace").rstrip("\n")
+                    with self._print_lock:
+                        self.out.write(prefix + text + "\n")
+                        self.out.flush()
+        stream.close()
+
+    # -- processes ------------------------------------------------------------------------------
+    def _params_file(self, spec: NodeSpec) -> Path | None:
+        if not spec.params:
+            return None
+        path = self.log_dir / f"{spec.name}.params.yaml"
+        document = {spec.name: {"ros__parameters": spec.params}}
+        path.write_text(yaml.safe_dump(document, sort_keys=False), encoding="utf-8")
+        return path
+
+    def _start(self, managed: Managed) -> None:
+        spec = managed.spec
+        argv = spec.command(self.python, self._params_file(spec) if spec.module else None)
+        env = dict(self.child_env)
+        env.update(spec.env)
+        try:
+            proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                    stderr=subprocess.STDOUT, env=env, start_new_session=True)
+        except OSError as exc:
+            self.say(f"cannot start '{spec.name}': {exc.strerror or exc}", "ERROR")
+            managed.state = "exited"
+            managed.exit_code = 127
+            self._on_exit(managed)
+            return
+        managed.proc = proc
+        managed.pgid = proc.pid  # start_new_session: the child leads its own group
+        if self.reaper:
+            self.reaper.watch(proc.pid)
+        managed.state = "running"
+        managed.reader = threading.Thread(target=self._pump, args=(managed, proc.stdout), daemon=True,
+                                          name=f"output-{spec.name}")
+        managed.reader.start()
+        what = spec.module or spec.executable
+        again = f" (restart {managed.restarts}/{spec.respawn_max})" if managed.restarts else ""
+        self.say(f"started '{spec.name}' [pid {proc.pid}] ({what}){again}")
+
+    def _dependency_state(self, managed: Managed) -> str:
+        """'ready' when every wait_for node is live (or finished with status 0), 'failed' if one can never be."""
+        for target in managed.spec.wait_for:
+            dep = self.by_name[target]
+            if dep.state == "exited" and dep.exit_code == 0:
+                continue
+            if dep.state in ("exited", "skipped"):
+                return "failed"
+            if dep.state != "running":
+                return "waiting"
+            live = self.readiness is not None and (
+                self.readiness.is_alive(dep.spec.full_name) or self.readiness.is_alive(dep.spec.name))
+            if not live:
+                return "waiting"
+        return "ready"
+
+    def _on_exit(self, managed: Managed) -> None:
+        spec, code = managed.spec, managed.exit_code
+        if managed.pgid is not None and self.reaper:
+            self.reaper.forget(managed.pgid)
+        describe = f"signal {-code}" if code is not None and code < 0 else f"status {code}"
+        if self._shutdown_started is not None:
+            self.say(f"'{spec.name}' ended ({describe})")
+            return
+        level = "INFO" if code == 0 else "ERROR"
+        self.say(f"'{spec.name}' [pid {managed.proc.pid if managed.proc else '-'}] exited with {describe}", level)
+        for handler in self.plan.on_exit:
+            if handler.node == spec.name:
+                if handler.log:
+                    self.say(handler.log)
+                if handler.shutdown:
+                    self.request_stop(f"on_exit of '{spec.name}' asked for shutdown")
+        if spec.respawn and managed.restarts < spec.respawn_max and self._stop_reason is None:
+            managed.restarts += 1
+            managed.state = "respawn_pending"
+            managed.next_start = time.monotonic() + spec.respawn_delay
+            self.say(f"respawning '{spec.name}' in {spec.respawn_delay:g} s "
+                     f"({managed.restarts}/{spec.respawn_max})", "WARN")
+            return
+        if spec.respawn:
+            self.say(f"'{spec.name}' reached its restart limit ({spec.respawn_max})", "ERROR")
+        if spec.required:
+            if code != 0:
+                self.exit_status = 1
+            self.request_stop(f"required node '{spec.name}' exited ({describe})")
+
+    def request_stop(self, reason: str) -> None:
+        if self._stop_reason is None:
+            self._stop_reason = reason
+
+    def handle_signal(self, signum: int, _frame: object = None) -> None:
+        """SIGINT/SIGTERM: begin the shutdown; a second signal escalates one stage right away."""
+        self._signals += 1
+        self.request_stop(f"received {signal.Signals(signum).name}")
+        if self._signals > 1 and self._shutdown_started is not None:
+            self._shutdown_started -= SIGTERM_AFTER_S if self._escalation == 0 else SIGKILL_AFTER_S
+
+    def _kill_group(self, managed: Managed, sig: int) -> None:
+        if managed.proc is None or managed.proc.poll() is not None:
+            return
+        try:
+            os.killpg(managed.pgid, sig)
+        except (ProcessLookupError, PermissionError):
+            pass
+
+    # -- main loop ------------------------------------------------------------------------------
+    def _step_running(self, now: float) -> None:
+        for managed in self.nodes:
+            if managed.state == "waiting" and self._shutdown_started is None:
+                state = self._dependency_state(managed)
+                if state == "ready":
+                    self._start(managed)
+                elif state == "failed":
+                    managed.state = "skipped"
+                    self.say(f"not starting '{managed.spec.name}': a node it waits for "
+                             f"({', '.join(managed.spec.wait_for)}) failed", "ERROR")
+                    if managed.spec.required:
+                        self.exit_status = 1
+                        self.request_stop(f"required node '{managed.spec.name}' could not start")
+                elif now - managed.waiting_since > managed.spec.wait_timeout:
+                    managed.state = "skipped"
+                    self.exit_status = 1
+                    self.say(f"'{managed.spec.name}' waited {managed.spec.wait_timeout:g} s for "
+                             f"{', '.join(managed.spec.wait_for)} to come up; giving up", "ERROR")
+                    self.request_stop("a node's wait_for timed out")
+            elif managed.state == "running" and managed.proc.poll() is not None:
+                managed.exit_code = managed.proc.returncode
+                managed.state = "exited"
+                self._on_exit(managed)
+            elif managed.state == "respawn_pending" and now >= managed.next_start and self._stop_reason is None:
+                self._start(managed)
+
+    def _step_shutdown(self, now: float) -> bool:
+        """Advance the shutdown; True once every process has ended."""
+        elapsed = now - self._shutdown_started
+        if self._escalation == 0 and elapsed >= SIGTERM_AFTER_S:
+            self._escalation = 1
+            for managed in self.nodes:
+                if managed.proc is not None and managed.proc.poll() is None:
+                    self.say(f"'{managed.spec.name}' still running after SIGINT: sending SIGTERM", "WARN")
+                    self._kill_group(managed, signal.SIGTERM)
+        if self._escalation == 1 and elapsed >= SIGKILL_AFTER_S:
+            self._escalation = 2
+            for managed in self.nodes:
+                if managed.proc is not None and managed.proc.poll() is None:
+                    self.say(f"'{managed.spec.name}' still running after SIGTERM: sending SIGKILL", "ERROR")
+                    self._kill_group(managed, signal.SIGKILL)
+        done = True
+        for managed in self.nodes:
+            if managed.state == "running":
+                if managed.proc.poll() is None:
+                    done = False
+                else:
+                    managed.exit_code = managed.proc.returncode
+                    managed.state = "exited"
+                    self._on_exit(managed)
+        return done
+
+    def _begin_shutdown(self) -> None:
+        self._shutdown_started = time.monotonic()
+        self.say(f"shutting down: {self._stop_reason}")
+        for managed in self.nodes:
+            if managed.state in ("waiting", "respawn_pending"):
+                managed.state = "skipped"
+            self._kill_group(managed, signal.SIGINT)
+
+    def run(self) -> int:
+        """Supervise until every process ended (or a stop was requested and carried out)."""
+        self.say(f"log directory: {self.log_dir}")
+        while True:
+            now = time.monotonic()
+            if self._stop_reason is not None and self._shutdown_started is None:
+                self._begin_shutdown()
+            if self._shutdown_started is not None:
+                if self._step_shutdown(now):
+                    break
+            else:
+                self._step_running(now)
+                if all(m.state in ("exited", "skipped") for m in self.nodes):
+                    self.say("all processes have ended")
+                    break
+            time.sleep(POLL_S)
+        for managed in self.nodes:
+            if managed.reader is not None:
+                managed.reader.join(timeout=2.0)
+            if managed.pgid is not None:
+                # Grandchildren a node left behind in its group go too.
+                try:
+                    os.killpg(managed.pgid, signal.SIGKILL)
+                except (ProcessLookupError, PermissionError):
+                    pass
+        for message in self.plan.on_shutdown:
+            self.say(message)
+        return self.exit_status
