@@ -13,7 +13,14 @@ from typing import Any
 from msgs.codec import DEFAULT_LIMITS, DecodeError, Limits, decode, encode, from_dict, to_dict
 from msgs.idl import DefinitionError
 from msgs.registry import (
-    Action, Service, add_search_path, get_class, get_type, list_types, package_names, register_message,
+    Action,
+    Service,
+    add_search_path,
+    get_class,
+    get_type,
+    list_types,
+    package_names,
+    register_message,
 )
 from msgs.timeutil import duration_from_sec, duration_to_sec, time_from_sec, time_to_sec
 

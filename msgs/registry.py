@@ -9,7 +9,14 @@ from pathlib import Path
 from typing import Any
 
 from msgs.idl import (
-    FLOAT_TYPES, INT_RANGES, STRING_TYPES, DefinitionError, FieldSpec, MsgSpec, parse_message, split_sections,
+    FLOAT_TYPES,
+    INT_RANGES,
+    STRING_TYPES,
+    DefinitionError,
+    FieldSpec,
+    MsgSpec,
+    parse_message,
+    split_sections,
 )
 
 BUILTIN_DIR = Path(__file__).resolve().parent / "definitions"

@@ -1,0 +1,15 @@
+"""The node runtime: the only code in zenroid that touches Zenoh."""
+
+from nodes.core.action import ActionClient, ActionServer, ClientGoalHandle, ServerGoalHandle
+from nodes.core.endpoints import Client, Publisher, ServiceError, ServiceServer, Subscription
+from nodes.core.lifecycle import LifecycleNode
+from nodes.core.log import Logger
+from nodes.core.node import Event, Node, Timer
+from nodes.core.params import ParameterError
+from nodes.core.runner import add_connection_arguments, add_node_arguments, connect_from_args, run_node
+
+__all__ = [
+    "ActionClient", "ActionServer", "Client", "ClientGoalHandle", "Event", "LifecycleNode", "Logger", "Node",
+    "ParameterError", "Publisher", "ServerGoalHandle", "ServiceError", "ServiceServer", "Subscription", "Timer",
+    "add_connection_arguments", "add_node_arguments", "connect_from_args", "run_node",
+]

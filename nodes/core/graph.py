@@ -1,0 +1,68 @@
+"""The node graph as Zenoh liveliness tokens (what ``node list`` / ``topic list`` read).
+
+Layout: ``@graph/<kind>/<session id>/<node>[/<name>/<type>]`` where ``<node>``, ``<name>`` and ``<type>``
+are percent-encoded (``/`` → ``%2F``) so each is one key chunk. Kinds: node, pub, sub, srv, cli, act, actc.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from urllib.parse import quote, unquote
+
+import zenoh
+
+ROOT = "@graph"
+KINDS = ("node", "pub", "sub", "srv", "cli", "act", "actc")
+
+
+def _enc(text: str) -> str:
+    return quote(text, safe="") or "%00"
+
+
+def _dec(chunk: str) -> str:
+    return "" if chunk == "%00" else unquote(chunk)
+
+
+def node_key(session_id: str, node: str) -> str:
+    return f"{ROOT}/node/{session_id}/{_enc(node)}"
+
+
+def endpoint_key(kind: str, session_id: str, node: str, name: str, type_name: str) -> str:
+    if kind not in KINDS or kind == "node":
+        raise ValueError(f"bad graph endpoint kind {kind!r}")
+    return f"{ROOT}/{kind}/{session_id}/{_enc(node)}/{_enc(name)}/{_enc(type_name)}"
+
+
+@dataclass(frozen=True)
+class GraphEntry:
+    kind: str
+    session_id: str
+    node: str
+    name: str = ""
+    type_name: str = ""
+
+
+def parse_key(key: str) -> GraphEntry | None:
+    parts = str(key).split("/")
+    if len(parts) < 4 or parts[0] != ROOT or parts[1] not in KINDS:
+        return None
+    if parts[1] == "node" and len(parts) == 4:
+        return GraphEntry("node", parts[2], _dec(parts[3]))
+    if len(parts) == 6:
+        return GraphEntry(parts[1], parts[2], _dec(parts[3]), _dec(parts[4]), _dec(parts[5]))
+    return None
+
+
+def snapshot(session: zenoh.Session, timeout: float = 1.0) -> list[GraphEntry]:
+    """Every live graph entry (nodes and endpoints) visible from ``session``."""
+    entries = []
+    for reply in session.liveliness().get(f"{ROOT}/**", timeout=timeout):
+        if reply.ok is not None:
+            entry = parse_key(str(reply.ok.key_expr))
+            if entry:
+                entries.append(entry)
+    return entries
+
+
+def node_names(session: zenoh.Session, timeout: float = 1.0) -> list[str]:
+    return sorted({e.node for e in snapshot(session, timeout) if e.kind == "node"})

@@ -1,0 +1,123 @@
+"""Typed, validated node parameters (ros2 ``declare_parameter`` with descriptors)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+
+class ParameterError(ValueError):
+    """A parameter value that does not satisfy its declaration; names the parameter."""
+
+
+@dataclass
+class ParameterDescriptor:
+    name: str
+    default: Any
+    type: type | None
+    description: str = ""
+    min_value: float | None = None
+    max_value: float | None = None
+    choices: tuple[Any, ...] | None = None
+    validator: Callable[[Any], str | None] | None = None
+    read_only: bool = False
+
+
+def parse_value(text: str) -> Any:
+    """A command-line parameter value: YAML scalars/lists (``1``, ``true``, ``[a, b]``), else the string."""
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError:
+        return text
+
+
+def load_params_file(path: str | Path, node_name: str, namespace: str = "") -> dict[str, Any]:
+    """Parameters for ``node_name`` from a ROS params file (``node: ros__parameters:``, ``/**``) or a flat map."""
+    p = Path(path)
+    try:
+        data = yaml.safe_load(p.read_text())
+    except OSError as exc:
+        raise ParameterError(f"params file {p}: {exc.strerror}") from None
+    except yaml.YAMLError as exc:
+        raise ParameterError(f"params file {p}: invalid YAML: {exc}") from None
+    if data is None:
+        return {}
+    if not isinstance(data, dict):
+        raise ParameterError(f"params file {p}: expected a map at the top level")
+    fq = "/" + "/".join(x for x in (namespace.strip("/"), node_name) if x)
+    keys = ("/**", "**", node_name, fq, fq.lstrip("/"))
+    if not any(isinstance(v, dict) and "ros__parameters" in v for v in data.values()):
+        return _flatten(data)  # a flat map of parameters
+    merged: dict[str, Any] = {}
+    for key in keys:
+        section = data.get(key)
+        if isinstance(section, dict) and isinstance(section.get("ros__parameters"), dict):
+            merged.update(_flatten(section["ros__parameters"]))
+    return merged
+
+
+def _flatten(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested maps become dotted names, as ROS does (``constraints.goal_time``)."""
+    out: dict[str, Any] = {}
+    for k, v in d.items():
+        name = f"{prefix}{k}"
+        if isinstance(v, dict) and v:
+            out.update(_flatten(v, name + "."))
+        out[name] = v
+    return out
+
+
+def coerce(desc: ParameterDescriptor, value: Any) -> Any:
+    """Check ``value`` against ``desc``; returns the (possibly converted) value or raises ParameterError."""
+    name = desc.name
+    t = desc.type
+    if t is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if t is not None and value is not None:
+        if t is list:
+            if isinstance(value, tuple):
+                value = list(value)
+            if not isinstance(value, list):
+                raise ParameterError(f"parameter '{name}': expected a list, got {type(value).__name__} {value!r}")
+            item_t = _item_type(desc.default)
+            if item_t is not None:
+                value = [_coerce_item(name, i, item_t, x) for i, x in enumerate(value)]
+        elif t is bool and not isinstance(value, bool):
+            raise ParameterError(f"parameter '{name}': expected a bool, got {value!r}")
+        elif not isinstance(value, t) or (t is int and isinstance(value, bool)):
+            raise ParameterError(f"parameter '{name}': expected {t.__name__}, got {type(value).__name__} {value!r}")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ParameterError(f"parameter '{name}': must be finite, got {value}")
+    if desc.min_value is not None and isinstance(value, (int, float)) and value < desc.min_value:
+        raise ParameterError(f"parameter '{name}': {value} is below the minimum {desc.min_value}")
+    if desc.max_value is not None and isinstance(value, (int, float)) and value > desc.max_value:
+        raise ParameterError(f"parameter '{name}': {value} is above the maximum {desc.max_value}")
+    if desc.choices is not None and value not in desc.choices:
+        raise ParameterError(f"parameter '{name}': {value!r} is not one of {list(desc.choices)}")
+    if desc.validator is not None:
+        problem = desc.validator(value)
+        if problem:
+            raise ParameterError(f"parameter '{name}': {problem}")
+    return value
+
+
+def _item_type(default: Any) -> type | None:
+    if isinstance(default, list) and default:
+        first = default[0]
+        return float if isinstance(first, float) else type(first)
+    return None
+
+
+def _coerce_item(name: str, i: int, t: type, x: Any) -> Any:
+    if t is float and isinstance(x, int) and not isinstance(x, bool):
+        return float(x)
+    if not isinstance(x, t) or (t is int and isinstance(x, bool)):
+        raise ParameterError(f"parameter '{name}[{i}]': expected {t.__name__}, got {x!r}")
+    if isinstance(x, float) and not math.isfinite(x):
+        raise ParameterError(f"parameter '{name}[{i}]': must be finite, got {x}")
+    return x
