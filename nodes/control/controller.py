@@ -1,0 +1,101 @@
+"""The controller base class, in the shape of ros2_controllers' ``ControllerInterface``.
+
+A controller declares parameters in ``on_init``, claims ``joint/interface`` names through
+``command_interface_configuration()`` / ``state_interface_configuration()``, and is driven by the
+manager through the lifecycle ``unconfigured -> inactive -> active``. ``update(time, period)`` runs on
+sim time (seconds) and may only touch its loaned interfaces; topics, services and actions are created
+through the small ``ControllerContext`` handle the manager passes in, never through Zenoh directly.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Protocol
+
+from nodes.control.interfaces import LoanedCommandInterface, LoanedStateInterface
+from nodes.control.params import Parameters
+
+UNCONFIGURED = "unconfigured"
+INACTIVE = "inactive"
+ACTIVE = "active"
+FINALIZED = "finalized"
+
+
+class ControllerError(RuntimeError):
+    """A lifecycle transition failed; the message says why."""
+
+
+class ControllerLogger(Protocol):
+    def debug(self, msg: str) -> None: ...
+    def info(self, msg: str) -> None: ...
+    def warn(self, msg: str) -> None: ...
+    def error(self, msg: str) -> None: ...
+
+
+class ControllerContext(Protocol):
+    """What the manager lends a controller to talk to the outside world.
+
+    Topic names are resolved like a node's: ``"~/x"`` -> ``<ns>/<controller>/x``, ``"x"`` -> ``<ns>/x``.
+    Subscription, service and action callbacks may run on another thread than ``update``: hand data
+    to ``update`` through a single attribute assignment (atomic under the GIL) or a lock."""
+
+    logger: ControllerLogger
+
+    def now(self) -> float: ...
+    def create_publisher(self, msg_type: Any, topic: str) -> Any: ...
+    def create_subscription(self, msg_type: Any, topic: str, callback: Any) -> Any: ...
+    def create_service(self, srv_type: Any, name: str, handler: Any) -> Any: ...
+    def create_action_server(self, action_type: Any, name: str, **callbacks: Any) -> Any: ...
+    def destroy_all(self) -> None: ...
+
+
+class Controller:
+    """Base class; subclasses override the ``on_*`` hooks, the interface configurations and ``update``."""
+
+    #: ros2_controllers plugin name, e.g. ``"joint_trajectory_controller/JointTrajectoryController"``
+    type_name = ""
+
+    def __init__(self, name: str, context: ControllerContext) -> None:
+        self.name = name
+        self.context = context
+        self.logger = context.logger
+        self.params = Parameters(name)
+        self.state = UNCONFIGURED
+        self.command_interfaces: list[LoanedCommandInterface] = []
+        self.state_interfaces: list[LoanedStateInterface] = []
+        self.update_rate = 0.0  # set by the manager before on_configure
+
+    # --- parameters -------------------------------------------------------------------------------
+    def declare_parameter(self, name: str, default: Any, **kwargs: Any) -> Any:
+        return self.params.declare(name, default, **kwargs)
+
+    def get_parameter(self, name: str) -> Any:
+        return self.params.get(name)
+
+    # --- hooks (ros2_controllers names) -------------------------------------------------------------
+    def on_init(self) -> None:
+        """Declare parameters (values from YAML are already known)."""
+
+    def on_configure(self) -> None:
+        """Read and check parameters, create topics/services/actions. Raise to refuse."""
+
+    def on_activate(self) -> None:
+        """Loans are in ``command_interfaces`` / ``state_interfaces`` now; take hold of the joints."""
+
+    def on_deactivate(self) -> None:
+        """Loans are about to be returned."""
+
+    def on_cleanup(self) -> None:
+        """Undo ``on_configure``."""
+
+    def command_interface_configuration(self) -> list[str]:
+        return []
+
+    def state_interface_configuration(self) -> list[str]:
+        return []
+
+    def update(self, time: float, period: float) -> None:
+        raise NotImplementedError
+
+    # --- helpers ----------------------------------------------------------------------------------
+    def loans_by_name(self) -> tuple[dict[str, LoanedCommandInterface], dict[str, LoanedStateInterface]]:
+        return ({c.name: c for c in self.command_interfaces}, {s.name: s for s in self.state_interfaces})

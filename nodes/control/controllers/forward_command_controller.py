@@ -1,0 +1,80 @@
+"""forward_command_controller/ForwardCommandController and the joint-group position / velocity / effort
+controllers: ``<ns>/<name>/commands`` (std_msgs/Float64MultiArray, one value per joint) written straight
+to one command interface of each joint."""
+
+from __future__ import annotations
+
+import math
+
+from nodes.control.controller import Controller, ControllerError
+from nodes.control.messages import msg_type
+
+
+class ForwardCommandController(Controller):
+    type_name = "forward_command_controller/ForwardCommandController"
+    #: fixed interface of the joint-group variants; None: the ``interface_name`` parameter decides
+    fixed_interface: str | None = None
+
+    def on_init(self) -> None:
+        self.declare_parameter("joints", [], type=list, element_type=str)
+        if self.fixed_interface is None:
+            self.declare_parameter("interface_name", "", choices=("position", "velocity", "effort"))
+
+    def on_configure(self) -> None:
+        self.joints = list(self.get_parameter("joints"))
+        if not self.joints:
+            raise ControllerError("parameter 'joints' is empty")
+        if len(set(self.joints)) != len(self.joints):
+            raise ControllerError(f"parameter 'joints' lists a joint twice: {self.joints}")
+        self.interface = self.fixed_interface or self.get_parameter("interface_name")
+        if not self.interface:
+            raise ControllerError("parameter 'interface_name' is empty (position, velocity or effort)")
+        unknown = self.params.undeclared()
+        if unknown:
+            self.logger.warn(f"{self.name}: ignoring unknown parameters {unknown}")
+        self._latest: list[float] | None = None
+        self.rejected_count = 0
+        self.context.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "~/commands",
+                                         self._on_commands)
+
+    def command_interface_configuration(self) -> list[str]:
+        return [f"{j}/{self.interface}" for j in self.joints]
+
+    def _on_commands(self, msg) -> None:
+        data = list(msg.data)
+        if len(data) != len(self.joints):
+            self.rejected_count += 1
+            self.logger.error(f"{self.name}: command rejected: data has {len(data)} values, expected "
+                              f"{len(self.joints)} (joints {self.joints})")
+            return
+        bad = [i for i, v in enumerate(data) if not math.isfinite(v)]
+        if bad:
+            self.rejected_count += 1
+            self.logger.error(f"{self.name}: command rejected: data[{bad[0]}] is not finite")
+            return
+        self._latest = data  # one assignment: atomic hand-over to update()
+
+    def on_activate(self) -> None:
+        self._latest = None  # commands sent while inactive are not replayed
+
+    def update(self, time: float, period: float) -> None:
+        latest = self._latest
+        if latest is None:
+            return  # nothing commanded yet: the hardware keeps its previous command
+        for loan, value in zip(self.command_interfaces, latest, strict=True):
+            loan.set_value(value)
+
+
+class JointGroupPositionController(ForwardCommandController):
+    type_name = "position_controllers/JointGroupPositionController"
+    fixed_interface = "position"
+
+
+class JointGroupVelocityController(ForwardCommandController):
+    type_name = "velocity_controllers/JointGroupVelocityController"
+    fixed_interface = "velocity"
+
+
+class JointGroupEffortController(ForwardCommandController):
+    type_name = "effort_controllers/JointGroupEffortController"
+    fixed_interface = "effort"

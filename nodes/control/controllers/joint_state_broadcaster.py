@@ -1,0 +1,71 @@
+"""joint_state_broadcaster/JointStateBroadcaster: every joint's position, velocity and effort on
+``<ns>/joint_states`` (sensor_msgs/JointState), once per update."""
+
+from __future__ import annotations
+
+import math
+
+from nodes.control.controller import Controller, ControllerError
+from nodes.control.messages import msg_type
+
+
+class JointStateBroadcaster(Controller):
+    type_name = "joint_state_broadcaster/JointStateBroadcaster"
+
+    def on_init(self) -> None:
+        self.declare_parameter("joints", [], type=list, element_type=str,
+                               description="joints to publish, in this order (empty: all joints of the robot)")
+        self.declare_parameter("interfaces", ["position", "velocity", "effort"], element_type=str,
+                               choices=("position", "velocity", "effort"))
+        self.declare_parameter("use_local_topics", False, description="publish on ~/joint_states")
+        self.declare_parameter("publish_rate", 0.0, min_value=0.0,
+                               description="Hz; 0 publishes at every update")
+        self.declare_parameter("frame_id", "")
+
+    def on_configure(self) -> None:
+        self.joints: list[str] = list(self.get_parameter("joints")) or list(self.available_joints)
+        if not self.joints:
+            raise ControllerError("no joints: the hardware has none and parameter 'joints' is empty")
+        unknown = [j for j in self.joints if j not in self.available_joints]
+        if unknown:
+            raise ControllerError(f"parameter 'joints': unknown joints {unknown}")
+        unknown_params = self.params.undeclared()
+        if unknown_params:
+            self.logger.warn(f"{self.name}: ignoring unknown parameters {unknown_params}")
+        self.kinds = list(self.get_parameter("interfaces"))
+        topic = "~/joint_states" if self.get_parameter("use_local_topics") else "joint_states"
+        self._type = msg_type("sensor_msgs/msg/JointState")
+        self._header_type = msg_type("std_msgs/msg/Header")
+        self._time_type = msg_type("builtin_interfaces/msg/Time")
+        self._pub = self.context.create_publisher(self._type, topic)
+        rate = self.get_parameter("publish_rate")
+        self._period = 1.0 / rate if rate > 0 else 0.0
+        self._last_publish = -math.inf
+        self.frame_id = self.get_parameter("frame_id")
+
+    @property
+    def available_joints(self) -> list[str]:
+        # Set by the manager from the hardware description before on_configure.
+        return getattr(self, "hardware_joints", [])
+
+    def state_interface_configuration(self) -> list[str]:
+        return [f"{j}/{k}" for j in self.joints for k in self.kinds]
+
+    def on_activate(self) -> None:
+        _, state = self.loans_by_name()
+        self._loans = {k: [state[f"{j}/{k}"] for j in self.joints] for k in self.kinds}
+        self._last_publish = -math.inf
+
+    def update(self, time: float, period: float) -> None:
+        if self._period and time - self._last_publish < self._period - 1e-9:
+            return
+        self._last_publish = time
+        values = {k: [loan.get_value() for loan in loans] for k, loans in self._loans.items()}
+        if any(v != v for v in values.get("position", ())):  # NaN: no state has arrived yet
+            return
+        sec = int(time // 1)
+        stamp = self._time_type(sec=sec, nanosec=min(int((time - sec) * 1e9), 999_999_999))
+        self._pub.publish(self._type(
+            header=self._header_type(stamp=stamp, frame_id=self.frame_id), name=self.joints,
+            position=values.get("position", []), velocity=values.get("velocity", []),
+            effort=values.get("effort", [])))

@@ -1,0 +1,424 @@
+"""joint_trajectory_controller/JointTrajectoryController: follow JointTrajectory messages and
+FollowJointTrajectory goals, interpolating between points, with path/goal tolerances (ros2_controllers).
+"""
+
+from __future__ import annotations
+
+import collections
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from nodes.control.controller import Controller, ControllerError
+from nodes.control.messages import build, sec_to_time
+from nodes.control.trajectory import Trajectory, TrajectoryError, duration_to_sec, validate_trajectory
+
+# control_msgs/FollowJointTrajectory.Result error codes
+SUCCESSFUL = 0
+INVALID_GOAL = -1
+INVALID_JOINTS = -2
+OLD_HEADER_TIMESTAMP = -3
+PATH_TOLERANCE_VIOLATED = -4
+GOAL_TOLERANCE_VIOLATED = -5
+
+FJT = "control_msgs/action/FollowJointTrajectory"
+
+
+@dataclass
+class Tolerances:
+    """Per-joint limits on |desired - actual|; 0 means "not checked" (as in ros2_controllers)."""
+
+    path_position: np.ndarray
+    path_velocity: np.ndarray
+    goal_position: np.ndarray
+    goal_velocity: np.ndarray
+    goal_time: float  # 0: wait forever for the goal tolerance
+
+
+@dataclass
+class _Incoming:
+    trajectory: Trajectory
+    goal: Any = None  # ServerGoalHandle for action goals
+    tolerances: Tolerances | None = None
+    label: str = "topic"
+
+
+@dataclass
+class _Active:
+    trajectory: Trajectory
+    goal: Any
+    tolerances: Tolerances
+    last_feedback: float = -math.inf
+    started: bool = field(default=False)
+
+
+def _merge_tolerances(default: np.ndarray, joint_index: dict[str, int], entries, attr: str) -> np.ndarray:
+    """Goal-supplied JointTolerance[] over the defaults: >0 replaces, -1 disables, 0 keeps the default."""
+    merged = default.copy()
+    for entry in entries or []:
+        name = entry.get("name") if isinstance(entry, dict) else entry.name
+        value = entry.get(attr, 0.0) if isinstance(entry, dict) else getattr(entry, attr, 0.0)
+        if name not in joint_index:
+            raise TrajectoryError(f"tolerance for unknown joint '{name}'")
+        if value is None or not math.isfinite(value):
+            raise TrajectoryError(f"tolerance {attr} of joint '{name}' is not finite")
+        if value > 0.0:
+            merged[joint_index[name]] = value
+        elif value < 0.0:
+            merged[joint_index[name]] = 0.0
+    return merged
+
+
+class JointTrajectoryController(Controller):
+    type_name = "joint_trajectory_controller/JointTrajectoryController"
+
+    def on_init(self) -> None:
+        self.declare_parameter("joints", [], type=list, element_type=str, description="controlled joints")
+        self.declare_parameter("command_interfaces", ["position"], element_type=str,
+                               choices=("position", "velocity"), description="interfaces commanded")
+        self.declare_parameter("state_interfaces", ["position", "velocity"], element_type=str,
+                               choices=("position", "velocity", "acceleration"))
+        self.declare_parameter("state_publish_rate", 50.0, min_value=0.0, description="controller_state Hz")
+        self.declare_parameter("action_monitor_rate", 20.0, min_value=0.0, description="feedback Hz")
+        self.declare_parameter("allow_partial_joints_goal", False)
+        self.declare_parameter("allow_integration_in_goal_trajectories", False)
+        self.declare_parameter("open_loop_control", False)
+        self.declare_parameter("interpolation_method", "splines", choices=("splines", "none"))
+        self.declare_parameter("cmd_timeout", 0.0, min_value=0.0,
+                               description="s after the last point a topic trajectory is stale")
+        self.declare_parameter("constraints.stopped_velocity_tolerance", 0.01, min_value=0.0)
+        self.declare_parameter("constraints.goal_time", 0.0, min_value=0.0)
+
+    # --- configuration ------------------------------------------------------------------------------
+    def on_configure(self) -> None:
+        joints: list[str] = self.get_parameter("joints")
+        if not joints:
+            raise ControllerError("parameter 'joints' is empty")
+        if len(set(joints)) != len(joints):
+            raise ControllerError(f"parameter 'joints' lists a joint twice: {joints}")
+        command = self.get_parameter("command_interfaces")
+        if not command:
+            raise ControllerError("parameter 'command_interfaces' is empty")
+        if "position" not in self.get_parameter("state_interfaces"):
+            raise ControllerError("parameter 'state_interfaces' must include 'position'")
+        self.joints = joints
+        self.joint_index = {name: i for i, name in enumerate(joints)}
+        self.command_kinds: list[str] = command
+        n = len(joints)
+        path = np.zeros(n)
+        goal = np.zeros(n)
+        goal_vel = np.full(n, self.get_parameter("constraints.stopped_velocity_tolerance"))
+        self.velocity_gains = np.zeros(n)
+        for i, joint in enumerate(joints):
+            path[i] = self.declare_parameter(f"constraints.{joint}.trajectory", 0.0, min_value=0.0)
+            goal[i] = self.declare_parameter(f"constraints.{joint}.goal", 0.0, min_value=0.0)
+            self.velocity_gains[i] = self.declare_parameter(f"gains.{joint}.p", 0.0, min_value=0.0)
+            for extra in ("i", "d", "i_clamp", "ff_velocity_scale"):
+                self.declare_parameter(f"gains.{joint}.{extra}", 0.0)
+        unknown = self.params.undeclared()
+        if unknown:
+            self.logger.warn(f"{self.name}: ignoring unknown parameters {unknown}")
+        self.default_tolerances = Tolerances(path, np.zeros(n), goal, goal_vel,
+                                             self.get_parameter("constraints.goal_time"))
+        self.interpolate_points = self.get_parameter("interpolation_method") == "splines"
+        self.cmd_timeout = self.get_parameter("cmd_timeout")
+        state_rate = self.get_parameter("state_publish_rate")
+        monitor_rate = self.get_parameter("action_monitor_rate")
+        self.state_period = 1.0 / state_rate if state_rate > 0 else math.inf
+        self.feedback_period = 1.0 / monitor_rate if monitor_rate > 0 else math.inf
+
+        self._inbox: collections.deque[_Incoming] = collections.deque()
+        self._active: _Active | None = None
+        self._desired_pos: np.ndarray | None = None
+        self._desired_vel = np.zeros(n)
+        self._desired_acc = np.zeros(n)
+        self._last_state_pub = -math.inf
+        self.rejected_count = 0
+
+        ctx = self.context
+        self._traj_type = _type("trajectory_msgs/msg/JointTrajectory")
+        ctx.create_subscription(self._traj_type, "~/joint_trajectory", self._on_trajectory_msg)
+        self._state_pub = ctx.create_publisher(
+            _type("control_msgs/msg/JointTrajectoryControllerState"), "~/controller_state")
+        self._action = ctx.create_action_server(
+            _type(FJT), "~/follow_joint_trajectory", goal_callback=self._on_goal,
+            cancel_callback=self._on_cancel, accepted_callback=self._on_accepted)
+
+    def command_interface_configuration(self) -> list[str]:
+        return [f"{j}/{k}" for k in self.command_kinds for j in self.joints]
+
+    def state_interface_configuration(self) -> list[str]:
+        return [f"{j}/{k}" for k in ("position", "velocity") for j in self.joints]
+
+    def on_activate(self) -> None:
+        cmd, state = self.loans_by_name()
+        self._pos_state = [state[f"{j}/position"] for j in self.joints]
+        self._vel_state = [state[f"{j}/velocity"] for j in self.joints]
+        self._pos_cmd = [cmd[f"{j}/position"] for j in self.joints] if "position" in self.command_kinds else []
+        self._vel_cmd = [cmd[f"{j}/velocity"] for j in self.joints] if "velocity" in self.command_kinds else []
+        # Hold where the joints are; resolved at the first update if no state has arrived yet.
+        self._desired_pos = None
+        self._inbox.clear()
+
+    def on_deactivate(self) -> None:
+        self._finish_goal("abort", INVALID_GOAL, "controller deactivated")
+        self._active = None
+        for incoming in list(self._inbox):
+            self._end(incoming.goal, "abort", INVALID_GOAL, "controller deactivated")
+        self._inbox.clear()
+
+    # --- inputs (any thread) ------------------------------------------------------------------------
+    def _validate(self, msg) -> Trajectory:
+        return validate_trajectory(
+            msg, self.joints, now=self.context.now(),
+            allow_partial_joints_goal=self.get_parameter("allow_partial_joints_goal"))
+
+    def _on_trajectory_msg(self, msg) -> None:
+        if self.state != "active":
+            self.logger.warn(f"{self.name}: trajectory ignored: controller is {self.state}")
+            return
+        try:
+            trajectory = self._validate(msg)
+        except TrajectoryError as exc:
+            self.rejected_count += 1
+            self.logger.error(f"{self.name}: trajectory rejected: {exc}")
+            return
+        self._inbox.append(_Incoming(trajectory))
+
+    def _on_goal(self, goal) -> tuple[bool, str]:
+        if self.state != "active":
+            return False, f"controller '{self.name}' is {self.state}, not active"
+        try:
+            trajectory = self._validate(_get(goal, "trajectory"))
+            tolerances = self._goal_tolerances(goal)
+        except TrajectoryError as exc:
+            self.rejected_count += 1
+            self.logger.error(f"{self.name}: goal rejected: {exc}")
+            return False, str(exc)
+        # Stash for the accepted callback (it receives the handle, not the parsed trajectory).
+        self._last_validated = (id(goal), trajectory, tolerances)
+        return True, ""
+
+    def _goal_tolerances(self, goal) -> Tolerances:
+        d = self.default_tolerances
+        goal_time = d.goal_time
+        raw_time = _get(goal, "goal_time_tolerance")
+        if raw_time is not None:
+            value = duration_to_sec(raw_time)
+            if value > 0.0:
+                goal_time = value
+        return Tolerances(
+            _merge_tolerances(d.path_position, self.joint_index, _get(goal, "path_tolerance"), "position"),
+            _merge_tolerances(d.path_velocity, self.joint_index, _get(goal, "path_tolerance"), "velocity"),
+            _merge_tolerances(d.goal_position, self.joint_index, _get(goal, "goal_tolerance"), "position"),
+            _merge_tolerances(d.goal_velocity, self.joint_index, _get(goal, "goal_tolerance"), "velocity"),
+            goal_time,
+        )
+
+    def _on_accepted(self, handle) -> None:
+        goal = handle.goal
+        cached = getattr(self, "_last_validated", None)
+        if cached is not None and cached[0] == id(goal):
+            _, trajectory, tolerances = cached
+        else:  # validated on another path: parse again (cheap, and already known to be valid)
+            trajectory, tolerances = self._validate(_get(goal, "trajectory")), self._goal_tolerances(goal)
+        self._inbox.append(_Incoming(trajectory, handle, tolerances, "goal"))
+
+    def _on_cancel(self, handle) -> bool:
+        return True  # the update loop sees is_cancel_requested and holds position
+
+    # --- real-time loop -----------------------------------------------------------------------------
+    def update(self, time: float, period: float) -> None:
+        actual_pos = np.fromiter((s.get_value() for s in self._pos_state), float, len(self.joints))
+        actual_vel = np.fromiter((s.get_value() for s in self._vel_state), float, len(self.joints))
+        if self._desired_pos is None:
+            if not np.all(np.isfinite(actual_pos)):
+                return  # no state yet: command nothing
+            self._hold(actual_pos)
+
+        self._take_new_trajectory(time, actual_pos)
+        active = self._active
+        if active is not None:
+            goal = active.goal
+            if goal is not None and goal.is_cancel_requested:
+                self._hold(actual_pos)
+                self._finish_goal("canceled", SUCCESSFUL, "goal canceled")
+            else:
+                self._follow(active, time, actual_pos, actual_vel)
+
+        self._write_commands(actual_pos)
+        if time - self._last_state_pub >= self.state_period:
+            self._last_state_pub = time
+            self._publish_state(time, actual_pos, actual_vel)
+
+    def _take_new_trajectory(self, time: float, actual_pos: np.ndarray) -> None:
+        newest: _Incoming | None = None
+        while self._inbox:
+            incoming = self._inbox.popleft()
+            if newest is not None:
+                self._end(newest.goal, "abort", INVALID_GOAL, "preempted by a newer trajectory")
+            newest = incoming
+        if newest is None:
+            return
+        if self._active is not None:
+            self._finish_goal("abort", INVALID_GOAL, f"preempted by a new {newest.label}")
+        trajectory = newest.trajectory
+        if trajectory.starts_on_receipt:
+            trajectory.start_time = time
+        idx = trajectory.joint_indices
+        # Start from the last commanded state: the first command equals the previous one (no jump).
+        trajectory.set_start_state(self._desired_pos[idx], self._desired_vel[idx], self._desired_acc[idx])
+        if newest.goal is not None:
+            newest.goal.execute()
+        self._active = _Active(trajectory, newest.goal, newest.tolerances or self.default_tolerances)
+
+    def _follow(self, active: _Active, time: float, actual_pos: np.ndarray, actual_vel: np.ndarray) -> None:
+        trajectory = active.trajectory
+        sample = trajectory.sample(time, self.interpolate_points)
+        idx = trajectory.joint_indices
+        self._desired_pos[idx] = sample.positions
+        self._desired_vel[idx] = sample.velocities
+        self._desired_acc[idx] = sample.accelerations
+        goal = active.goal
+        if goal is None:
+            if self.cmd_timeout > 0.0 and time > trajectory.end_time + self.cmd_timeout:
+                self.logger.warn(f"{self.name}: command timed out ({self.cmd_timeout} s after the last point): "
+                                 "holding position")
+                self._hold(actual_pos)
+                self._active = None
+            elif sample.past_end:
+                self._active = None  # keep the last point as the hold command
+            return
+        tol = active.tolerances
+        pos_err = sample.positions - actual_pos[idx]
+        if time - active.last_feedback >= self.feedback_period:
+            active.last_feedback = time
+            self._publish_feedback(goal, time, sample, actual_pos[idx], actual_vel[idx])
+        if not sample.past_end:
+            if not sample.before_start:
+                bad = _violations(pos_err, tol.path_position[idx])
+                vel_err = sample.velocities - actual_vel[idx]
+                bad += _violations(vel_err, tol.path_velocity[idx])
+                if bad:
+                    names = ", ".join(f"{trajectory.joint_names[i]} (error {pos_err[i]:+.4f})" for i in bad)
+                    self._hold(actual_pos)
+                    self._finish_goal("abort", PATH_TOLERANCE_VIOLATED, f"path tolerance violated by {names}")
+            return
+        outside = _violations(pos_err, tol.goal_position[idx]) + _violations(actual_vel[idx],
+                                                                             tol.goal_velocity[idx])
+        if not outside:
+            self._finish_goal("succeed", SUCCESSFUL, "")
+            self._active = None  # hold the final point
+        elif tol.goal_time > 0.0 and time > trajectory.end_time + tol.goal_time:
+            names = ", ".join(f"{trajectory.joint_names[i]} (error {pos_err[i]:+.4f})" for i in sorted(set(outside)))
+            self._hold(actual_pos)
+            self._finish_goal("abort", GOAL_TOLERANCE_VIOLATED,
+                              f"goal tolerance not met {tol.goal_time} s after the end: {names}")
+
+    def _hold(self, actual_pos: np.ndarray) -> None:
+        self._desired_pos = np.array(actual_pos, dtype=float)
+        self._desired_vel = np.zeros(len(self.joints))
+        self._desired_acc = np.zeros(len(self.joints))
+
+    def _write_commands(self, actual_pos: np.ndarray) -> None:
+        desired = self._desired_pos
+        for loan, value in zip(self._pos_cmd, desired, strict=True):
+            loan.set_value(value)
+        if self._vel_cmd:
+            velocity = self._desired_vel
+            if not self._pos_cmd:  # velocity-only joints: close the position loop with gains.<joint>.p
+                velocity = velocity + self.velocity_gains * (desired - actual_pos)
+            for loan, value in zip(self._vel_cmd, velocity, strict=True):
+                loan.set_value(value)
+
+    # --- goal bookkeeping ---------------------------------------------------------------------------
+    def _finish_goal(self, how: str, code: int, text: str) -> None:
+        active = self._active
+        if active is None:
+            return
+        self._active = None
+        self._end(active.goal, how, code, text)
+
+    def _end(self, goal, how: str, code: int, text: str) -> None:
+        if goal is None:
+            if how == "abort" and text:
+                self.logger.info(f"{self.name}: trajectory stopped: {text}")
+            return
+        if how != "succeed":
+            self.logger.warn(f"{self.name}: goal {how}: {text}")
+        result = _result(code, text)
+        try:
+            getattr(goal, {"succeed": "succeed", "abort": "abort", "canceled": "canceled"}[how])(result)
+        except Exception as exc:  # a goal that already ended (client vanished) must not stop control
+            self.logger.warn(f"{self.name}: could not report goal result: {exc}")
+
+    # --- outputs ------------------------------------------------------------------------------------
+    def _publish_feedback(self, goal, time: float, sample, actual_pos, actual_vel) -> None:
+        names = self._active.trajectory.joint_names if self._active else []
+        feedback = build_feedback(time, names, sample.positions, sample.velocities, actual_pos, actual_vel)
+        try:
+            goal.publish_feedback(feedback)
+        except Exception as exc:
+            self.logger.warn(f"{self.name}: feedback not sent: {exc}")
+
+    def _publish_state(self, time: float, actual_pos: np.ndarray, actual_vel: np.ndarray) -> None:
+        desired = _point(self._desired_pos, self._desired_vel)
+        actual = _point(actual_pos, actual_vel)
+        error = _point(self._desired_pos - actual_pos, self._desired_vel - actual_vel)
+        msg = build("control_msgs/msg/JointTrajectoryControllerState", {
+            "header": {"stamp": sec_to_time(time), "frame_id": ""},
+            "joint_names": list(self.joints),
+            "reference": desired, "desired": desired,
+            "feedback": actual, "actual": actual,
+            "error": error,
+            "output": _point(self._desired_pos, self._desired_vel),
+        })
+        self._state_pub.publish(msg)
+
+    # --- introspection for tests and the CLI --------------------------------------------------------
+    @property
+    def desired_positions(self) -> np.ndarray | None:
+        return None if self._desired_pos is None else self._desired_pos.copy()
+
+    @property
+    def has_active_trajectory(self) -> bool:
+        return self._active is not None
+
+
+def _violations(error: np.ndarray, tolerance: np.ndarray) -> list[int]:
+    """Indices where a tolerance is set (> 0) and |error| exceeds it."""
+    return [i for i in np.nonzero((tolerance > 0.0) & (np.abs(error) > tolerance))[0].tolist()]
+
+
+def _point(positions, velocities) -> dict:
+    return {"positions": [float(v) for v in positions], "velocities": [float(v) for v in velocities]}
+
+
+def _get(obj, name: str):
+    return obj.get(name) if isinstance(obj, dict) else getattr(obj, name, None)
+
+
+def _type(name: str):
+    from nodes.control.messages import msg_type
+
+    return msg_type(name)
+
+
+def _result(code: int, text: str):
+    cls = _type(FJT).Result
+    return cls(error_code=code, error_string=text)
+
+
+def build_feedback(time: float, names, desired_pos, desired_vel, actual_pos, actual_vel):
+    cls = _type(FJT).Feedback
+    import msgs
+
+    return msgs.from_dict(cls, {
+        "header": {"stamp": sec_to_time(time), "frame_id": ""},
+        "joint_names": list(names),
+        "desired": _point(desired_pos, desired_vel),
+        "actual": _point(actual_pos, actual_vel),
+        "error": _point(np.asarray(desired_pos) - actual_pos, np.asarray(desired_vel) - actual_vel),
+    })

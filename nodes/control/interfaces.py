@@ -1,0 +1,159 @@
+"""Loaned hardware interfaces: the only way controllers see joints (ros2_control's resource manager).
+
+The controller manager owns one value slot per ``joint/interface``. A controller gets *loans* for the
+interfaces it declared; a state loan can only be read, a command loan read and written. Two active
+controllers never hold a loan on the same command interface (the manager refuses the switch).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+STATE_KINDS = ("position", "velocity", "effort")
+COMMAND_KINDS = ("position", "velocity", "effort")
+
+
+def interface_name(joint: str, kind: str) -> str:
+    return f"{joint}/{kind}"
+
+
+def split_interface(name: str) -> tuple[str, str]:
+    """``"left_knee/position"`` -> ``("left_knee", "position")``; raises ValueError otherwise."""
+    joint, sep, kind = name.rpartition("/")
+    if not sep or not joint or not kind:
+        raise ValueError(f"interface '{name}' is not of the form joint/interface")
+    return joint, kind
+
+
+@dataclass
+class JointInfo:
+    """One joint as the hardware describes it (zenroid_msgs/HardwareJoint)."""
+
+    name: str
+    command_interfaces: list[str] = field(default_factory=lambda: ["position"])
+    state_interfaces: list[str] = field(default_factory=lambda: list(STATE_KINDS))
+    min_position: float = -math.inf
+    max_position: float = math.inf
+    max_velocity: float = math.inf
+    max_effort: float = math.inf
+
+
+class _Slot:
+    """A single float shared between the manager and a loan (a plain attribute: cheap at 1 kHz)."""
+
+    __slots__ = ("value",)
+
+    def __init__(self) -> None:
+        self.value = math.nan
+
+
+class LoanedStateInterface:
+    __slots__ = ("name", "joint", "kind", "_slot")
+
+    def __init__(self, name: str, slot: _Slot) -> None:
+        self.name = name
+        self.joint, self.kind = split_interface(name)
+        self._slot = slot
+
+    def get_value(self) -> float:
+        return self._slot.value
+
+
+class LoanedCommandInterface(LoanedStateInterface):
+    __slots__ = ()
+
+    def set_value(self, value: float) -> None:
+        self._slot.value = float(value)
+
+
+class HardwareInterfaces:
+    """All state and command slots of one robot, filled from ``hardware/state`` frames.
+
+    Every joint gets position/velocity/effort state interfaces (the state frame carries all three) and
+    the command interfaces the hardware declares. Command slots start as NaN: "no command", which the
+    manager leaves out of ``hardware/command`` so the simulator keeps its previous one.
+    """
+
+    def __init__(self, joints: list[JointInfo]) -> None:
+        self.joints: dict[str, JointInfo] = {j.name: j for j in joints}
+        self.joint_names = [j.name for j in joints]
+        self._state: dict[str, _Slot] = {}
+        self._command: dict[str, _Slot] = {}
+        for joint in joints:
+            for kind in STATE_KINDS:
+                self._state[interface_name(joint.name, kind)] = _Slot()
+            for kind in joint.command_interfaces:
+                if kind not in COMMAND_KINDS:
+                    raise ValueError(f"joint '{joint.name}': unknown command interface '{kind}'")
+                self._command[interface_name(joint.name, kind)] = _Slot()
+        # Per-joint slot triples in frame order, rebuilt when the frame's name list changes.
+        self._frame_names: list[str] | None = None
+        self._frame_slots: list[tuple[_Slot, _Slot, _Slot] | None] = []
+        # Command slots in a fixed order so building hardware/command is one pass.
+        self._command_items = [(split_interface(n), s) for n, s in self._command.items()]
+        self.has_state = False
+
+    @property
+    def state_interface_names(self) -> list[str]:
+        return list(self._state)
+
+    @property
+    def command_interface_names(self) -> list[str]:
+        return list(self._command)
+
+    def loan_state(self, name: str) -> LoanedStateInterface:
+        slot = self._state.get(name)
+        if slot is None:
+            raise KeyError(f"state interface '{name}' does not exist")
+        return LoanedStateInterface(name, slot)
+
+    def loan_command(self, name: str) -> LoanedCommandInterface:
+        slot = self._command.get(name)
+        if slot is None:
+            raise KeyError(f"command interface '{name}' does not exist")
+        return LoanedCommandInterface(name, slot)
+
+    def read_state(self, names: list[str], position: list[float], velocity: list[float],
+                   effort: list[float]) -> None:
+        """Copy one ``hardware/state`` frame into the state slots (unknown joints are ignored)."""
+        if names != self._frame_names:
+            self._frame_names = list(names)
+            self._frame_slots = []
+            for joint in names:
+                if joint in self.joints:
+                    self._frame_slots.append(tuple(self._state[interface_name(joint, k)] for k in STATE_KINDS))
+                else:
+                    self._frame_slots.append(None)
+        n_pos, n_vel, n_eff = len(position), len(velocity), len(effort)
+        for i, slots in enumerate(self._frame_slots):
+            if slots is None:
+                continue
+            slots[0].value = position[i] if i < n_pos else math.nan
+            slots[1].value = velocity[i] if i < n_vel else 0.0
+            slots[2].value = effort[i] if i < n_eff else 0.0
+        self.has_state = True
+
+    def state_value(self, joint: str, kind: str) -> float:
+        return self._state[interface_name(joint, kind)].value
+
+    def command_value(self, joint: str, kind: str) -> float:
+        return self._command[interface_name(joint, kind)].value
+
+    def reset_command(self, name: str) -> None:
+        self._command[name].value = math.nan
+
+    def commands(self, only: set[str] | None = None) -> tuple[list[str], list[str], list[float]]:
+        """The finite command values as ``(name[], interface[], value[])`` for ``hardware/command``.
+
+        ``only`` restricts the output to claimed interfaces (an unclaimed slot keeps a stale value)."""
+        names: list[str] = []
+        kinds: list[str] = []
+        values: list[float] = []
+        for (joint, kind), slot in self._command_items:
+            value = slot.value
+            if value == value and (only is None or f"{joint}/{kind}" in only):  # NaN != NaN: no command
+                names.append(joint)
+                kinds.append(kind)
+                values.append(value)
+        return names, kinds, values

@@ -1,0 +1,255 @@
+"""Joint trajectories as ros2_controllers' JTC understands them: validation, interpolation, sampling.
+
+Pure logic (no Zenoh, no messages beyond duck-typed ``JointTrajectory``-shaped objects), so it is unit
+tested directly. Interpolation follows the fields each pair of points carries: positions only ->
+linear, positions + velocities -> cubic, positions + velocities + accelerations -> quintic.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+LINEAR, CUBIC, QUINTIC = 1, 3, 5
+
+
+class TrajectoryError(ValueError):
+    """An incoming trajectory was rejected; the message says which field and why."""
+
+
+def duration_to_sec(value) -> float:
+    """builtin_interfaces Duration/Time (object or dict) -> seconds."""
+    if isinstance(value, dict):
+        return float(value.get("sec", 0)) + float(value.get("nanosec", 0)) * 1e-9
+    return float(value.sec) + float(value.nanosec) * 1e-9
+
+
+def _field(obj, name: str):
+    return obj.get(name) if isinstance(obj, dict) else getattr(obj, name, None)
+
+
+@dataclass
+class Sample:
+    positions: np.ndarray
+    velocities: np.ndarray
+    accelerations: np.ndarray
+    before_start: bool  # t is before the trajectory's start time (holding the start state)
+    past_end: bool  # t is at or after the last point
+
+
+@dataclass
+class Trajectory:
+    """A validated trajectory over ``joint_indices`` (indices into the controller's joint list)."""
+
+    joint_names: list[str]
+    joint_indices: list[int]
+    times: np.ndarray  # time_from_start of each point, strictly increasing
+    positions: np.ndarray  # (points, joints)
+    velocities: np.ndarray | None  # (points, joints) or None when no point carries them
+    accelerations: np.ndarray | None
+    has_velocity: list[bool]
+    has_acceleration: list[bool]
+    start_time: float  # absolute (sim) seconds
+    starts_on_receipt: bool = True  # header.stamp was zero: the controller starts it when it takes it
+    start_positions: np.ndarray | None = None  # state before the trajectory, set by ``set_start_state``
+    start_velocities: np.ndarray | None = None
+    start_accelerations: np.ndarray | None = None
+
+    @property
+    def end_time(self) -> float:
+        return self.start_time + float(self.times[-1])
+
+    def set_start_state(self, positions: np.ndarray, velocities: np.ndarray,
+                        accelerations: np.ndarray | None = None) -> None:
+        """Where the first segment starts: the joint state when the trajectory takes over (no jump)."""
+        self.start_positions = np.asarray(positions, dtype=float)
+        self.start_velocities = np.asarray(velocities, dtype=float)
+        self.start_accelerations = (np.zeros_like(self.start_positions) if accelerations is None
+                                    else np.asarray(accelerations, dtype=float))
+
+    def sample(self, t: float, interpolate_points: bool = True) -> Sample:
+        """Desired positions/velocities/accelerations at absolute time ``t``.
+
+        ``interpolate_points=False`` is ``interpolation_method: none``: the desired state steps from one
+        point to the next when its time is reached."""
+        rel = t - self.start_time
+        n_joints = len(self.joint_indices)
+        if rel < 0.0:
+            p = self.start_positions if self.start_positions is not None else self.positions[0]
+            return Sample(p.copy(), np.zeros(n_joints), np.zeros(n_joints), True, False)
+        times = self.times
+        last = len(times) - 1
+        if rel >= times[last]:
+            return Sample(self.positions[last].copy(), self._vel(last), self._acc(last), False, True)
+        if rel < times[0]:
+            if self.start_positions is None:
+                raise TrajectoryError("trajectory sampled before its start state was set")
+            degree = self._degree_from_start(0)
+            p0, v0, a0 = self.start_positions, self.start_velocities, self.start_accelerations
+            t0 = 0.0
+            i1 = 0
+            if not interpolate_points:
+                return Sample(p0.copy(), np.zeros(n_joints), np.zeros(n_joints), False, False)
+        else:
+            i0 = int(np.searchsorted(times, rel, side="right")) - 1  # times[i0] <= rel < times[i0+1]
+            i1 = i0 + 1
+            degree = self._degree(i0, i1)
+            p0, v0, a0 = self.positions[i0], self._vel(i0), self._acc(i0)
+            t0 = float(times[i0])
+            if not interpolate_points:
+                return Sample(p0.copy(), v0, a0, False, False)
+        p1, v1, a1 = self.positions[i1], self._vel(i1), self._acc(i1)
+        return interpolate(degree, float(times[i1]) - t0, rel - t0, p0, v0, a0, p1, v1, a1)
+
+    def _vel(self, i: int) -> np.ndarray:
+        if self.velocities is not None and self.has_velocity[i]:
+            return self.velocities[i].copy()
+        return np.zeros(len(self.joint_indices))
+
+    def _acc(self, i: int) -> np.ndarray:
+        if self.accelerations is not None and self.has_acceleration[i]:
+            return self.accelerations[i].copy()
+        return np.zeros(len(self.joint_indices))
+
+    def _degree(self, i0: int, i1: int) -> int:
+        if self.has_velocity[i0] and self.has_velocity[i1]:
+            if self.has_acceleration[i0] and self.has_acceleration[i1]:
+                return QUINTIC
+            return CUBIC
+        return LINEAR
+
+    def _degree_from_start(self, i1: int) -> int:
+        # The start state always has velocity and acceleration: the first point decides.
+        if self.has_velocity[i1]:
+            return QUINTIC if self.has_acceleration[i1] else CUBIC
+        return LINEAR
+
+
+def interpolate(degree: int, duration: float, s: float, p0, v0, a0, p1, v1, a1) -> Sample:
+    """Polynomial between two states over ``duration``, evaluated at ``s`` seconds into it."""
+    T = duration
+    if T <= 0.0:
+        return Sample(np.array(p1, dtype=float), np.array(v1, dtype=float), np.array(a1, dtype=float),
+                      False, False)
+    if degree == LINEAR:
+        slope = (p1 - p0) / T
+        return Sample(p0 + slope * s, slope.copy(), np.zeros_like(p0), False, False)
+    if degree == CUBIC:
+        # p(s) = c0 + c1 s + c2 s^2 + c3 s^3 matching p and v at both ends.
+        c0, c1 = p0, v0
+        c2 = (3.0 * (p1 - p0) - (2.0 * v0 + v1) * T) / T**2
+        c3 = (2.0 * (p0 - p1) + (v0 + v1) * T) / T**3
+        pos = c0 + s * (c1 + s * (c2 + s * c3))
+        vel = c1 + s * (2.0 * c2 + 3.0 * c3 * s)
+        acc = 2.0 * c2 + 6.0 * c3 * s
+        return Sample(pos, vel, acc, False, False)
+    # Quintic matching p, v, a at both ends.
+    T2, T3, T4, T5 = T * T, T**3, T**4, T**5
+    c0, c1, c2 = p0, v0, 0.5 * a0
+    c3 = (20.0 * (p1 - p0) - (8.0 * v1 + 12.0 * v0) * T - (3.0 * a0 - a1) * T2) / (2.0 * T3)
+    c4 = (30.0 * (p0 - p1) + (14.0 * v1 + 16.0 * v0) * T + (3.0 * a0 - 2.0 * a1) * T2) / (2.0 * T4)
+    c5 = (12.0 * (p1 - p0) - (6.0 * v1 + 6.0 * v0) * T - (a0 - a1) * T2) / (2.0 * T5)
+    pos = c0 + s * (c1 + s * (c2 + s * (c3 + s * (c4 + s * c5))))
+    vel = c1 + s * (2.0 * c2 + s * (3.0 * c3 + s * (4.0 * c4 + s * 5.0 * c5)))
+    acc = 2.0 * c2 + s * (6.0 * c3 + s * (12.0 * c4 + s * 20.0 * c5))
+    return Sample(pos, vel, acc, False, False)
+
+
+def _float_list(values, where: str, expected: int) -> list[float] | None:
+    """A point's array: None when empty, else exactly ``expected`` finite floats."""
+    if values is None:
+        return None
+    values = list(values)
+    if not values:
+        return None
+    if len(values) != expected:
+        raise TrajectoryError(f"{where} has {len(values)} values, expected {expected} (one per joint)")
+    out = []
+    for k, v in enumerate(values):
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise TrajectoryError(f"{where}[{k}] is not a number: {v!r}")
+        if not math.isfinite(v):
+            raise TrajectoryError(f"{where}[{k}] is not finite ({v})")
+        out.append(float(v))
+    return out
+
+
+def validate_trajectory(msg, controller_joints: list[str], *, now: float,
+                        allow_partial_joints_goal: bool = False,
+                        require_positions: bool = True) -> Trajectory:
+    """Turn a JointTrajectory into a ``Trajectory`` or raise TrajectoryError with the reason.
+
+    Checks as ros2_controllers does: joint names known, not duplicated and (unless partial goals are
+    allowed) complete; at least one point; each point's arrays the right length and finite; strictly
+    increasing ``time_from_start``; a trajectory with a start stamp must not end in the past."""
+    joint_names = list(_field(msg, "joint_names") or [])
+    points = list(_field(msg, "points") or [])
+    if not joint_names:
+        raise TrajectoryError("joint_names is empty")
+    if not points:
+        raise TrajectoryError("points is empty (the trajectory has no points)")
+    index_of = {name: i for i, name in enumerate(controller_joints)}
+    seen: set[str] = set()
+    for name in joint_names:
+        if name not in index_of:
+            raise TrajectoryError(f"joint_names: unknown joint '{name}' (controller joints: "
+                                  f"{', '.join(controller_joints)})")
+        if name in seen:
+            raise TrajectoryError(f"joint_names: joint '{name}' appears twice")
+        seen.add(name)
+    if not allow_partial_joints_goal and len(joint_names) != len(controller_joints):
+        missing = [j for j in controller_joints if j not in seen]
+        raise TrajectoryError(f"joint_names: missing joints {missing} (allow_partial_joints_goal is false)")
+    n = len(joint_names)
+    times: list[float] = []
+    positions: list[list[float]] = []
+    velocities: list[list[float] | None] = []
+    accelerations: list[list[float] | None] = []
+    for i, point in enumerate(points):
+        where = f"points[{i}]"
+        tfs_raw = _field(point, "time_from_start")
+        tfs = duration_to_sec(tfs_raw) if tfs_raw is not None else 0.0
+        if not math.isfinite(tfs) or tfs < 0.0:
+            raise TrajectoryError(f"{where}.time_from_start is negative or not finite ({tfs})")
+        if times and tfs <= times[-1]:
+            raise TrajectoryError(f"{where}.time_from_start ({tfs:.6g} s) is not after the previous point's "
+                                  f"({times[-1]:.6g} s): time_from_start must increase strictly")
+        pos = _float_list(_field(point, "positions"), f"{where}.positions", n)
+        vel = _float_list(_field(point, "velocities"), f"{where}.velocities", n)
+        acc = _float_list(_field(point, "accelerations"), f"{where}.accelerations", n)
+        _float_list(_field(point, "effort"), f"{where}.effort", n)
+        if pos is None:
+            if require_positions:
+                raise TrajectoryError(f"{where}.positions is empty (the controller commands positions)")
+            pos = [math.nan] * n
+        if acc is not None and vel is None:
+            raise TrajectoryError(f"{where} has accelerations but no velocities")
+        times.append(tfs)
+        positions.append(pos)
+        velocities.append(vel)
+        accelerations.append(acc)
+    header = _field(msg, "header")
+    stamp = duration_to_sec(_field(header, "stamp")) if header is not None and _field(header, "stamp") is not None else 0.0
+    start_time = stamp if stamp > 0.0 else now
+    if stamp > 0.0 and start_time + times[-1] < now:
+        raise TrajectoryError(f"header.stamp {stamp:.3f} s + last time_from_start {times[-1]:.3f} s ends in the "
+                              f"past (now {now:.3f} s)")
+    has_vel = [v is not None for v in velocities]
+    has_acc = [a is not None for a in accelerations]
+    zeros = [0.0] * n
+    vel_arr = np.array([v if v is not None else zeros for v in velocities]) if any(has_vel) else None
+    acc_arr = np.array([a if a is not None else zeros for a in accelerations]) if any(has_acc) else None
+    return Trajectory(
+        joint_names=joint_names,
+        joint_indices=[index_of[name] for name in joint_names],
+        times=np.array(times, dtype=float),
+        positions=np.array(positions, dtype=float),
+        velocities=vel_arr,
+        accelerations=acc_arr,
+        has_velocity=has_vel,
+        has_acceleration=has_acc,
+        start_time=start_time,
+        starts_on_receipt=stamp <= 0.0,
+    )
