@@ -57,6 +57,11 @@ class PhysicsWorld:
     def step(self) -> None:
         self.world.step()
 
+    def reset_collision(self) -> None:
+        """A fresh collision detector: its broad-phase tree orders contacts, so a reset that keeps the old
+        one is not bit-identical to a fresh start (measured: 1e-13 rad apart after 200 steps)."""
+        self.world.getConstraintSolver().setCollisionDetector(_make_detector(self.collision_detector))
+
     # -- gravity ----------------------------------------------------------------------------------------
     def set_gravity(self, gravity) -> None:
         vector = np.asarray(gravity, dtype=float).reshape(-1)

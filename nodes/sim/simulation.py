@@ -1,0 +1,124 @@
+"""The simulated world as a whole: entities with their hardware interfaces, physics steps, resets.
+
+No networking here: the node (``nodes.sim.node``) decides when to step and what to publish.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from nodes.sim.entity import Entity, EntitySpec, Pose, SpawnError
+from nodes.sim.hardware import Gains, HardwareInterface
+from nodes.sim.humanoid_state import BalanceState, balance_state, robot_contacts
+from nodes.sim.world import GROUND_NAME, PhysicsWorld
+
+MODES = ("lockstep", "realtime", "kinematic")
+
+
+class Simulation:
+    def __init__(self, world: PhysicsWorld, gains_for: Callable[[str], Gains],
+                 warn: Callable[[str], None] | None = None, mode: str = "lockstep") -> None:
+        if mode not in MODES:
+            raise ValueError(f"mode {mode!r} is not one of {', '.join(MODES)}")
+        self.world = world
+        self.gains_for = gains_for
+        self.warn = warn or (lambda message: None)
+        self.mode = mode
+        self.entities: dict[str, Entity] = {}
+        self.hardware: dict[str, HardwareInterface] = {}   # by robot namespace
+        self.step_count = 0                                  # physics steps since start / reset_simulation
+
+    @property
+    def kinematic(self) -> bool:
+        return self.mode == "kinematic"
+
+    # -- entities ---------------------------------------------------------------------------------------
+    def spawn(self, spec: EntitySpec, reference_frame: str = "") -> Entity:
+        """Add an entity; raises SpawnError / UrdfError with a clear reason and leaves the world unchanged."""
+        if spec.name in self.entities or spec.name == GROUND_NAME:
+            raise SpawnError(f"an entity named {spec.name!r} already exists")
+        frame = reference_frame.strip()
+        if frame not in ("", "world", "map"):
+            parent = self.entities.get(frame.split("::")[0])
+            if parent is None:
+                raise SpawnError(f"reference_frame {frame!r} is neither 'world' nor an existing entity")
+            spec.pose = parent.world_pose().compose(spec.pose.validated())
+        entity = Entity(spec)
+        if entity.namespace in self.hardware:
+            raise SpawnError(f"robot namespace {entity.namespace!r} is already used by entity "
+                             f"{self.hardware[entity.namespace].entity.name!r}")
+        hardware = HardwareInterface(entity, self.gains_for, self.warn)
+        self.world.world.addSkeleton(entity.skeleton)
+        self.entities[entity.name] = entity
+        self.hardware[entity.namespace] = hardware
+        return entity
+
+    def delete(self, name: str) -> bool:
+        if name == GROUND_NAME:
+            return self.world.remove_ground()
+        entity = self.entities.pop(name, None)
+        if entity is None:
+            return False
+        self.hardware.pop(entity.namespace, None)
+        self.world.world.removeSkeleton(entity.skeleton)
+        return True
+
+    def clear(self) -> None:
+        """Remove everything (shutdown): drop DART objects in an order that does not crash on exit."""
+        for name in list(self.entities):
+            self.delete(name)
+        self.world.remove_ground()
+
+    # -- stepping ---------------------------------------------------------------------------------------
+    def step(self, count: int = 1) -> None:
+        """``count`` physics steps with the current commands (kinematic: joints set, no dynamics)."""
+        dt = self.world.time_step
+        hardware = list(self.hardware.values())
+        for _ in range(count):
+            if self.kinematic:
+                for hw in hardware:
+                    hw.set_kinematic(dt)
+                self.world.world.setTime(self.world.time + dt)
+            else:
+                for hw in hardware:
+                    hw.before_step()
+                self.world.step()
+                for hw in hardware:
+                    hw.after_step()
+            self.step_count += 1
+
+    def hold_all(self) -> None:
+        for hw in self.hardware.values():
+            hw.hold_position()
+
+    def reset_world(self) -> None:
+        """Robots back to their spawn poses and joint positions, at rest, holding position (time kept)."""
+        for entity in self.entities.values():
+            entity.reset()
+        self.world.reset_collision()
+        self.hold_all()
+
+    def reset_simulation(self) -> None:
+        """reset_world plus sim time and step counter back to zero."""
+        self.reset_world()
+        self.world.world.reset()   # time = 0 and the last collision result cleared
+        self.step_count = 0
+
+    # -- outputs ----------------------------------------------------------------------------------------
+    def model_states(self) -> list[tuple[str, Pose, np.ndarray, np.ndarray]]:
+        """(name, pose, linear, angular) per model, ``ground_plane`` first when present (as Gazebo does)."""
+        rows = []
+        if self.world.has_ground:
+            rows.append((GROUND_NAME, Pose(), np.zeros(3), np.zeros(3)))
+        for name, entity in self.entities.items():
+            linear, angular = entity.world_twist()
+            rows.append((name, entity.world_pose(), linear, angular))
+        return rows
+
+    def balance(self, namespace: str) -> BalanceState:
+        skeleton = self.hardware[namespace].skeleton
+        contacts = [] if self.kinematic else robot_contacts(self.world.contacts(), skeleton.getName())
+        return balance_state(np.asarray(skeleton.getCOM()), np.asarray(skeleton.getCOMLinearAcceleration()),
+                             self.world.gravity[2], contacts)
