@@ -10,6 +10,8 @@ import argparse
 import importlib
 import sys
 
+from nodes.tools.errors import UsageError
+
 # verb -> (module, one-line help)
 VERBS: dict[str, tuple[str, str]] = {
     "launch": ("launch.cli", "run a YAML launch file"),
@@ -28,10 +30,6 @@ VERBS: dict[str, tuple[str, str]] = {
     "doctor": ("nodes.tools.doctor", "check the installation and the network"),
     "bag": ("nodes.tools.bag", "record/play/info bags"),
 }
-
-
-class UsageError(Exception):
-    """Bad command-line input: printed as one line, exit status 2."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -71,6 +69,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         return 130
 
+
+__all__ = ["VERBS", "UsageError", "main"]
 
 if __name__ == "__main__":
     sys.exit(main())
