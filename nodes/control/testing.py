@@ -1,0 +1,178 @@
+"""In-process stand-ins for the manager's Zenoh side: a fake ``ControllerContext`` and goal handle.
+
+Used by the unit tests and ``bench/control.py`` to drive controllers without any network.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from nodes.control.interfaces import HardwareInterfaces, JointInfo
+
+
+class ListLogger:
+    def __init__(self) -> None:
+        self.lines: list[tuple[str, str]] = []
+
+    def _log(self, level: str, msg: str) -> None:
+        self.lines.append((level, msg))
+
+    def debug(self, msg: str) -> None:
+        self._log("debug", msg)
+
+    def info(self, msg: str) -> None:
+        self._log("info", msg)
+
+    def warn(self, msg: str) -> None:
+        self._log("warn", msg)
+
+    def error(self, msg: str) -> None:
+        self._log("error", msg)
+
+    def text(self, level: str | None = None) -> str:
+        return "\n".join(m for lvl, m in self.lines if level is None or lvl == level)
+
+
+class FakePublisher:
+    def __init__(self, topic: str) -> None:
+        self.topic = topic
+        self.messages: list[Any] = []
+
+    def publish(self, msg: Any) -> None:
+        self.messages.append(msg)
+
+
+class FakeActionServer:
+    def __init__(self, name: str, callbacks: dict[str, Any]) -> None:
+        self.name = name
+        self.callbacks = callbacks
+
+    def send_goal(self, goal: Any) -> tuple[bool, str, FakeGoalHandle | None]:
+        verdict = self.callbacks["goal_callback"](goal)
+        accepted, reason = verdict if isinstance(verdict, tuple) else (bool(verdict), "")
+        if not accepted:
+            return False, reason, None
+        handle = FakeGoalHandle(goal, self)
+        self.callbacks["accepted_callback"](handle)
+        return True, "", handle
+
+
+class FakeGoalHandle:
+    """Status codes as action_msgs/GoalStatus."""
+
+    def __init__(self, goal: Any, server: FakeActionServer) -> None:
+        self.goal = goal
+        self.server = server
+        self.status = 1
+        self.result: Any = None
+        self.feedback: list[Any] = []
+
+    @property
+    def is_active(self) -> bool:
+        return self.status in (1, 2, 3)
+
+    @property
+    def is_cancel_requested(self) -> bool:
+        return self.status == 3
+
+    def cancel(self) -> None:
+        if self.server.callbacks["cancel_callback"](self):
+            self.status = 3
+
+    def execute(self) -> None:
+        self.status = 2
+
+    def publish_feedback(self, fb: Any) -> None:
+        self.feedback.append(fb)
+
+    def _finish(self, status: int, result: Any) -> None:
+        if self.is_active:
+            self.status, self.result = status, result
+
+    def succeed(self, result: Any = None) -> None:
+        self._finish(4, result)
+
+    def canceled(self, result: Any = None) -> None:
+        self._finish(5, result)
+
+    def abort(self, result: Any = None) -> None:
+        self._finish(6, result)
+
+
+class FakeContext:
+    def __init__(self, name: str = "ctrl") -> None:
+        self.name = name
+        self.logger = ListLogger()
+        self.time = 0.0
+        self.publishers: dict[str, FakePublisher] = {}
+        self.subscriptions: dict[str, Any] = {}
+        self.services: dict[str, Any] = {}
+        self.actions: dict[str, FakeActionServer] = {}
+        self.destroyed = 0
+
+    def _resolve(self, topic: str) -> str:
+        return f"{self.name}/{topic[2:]}" if topic.startswith("~/") else topic
+
+    def now(self) -> float:
+        return self.time
+
+    def create_publisher(self, msg_type: Any, topic: str) -> FakePublisher:
+        pub = FakePublisher(self._resolve(topic))
+        self.publishers[pub.topic] = pub
+        return pub
+
+    def create_subscription(self, msg_type: Any, topic: str, callback: Any) -> Any:
+        self.subscriptions[self._resolve(topic)] = callback
+        return callback
+
+    def create_service(self, srv_type: Any, name: str, handler: Any) -> Any:
+        self.services[self._resolve(name)] = handler
+        return handler
+
+    def create_action_server(self, action_type: Any, name: str, **callbacks: Any) -> FakeActionServer:
+        server = FakeActionServer(self._resolve(name), callbacks)
+        self.actions[server.name] = server
+        return server
+
+    def destroy_all(self) -> None:
+        self.destroyed += 1
+        self.publishers.clear()
+        self.subscriptions.clear()
+        self.services.clear()
+        self.actions.clear()
+
+
+def make_hardware(joints: list[str], command_interfaces: tuple[str, ...] = ("position",)) -> HardwareInterfaces:
+    return HardwareInterfaces([JointInfo(j, list(command_interfaces)) for j in joints])
+
+
+class FirstOrderPlant:
+    """A toy joint model for unit tests: position follows a position command with time constant ``tau``,
+    integrates a velocity command, or accelerates under an effort command with inertia ``inertia``."""
+
+    def __init__(self, hardware: HardwareInterfaces, tau: float = 0.02, inertia: float = 0.05) -> None:
+        self.hw = hardware
+        self.tau = tau
+        self.inertia = inertia
+        self.names = list(hardware.joint_names)
+        self.pos = {j: 0.0 for j in self.names}
+        self.vel = {j: 0.0 for j in self.names}
+
+    def publish_state(self) -> None:
+        self.hw.read_state(self.names, [self.pos[j] for j in self.names], [self.vel[j] for j in self.names],
+                           [0.0] * len(self.names))
+
+    def apply(self, names: list[str], kinds: list[str], values: list[float], dt: float) -> None:
+        commanded = dict(zip(names, zip(kinds, values, strict=True), strict=True))
+        for j in self.names:
+            kind, value = commanded.get(j, ("hold", self.pos[j]))
+            if kind in ("position", "hold"):
+                new = self.pos[j] + (value - self.pos[j]) * min(1.0, dt / self.tau)
+                self.vel[j] = (new - self.pos[j]) / dt
+                self.pos[j] = new
+            elif kind == "velocity":
+                self.vel[j] = value
+                self.pos[j] += value * dt
+            else:
+                self.vel[j] += value / self.inertia * dt
+                self.pos[j] += self.vel[j] * dt
