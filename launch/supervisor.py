@@ -147,8 +147,14 @@ class Supervisor:
 
     def _on_exit(self, managed: Managed) -> None:
         spec, code = managed.spec, managed.exit_code
-        if managed.pgid is not None and self.reaper:
-            self.reaper.forget(managed.pgid)
+        if managed.pgid is not None:
+            # Whatever the node left running in its group (its own children) must not outlive it.
+            try:
+                os.killpg(managed.pgid, signal.SIGKILL)
+            except (ProcessLookupError, PermissionError):
+                pass
+            if self.reaper:
+                self.reaper.forget(managed.pgid)
         describe = f"signal {-code}" if code is not None and code < 0 else f"status {code}"
         if self._shutdown_started is not None:
             self.say(f"'{spec.name}' ended ({describe})")
@@ -274,12 +280,6 @@ class Supervisor:
         for managed in self.nodes:
             if managed.reader is not None:
                 managed.reader.join(timeout=2.0)
-            if managed.pgid is not None:
-                # Grandchildren a node left behind in its group go too.
-                try:
-                    os.killpg(managed.pgid, signal.SIGKILL)
-                except (ProcessLookupError, PermissionError):
-                    pass
         for message in self.plan.on_shutdown:
             self.say(message)
         return self.exit_status

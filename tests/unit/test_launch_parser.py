@@ -1,0 +1,219 @@
+"""Launch file parsing and resolution: every error names file:line and nothing is started."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from launch.resolve import find_launch_file, resolve
+from launch.substitutions import SubstitutionContext, substitute
+from launch.yaml_source import LaunchError, Source
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def write(directory: Path, text: str, name: str = "test.yaml") -> Path:
+    path = directory / name
+    path.write_text(textwrap.dedent(text).lstrip(), encoding="utf-8")
+    return path
+
+
+def error_of(path: Path, args: dict[str, str] | None = None) -> LaunchError:
+    with pytest.raises(LaunchError) as info:
+        resolve(path, args or {})
+    return info.value
+
+
+GOOD = """
+launch:
+  - arg: {name: x, default: "0.5", description: "x position"}
+  - arg: {name: mode, default: realtime, choices: [realtime, lockstep]}
+  - arg: {name: gui, default: "false"}
+  - node:
+      name: talker
+      module: launch.dummy_node
+      namespace: humanoid
+      params: {x: $(var x), mode: $(var mode), gains: [1, "$(var x)"], label: "x=$(var x)"}
+      remap: {joint_states: /other/joint_states}
+      args: [--exit-after, "1"]
+  - node: {name: viewer, module: launch.dummy_node, if: $(var gui)}
+  - node: {name: headless, module: launch.dummy_node, unless: $(var gui)}
+  - group:
+      namespace: inner
+      actions:
+        - node: {name: grouped, module: launch.dummy_node, namespace: deeper, remap: ["a:=b"]}
+"""
+
+
+def test_good_file_resolves_with_typed_params_namespaces_and_conditions(tmp_path: Path) -> None:
+    plan = resolve(write(tmp_path, GOOD), {"mode": "lockstep"})
+    names = [n.name for n in plan.nodes]
+    assert names == ["talker", "headless", "grouped"]
+    talker = plan.nodes[0]
+    assert talker.params == {"x": 0.5, "mode": "lockstep", "gains": [1, 0.5], "label": "x=0.5"}
+    assert talker.remaps == [("joint_states", "/other/joint_states")]
+    assert talker.full_name == "humanoid/talker"
+    assert plan.nodes[2].namespace == "inner/deeper"
+    assert plan.nodes[2].remaps == [("a", "b")]
+    assert plan.args == {"x": "0.5", "mode": "lockstep", "gui": "false"}
+    command = talker.command("python", Path("/tmp/p.yaml"))
+    assert command[:5] == ["python", "-m", "launch.dummy_node", "--name", "talker"]
+    assert "--ns" in command and command[command.index("--ns") + 1] == "humanoid"
+    assert command[-2:] == ["--exit-after", "1"]
+    gui_plan = resolve(write(tmp_path, GOOD), {"gui": "true"})
+    assert [n.name for n in gui_plan.nodes] == ["talker", "viewer", "grouped"]
+
+
+@pytest.mark.parametrize(
+    ("text", "line", "fragment"),
+    [
+        ("launch: []\nextra: 1\n", 2, "unknown key 'extra'"),
+        ("launch:\n  - nod: {name: a}\n", 2, "unknown action 'nod'"),
+        ("launch:\n  - node:\n      name: a\n      module: launch.dummy_node\n      respawnn: true\n", 5,
+         "unknown key 'respawnn' in node"),
+        ("launch:\n  - arg: {name: x}\n", 2, "missing required argument 'x'"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node, args: [\"$(bogus 1)\"]}\n", 2,
+         "unknown substitution '$(bogus)'"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node, args: [\"$(var x\"]}\n", 2, "unterminated"),
+        ("launch:\n  - arg: {name: y, default: '1'}\n  - node:\n      name: a\n      module: launch.dummy_node\n"
+         "      args: [\"$(var x)\"]\n", 6, "no launch argument 'x' is declared"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node, args: [\"$(env ZENROID_SURELY_UNSET_VAR)\"]}\n",
+         2, "is not set"),
+        ("launch:\n  - include: {file: missing.yaml}\n", 2, "included launch file not found: missing.yaml"),
+        ("launch:\n  - node:\n      name: a\n      module: launch.dummy_node\n      param_file: nope.yaml\n", 5,
+         "parameter file not found: nope.yaml"),
+        ("launch:\n  - node: {name: a, module: nodes.no_such_module_here}\n", 2, "module 'nodes.no_such_module_here'"),
+        ("launch:\n  - node: {name: a, exec: zenroid-no-such-program}\n", 2, "program 'zenroid-no-such-program'"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node, exec: ls}\n", 2, "exactly one of 'module'"),
+        ("launch:\n  - node:\n      name: a\n      name: b\n", 4, "duplicate key 'name'"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node\n", 3, "invalid YAML"),
+        ("launch:\n  - arg: {name: m, default: fast, choices: [realtime, lockstep]}\n", 2, "must be one of"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node}\n  - node: {name: a, module: launch.dummy_node}\n",
+         3, "duplicate node name 'a'"),
+        ("launch:\n  - node:\n      name: a\n      module: launch.dummy_node\n      respawn: maybe\n", 5,
+         "must be true or false"),
+        ("launch:\n  - node:\n      name: a\n      module: launch.dummy_node\n      respawn_delay: soon\n", 5,
+         "respawn_delay' must be a number"),
+        ("launch:\n  - node:\n      name: a\n      module: launch.dummy_node\n      respawn_delay: -1\n", 5,
+         "finite number >= 0"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node}\n  - on_exit: {node: b}\n", 3,
+         "on_exit watches node 'b'"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node, wait_for: [ghost]}\n", 2, "waits for 'ghost'"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node, output: loud}\n", 2, "'screen' or 'log'"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node, params: [1, 2]}\n", 2, "'params' must be a mapping"),
+        ("launch:\n  - node: {name: 'a b', module: launch.dummy_node}\n", 2, "node name 'a b'"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node, namespace: 'x y'}\n", 2, "namespace 'x y'"),
+        ("launch:\n  - node: {name: a, module: launch.dummy_node, if: perhaps}\n", 2, "'if' must be true or false"),
+        ("launch:\n  - node: !!python/object:os.system {name: a}\n", 2, "invalid YAML"),
+        ("launch:\n  - node:\n      module: launch.dummy_node\n", 2, "node needs a 'name'"),
+        ("launch: {node: a}\n", 1, "'launch' must be a list"),
+        ("- node: {name: a}\n", 1, "a launch file is a mapping"),
+    ],
+)
+def test_errors_name_file_line_and_reason(tmp_path: Path, text: str, line: int, fragment: str) -> None:
+    path = write(tmp_path, text)
+    error = error_of(path)
+    assert error.source is not None and error.source.file == path
+    assert error.source.line == line, str(error)
+    assert fragment in str(error)
+    assert str(error).startswith(f"{path}:{line}: ")
+
+
+def test_unknown_command_line_argument_is_an_error(tmp_path: Path) -> None:
+    error = error_of(write(tmp_path, GOOD), {"nope": "1"})
+    assert "unknown launch argument(s): nope" in str(error)
+
+
+def test_include_passes_args_and_inherits_matching_parent_values(tmp_path: Path) -> None:
+    write(tmp_path, """
+        launch:
+          - arg: {name: robot}
+          - arg: {name: zenoh_port, default: "1"}
+          - node: {name: "$(var robot)_node", module: launch.dummy_node, params: {port: $(var zenoh_port)}}
+        """, name="child.yaml")
+    parent = write(tmp_path, """
+        launch:
+          - arg: {name: zenoh_port, default: "7000"}
+          - include: {file: child.yaml, args: {robot: atlas}}
+          - group:
+              namespace: g
+              actions:
+                - include: {file: "$(dirname)/child.yaml", args: {robot: other}}
+        """)
+    plan = resolve(parent, {"zenoh_port": "7001"})
+    assert [(n.name, n.namespace, n.params["port"]) for n in plan.nodes] == [
+        ("atlas_node", "", 7001), ("other_node", "g", 7001)]
+
+
+def test_include_errors_point_into_the_included_file(tmp_path: Path) -> None:
+    child = write(tmp_path, "launch:\n  - node: {name: a, module: launch.dummy_node, bad_key: 1}\n", name="child.yaml")
+    parent = write(tmp_path, "launch:\n  - include: {file: child.yaml}\n")
+    error = error_of(parent)
+    assert error.source == Source(child, 2)
+    write(tmp_path, "launch:\n  - arg: {name: a, default: '1'}\n", name="child.yaml")
+    undeclared = write(tmp_path, "launch:\n  - include: {file: child.yaml, args: {zzz: '1'}}\n", name="p2.yaml")
+    assert "does not declare" in str(error_of(undeclared))
+
+
+def test_include_cycle_is_an_error(tmp_path: Path) -> None:
+    path = write(tmp_path, "launch:\n  - include: {file: test.yaml}\n")
+    assert "include cycle" in str(error_of(path))
+
+
+def test_substitutions() -> None:
+    ctx = SubstitutionContext(variables={"a": "1"}, current_file=Path("/x/y/f.yaml"), environ={"HOME": "/h"},
+                              robot_resolver=lambda name: Path(f"/robots/{name}.urdf"))
+    src = Source(Path("f.yaml"), 3)
+    assert substitute("v=$(var a) h=$(env HOME) d=$(env NOPE dflt)", ctx, src) == "v=1 h=/h d=dflt"
+    assert substitute("$(dirname)/z", ctx, src) == "/x/y/z"
+    assert substitute("$(robot humanoid)", ctx, src) == "/robots/humanoid.urdf"
+    assert substitute("cost $$(var a) plain", ctx, src) == "cost $(var a) plain"
+    with pytest.raises(LaunchError, match="takes one argument"):
+        substitute("$(var a b)", ctx, src)
+    with pytest.raises(LaunchError, match="nested"):
+        substitute("$(var $(var a))", ctx, src)
+    with pytest.raises(LaunchError, match="empty substitution"):
+        substitute("$()", ctx, src)
+
+
+def test_robot_substitution_uses_robots_dir(tmp_path: Path) -> None:
+    path = write(tmp_path, "launch:\n  - node: {name: a, module: launch.dummy_node, args: [\"$(robot no_such_bot)\"]}\n")
+    error = error_of(path)
+    assert error.source.line == 2 and "no_such_bot" in str(error)
+
+
+def test_bare_names_resolve_in_launch_dir() -> None:
+    assert find_launch_file("humanoid.yaml") == ROOT / "launch" / "humanoid.yaml"
+    with pytest.raises(FileNotFoundError):
+        find_launch_file("no_such_launch.yaml")
+
+
+def run_cli(*argv: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "launch", *argv], cwd=ROOT, capture_output=True, text=True,
+                          timeout=60)
+
+
+def test_cli_bad_file_exits_2_with_file_line_and_starts_nothing(tmp_path: Path) -> None:
+    path = write(tmp_path, "launch:\n  - node: {name: a, module: launch.dummy_node, typo: 1}\n")
+    result = run_cli(str(path))
+    assert result.returncode == 2
+    assert f"{path}:2: unknown key 'typo'" in result.stderr
+    assert "started" not in result.stdout and "zenoh" not in result.stdout
+
+
+def test_cli_show_args_and_print(tmp_path: Path) -> None:
+    path = write(tmp_path, GOOD)
+    shown = run_cli(str(path), "--show-args")
+    assert shown.returncode == 0
+    assert "'mode':" in shown.stdout and "Valid choices are: ['realtime', 'lockstep']" in shown.stdout
+    assert "x position" in shown.stdout and "(default: '0.5')" in shown.stdout
+    printed = run_cli(str(path), "x:=2", "--print")
+    assert printed.returncode == 0, printed.stderr
+    assert "x: 2" in printed.stdout and "embedded router on tcp/127.0.0.1:7447" in printed.stdout
+    assert "[launch]" not in printed.stdout  # nothing was started
+    bad = run_cli(str(path), "x")
+    assert bad.returncode == 2 and "name:=value" in bad.stderr

@@ -1,0 +1,180 @@
+"""The launcher supervising real processes (stand-in nodes) over a real embedded Zenoh router."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import psutil
+import pytest
+
+from tests.conftest import wait_until
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+class Launch:
+    """``python -m launch FILE`` in its own session, output captured to a file."""
+
+    def __init__(self, tmp_path: Path, text: str, port: int, *args: str) -> None:
+        self.file = tmp_path / "test.yaml"
+        self.file.write_text(textwrap.dedent(text).lstrip(), encoding="utf-8")
+        self.log_dir = tmp_path / "logs"
+        self.out_path = tmp_path / "launch.out"
+        env = dict(os.environ)
+        env.pop("ZENOH_CONNECT", None)
+        env.pop("ZENOH_CONFIG", None)
+        with open(self.out_path, "wb") as out:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "launch", str(self.file), f"zenoh_port:={port}", "--log-dir",
+                 str(self.log_dir), *args],
+                cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+
+    def output(self) -> str:
+        return self.out_path.read_text(errors="replace")
+
+    def pids(self, name: str) -> list[int]:
+        return [int(p) for p in re.findall(rf"started '{name}' \[pid (\d+)\]", self.output())]
+
+    def wait_output(self, fragment: str, timeout: float = 30.0) -> None:
+        wait_until(lambda: fragment in self.output(), timeout, 0.05, f"'{fragment}' in launcher output:\n"
+                   + self.output())
+
+    def stop(self) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+        try:
+            return self.proc.wait(timeout=20)
+        finally:
+            if self.proc.poll() is None:
+                os.killpg(self.proc.pid, signal.SIGKILL)
+                self.proc.wait()
+
+
+def gone(pid: int) -> bool:
+    try:
+        return psutil.Process(pid).status() == psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return True
+
+
+HEADER = """
+launch:
+  - arg: {name: zenoh_port, default: "7447"}
+"""
+
+
+def test_respawn_after_kill_9_and_sigint_ends_everything(tmp_path: Path, zenoh_port: int) -> None:
+    launch = Launch(tmp_path, HEADER + """
+  - node: {name: worker, module: launch.dummy_node, namespace: demo, respawn: true, respawn_delay: 0.3,
+           params: {rate: 5.0}, args: [--child]}
+  - node: {name: steady, module: launch.dummy_node}
+""", zenoh_port)
+    try:
+        launch.wait_output("[worker] ready demo/worker")
+        launch.wait_output("[steady] ready steady")
+        first = launch.pids("worker")[0]
+        os.kill(first, signal.SIGKILL)
+        launch.wait_output("respawning 'worker' in 0.3 s (1/5)")
+        wait_until(lambda: len(launch.pids("worker")) == 2, 20, 0.05, "a second worker")
+        second = launch.pids("worker")[1]
+        assert second != first and not gone(second)
+        wait_until(lambda: launch.output().count("[worker] ready demo/worker") == 2, 30, 0.05, "respawned ready")
+        # Parameters reach the node through the generated params file.
+        assert "[worker] params {worker: {ros__parameters: {rate: 5.0}}}" in launch.output()
+        children = [int(p) for p in re.findall(r"\[worker\] child pid (\d+)", launch.output())]
+        everyone = [*launch.pids("worker"), *launch.pids("steady"), *children]
+        assert launch.stop() == 0
+        wait_until(lambda: all(gone(p) for p in everyone), 10, 0.05, "every node and child process to end")
+        assert "[steady] bye steady" in launch.output()  # SIGINT reached it: it closed cleanly
+        assert (launch.log_dir / "worker.log").read_text().count("ready demo/worker") == 2
+    finally:
+        launch.stop()
+
+
+def test_required_node_failure_ends_launch_with_nonzero_status(tmp_path: Path, zenoh_port: int) -> None:
+    launch = Launch(tmp_path, HEADER + """
+  - node: {name: brittle, module: launch.dummy_node, required: true, args: [--exit-after, "1", --exit-code, "4"]}
+  - node: {name: bystander, module: launch.dummy_node}
+  - on_exit: {node: brittle, log: "brittle has gone"}
+  - on_shutdown: {log: "launch over"}
+""", zenoh_port)
+    try:
+        assert launch.proc.wait(timeout=40) == 1
+        out = launch.output()
+        assert "'brittle'" in out and "exited with status 4" in out
+        assert "required node 'brittle' exited (status 4)" in out
+        assert "brittle has gone" in out and out.rstrip().endswith("launch over")
+        assert all(gone(p) for p in launch.pids("bystander"))
+    finally:
+        launch.stop()
+
+
+def test_wait_for_starts_nodes_in_readiness_order(tmp_path: Path, zenoh_port: int) -> None:
+    launch = Launch(tmp_path, HEADER + """
+  - node: {name: slow_server, module: launch.dummy_node, namespace: ns, args: [--start-delay, "1.5"]}
+  - node: {name: client, module: launch.dummy_node, wait_for: [slow_server]}
+  - node: {name: one_shot, module: launch.dummy_node, args: [--exit-after, "0.5"]}
+  - node: {name: after_one_shot, module: launch.dummy_node, wait_for: [one_shot, client]}
+""", zenoh_port)
+    try:
+        launch.wait_output("[after_one_shot] ready after_one_shot", 40)
+        out = launch.output()
+        assert out.index("[slow_server] ready ns/slow_server") < out.index("started 'client'")
+        assert out.index("'one_shot'") < out.index("started 'after_one_shot'")
+        assert out.index("[client] ready client") < out.index("started 'after_one_shot'")
+    finally:
+        assert launch.stop() == 0
+
+
+def test_launcher_killed_with_sigkill_leaves_no_orphans(tmp_path: Path, zenoh_port: int) -> None:
+    launch = Launch(tmp_path, HEADER + """
+  - node: {name: a, module: launch.dummy_node, args: [--child]}
+  - node: {name: b, module: launch.dummy_node}
+""", zenoh_port)
+    try:
+        launch.wait_output("[a] ready a")
+        launch.wait_output("[b] ready b")
+        children = [int(p) for p in re.findall(r"\[a\] child pid (\d+)", launch.output())]
+        everyone = [*launch.pids("a"), *launch.pids("b"), *children]
+        os.kill(launch.proc.pid, signal.SIGKILL)  # no chance to clean up: the reaper must
+        launch.proc.wait()
+        wait_until(lambda: all(gone(p) for p in everyone), 15, 0.05, "the reaper to end every node")
+    finally:
+        for pid in locals().get("everyone", []):
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+
+
+@pytest.mark.slow
+def test_stubborn_node_gets_sigterm_then_sigkill(tmp_path: Path, zenoh_port: int) -> None:
+    launch = Launch(tmp_path, HEADER + """
+  - node: {name: stubborn, module: launch.dummy_node, args: [--ignore-sigint]}
+""", zenoh_port)
+    try:
+        launch.wait_output("[stubborn] ready stubborn")
+        pid = launch.pids("stubborn")[0]
+        launch.proc.send_signal(signal.SIGINT)
+        assert launch.proc.wait(timeout=30) == 0
+        out = launch.output()
+        assert "sending SIGTERM" in out and "sending SIGKILL" in out
+        assert gone(pid)
+    finally:
+        launch.stop()
+
+
+def test_port_in_use_is_a_clear_error(tmp_path: Path, zenoh_port: int, router: str) -> None:
+    launch = Launch(tmp_path, HEADER + "  - node: {name: a, module: launch.dummy_node}\n", zenoh_port)
+    try:
+        assert launch.proc.wait(timeout=30) == 1
+        assert f"cannot host the Zenoh router on {router}" in launch.output()
+        assert "started 'a'" not in launch.output()
+    finally:
+        launch.stop()
