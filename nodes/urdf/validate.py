@@ -22,6 +22,22 @@ class Issue:
         return f"{self.severity}: {self.message}"
 
 
+def _reaches(model: RobotModel, start: str, target: str) -> bool:
+    """True when ``target`` is an ancestor of (or is) ``start`` through any parent joint."""
+    parents: dict[str, list[str]] = {}
+    for joint in model.joints.values():
+        parents.setdefault(joint.child, []).append(joint.parent)
+    stack, seen = [start], set()
+    while stack:
+        link = stack.pop()
+        if link == target:
+            return True
+        if link not in seen:
+            seen.add(link)
+            stack.extend(parents.get(link, []))
+    return False
+
+
 def _tree_errors(model: RobotModel) -> list[str]:
     errors: list[str] = []
     for name in model.duplicate_links:
@@ -36,8 +52,9 @@ def _tree_errors(model: RobotModel) -> list[str]:
         if joint.parent == joint.child:
             errors.append(f"joint '{joint.name}': link '{joint.child}' is its own parent (cycle)")
         if joint.child in parent_of:
+            loop = " and closes a loop (cycle)" if _reaches(model, joint.parent, joint.child) else ""
             errors.append(
-                f"link '{joint.child}' has two parent joints ('{parent_of[joint.child]}' and '{joint.name}')"
+                f"link '{joint.child}' has two parent joints ('{parent_of[joint.child]}' and '{joint.name}'){loop}"
             )
         else:
             parent_of[joint.child] = joint.name
