@@ -1,0 +1,103 @@
+"""How simulated time advances: wall-clock pacing and the lockstep hand-off with controller managers.
+
+``Pacer`` keeps sim time on the wall clock at a real-time factor. ``CommandInbox`` is where a robot's
+``hardware/command`` messages land (written from Zenoh's thread, read by the physics thread), and tracks
+whether a controller manager is connected (lockstep waits for it) or gone (hold position).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+# Give up pacing catch-up after falling this far behind (a pause, a hiccup): restart the origin instead
+# of running a burst of steps with no sleep.
+MAX_CATCH_UP_S = 0.25
+# Sleep until this close to the deadline, then spin: OS sleeps overshoot by ~0.1 ms.
+SPIN_WINDOW_S = 0.0003
+
+
+class Pacer:
+    """Maps sim time to wall time: sim time t is due at ``origin_wall + (t - origin_sim) / rtf``."""
+
+    def __init__(self, real_time_factor: float = 1.0) -> None:
+        self.real_time_factor = real_time_factor
+        self._origin_wall: float | None = None
+        self._origin_sim = 0.0
+
+    def restart(self) -> None:
+        self._origin_wall = None
+
+    def wait_until_due(self, sim_time: float, idle: Callable[[float], None] | None = None) -> float:
+        """Block until ``sim_time`` is due; returns how late (s) we are, 0 if on time.
+
+        ``idle(max_wait_s)`` is called while there is more than the spin window left (the node processes
+        service requests there); the last fraction of a millisecond is spun for precision.
+        """
+        now = time.perf_counter()
+        if self._origin_wall is None or self.real_time_factor <= 0:
+            self._origin_wall, self._origin_sim = now, sim_time
+            return 0.0
+        due = self._origin_wall + (sim_time - self._origin_sim) / self.real_time_factor
+        late = now - due
+        if late > MAX_CATCH_UP_S:
+            self._origin_wall, self._origin_sim = now, sim_time
+            return late
+        while True:
+            remaining = due - time.perf_counter()
+            if remaining <= 0:
+                break
+            if remaining > SPIN_WINDOW_S:
+                wait = remaining - SPIN_WINDOW_S
+                if idle is not None:
+                    idle(wait)
+                else:
+                    time.sleep(wait)
+        return max(0.0, late)
+
+
+class CommandInbox:
+    """The latest ``hardware/command`` of one robot and its controller manager's connection state."""
+
+    def __init__(self) -> None:
+        self._cond = threading.Condition()
+        self._latest: Any = None
+        self._fresh = False
+        self.connected = False           # set by the physics thread when a command is taken
+        self.last_wall = 0.0              # monotonic time of the last command received
+
+    def put(self, command: Any) -> None:
+        """From the subscription (Zenoh thread)."""
+        with self._cond:
+            self._latest = command
+            self._fresh = True
+            self.last_wall = time.monotonic()
+            self._cond.notify_all()
+
+    def take(self) -> Any:
+        """The newest unread command, or None."""
+        with self._cond:
+            if not self._fresh:
+                return None
+            self._fresh = False
+            return self._latest
+
+    def wait_for_step(self, step: int, timeout: float) -> Any:
+        """The command answering ``step`` (lockstep), or None after ``timeout`` s."""
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while True:
+                latest = self._latest
+                if self._fresh and latest is not None and latest.step == step:
+                    self._fresh = False
+                    return latest
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    return None
+                self._cond.wait(remaining)
+
+    def clear(self) -> None:
+        with self._cond:
+            self._latest, self._fresh = None, False
