@@ -53,8 +53,8 @@ def coerce(spec: ParamSpec, value: Any) -> Any:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ParameterError(f"{where}: expected a number, got {value!r}")
         value = float(value)
-        if not math.isfinite(value):
-            raise ParameterError(f"{where}: must be finite, got {value}")
+        if math.isnan(value):  # infinity is allowed: it means "no limit" for clamps
+            raise ParameterError(f"{where}: must be a number, got NaN")
     elif spec.type is int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise ParameterError(f"{where}: expected an integer, got {value!r}")

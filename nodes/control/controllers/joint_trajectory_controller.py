@@ -288,7 +288,7 @@ class JointTrajectoryController(Controller):
                                  "holding position")
                 self._hold(actual_pos)
                 self._active = None
-            elif sample.past_end:
+            elif sample.past_end and self.cmd_timeout <= 0.0:
                 self._active = None  # keep the last point as the hold command
             return
         tol = active.tolerances

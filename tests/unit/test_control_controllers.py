@@ -1,0 +1,444 @@
+"""Controllers and the manager driven in-process against a toy plant (no Zenoh): JTC, forward, PID,
+broadcaster, interface claiming, crash isolation, the tutorials' YAML."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+import yaml
+
+import msgs
+from nodes.control.config import ConfigError, load_config_file, parse_config
+from nodes.control.controller import Controller
+from nodes.control.controllers import CONTROLLER_TYPES
+from nodes.control.controllers.joint_trajectory_controller import (
+    GOAL_TOLERANCE_VIOLATED,
+    INVALID_GOAL,
+    PATH_TOLERANCE_VIOLATED,
+    SUCCESSFUL,
+)
+from nodes.control.manager import BEST_EFFORT, STRICT, ControllerManager, ManagerError
+from nodes.control.testing import FakeContext, FirstOrderPlant, ListLogger, make_hardware
+
+ROOT = Path(__file__).resolve().parents[2]
+JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
+Float64MultiArray = msgs.get_type("std_msgs/msg/Float64MultiArray")
+FJT = msgs.get_type("control_msgs/action/FollowJointTrajectory")
+SUCCEEDED, CANCELED, ABORTED = 4, 5, 6
+
+LAB_YAML = (ROOT / "config" / "controller_lab_controllers.yaml").read_text()
+
+
+class Rig:
+    """Manager + fake contexts + first-order plant, stepped on a simulated clock."""
+
+    def __init__(self, config_text: str, joints: list[str], command_interfaces=("position",), rate: int = 100,
+                 tau: float = 0.02) -> None:
+        self.hw = make_hardware(joints, command_interfaces)
+        self.contexts: dict[str, FakeContext] = {}
+        self.logger = ListLogger()
+        self.manager = ControllerManager(self.hw, parse_config(yaml.safe_load(config_text)), rate,
+                                         self._context, self.logger)
+        self.plant = FirstOrderPlant(self.hw, tau=tau)
+        self.dt = 1.0 / rate
+        self.t = 0.0
+        self.sent: list[tuple[list[str], list[str], list[float]]] = []
+        self.plant.publish_state()
+
+    def _context(self, name: str) -> FakeContext:
+        ctx = FakeContext(name)
+        ctx.logger = self.logger
+        ctx.time = self.t
+        self.contexts[name] = ctx
+        return ctx
+
+    def spawn(self, *names: str, activate: bool = True) -> None:
+        for name in names:
+            self.manager.load(name)
+            self.manager.configure(name)
+        if activate:
+            ok, message = self.manager.switch(list(names), [], STRICT)
+            assert ok, message
+
+    def step(self, seconds: float) -> None:
+        for _ in range(max(1, int(round(seconds / self.dt)))):
+            self.plant.publish_state()
+            for ctx in self.contexts.values():
+                ctx.time = self.t
+            self.manager.update(self.t, self.dt)
+            command = self.manager.command()
+            self.sent.append(command)
+            self.plant.apply(*command, self.dt)
+            self.t += self.dt
+
+    def controller(self, name: str) -> Controller:
+        return self.manager.controllers[name].controller
+
+    def publish(self, topic: str, msg) -> None:
+        for ctx in self.contexts.values():
+            if topic in ctx.subscriptions:
+                ctx.subscriptions[topic](msg)
+                return
+        raise KeyError(topic)
+
+    def send_goal(self, controller: str, goal_dict: dict):
+        server = self.contexts[controller].actions[f"{controller}/follow_joint_trajectory"]
+        return server.send_goal(msgs.from_dict(FJT.Goal, goal_dict))
+
+
+def trajectory(joints, points, stamp=None) -> dict:
+    out = {"joint_names": joints, "points": [
+        {"positions": p, "time_from_start": {"sec": int(t), "nanosec": int(round((t % 1) * 1e9))}} for t, p in points]}
+    if stamp is not None:
+        out["header"] = {"stamp": {"sec": int(stamp), "nanosec": int(round((stamp % 1) * 1e9))}}
+    return out
+
+
+def lab_rig(**kwargs) -> Rig:
+    rig = Rig(LAB_YAML, ["joint1"], ("position", "velocity"), **kwargs)
+    rig.spawn("joint_state_broadcaster", "joint_trajectory_controller")
+    return rig
+
+
+# --- configuration ------------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["controllers.yaml", "controller_lab_controllers.yaml", "lab_2_3_controllers.yaml",
+                                  "atlas_controllers.yaml", "humanoid_simplified_controllers.yaml"])
+def test_every_robot_config_loads_and_names_known_types(name):
+    config = load_config_file(ROOT / "config" / name)
+    assert config.update_rate and config.controllers
+    for cfg in config.controllers.values():
+        assert cfg.type in CONTROLLER_TYPES, cfg
+
+
+def test_tutorial_yaml_loads_unchanged():
+    # Seed 003's simple_robot_controllers.yaml, verbatim (comments included).
+    text = """
+controller_manager:
+  ros__parameters:
+    update_rate: 100 # Hz
+
+    joint_state_broadcaster:
+      type: joint_state_broadcaster/JointStateBroadcaster
+
+    joint_trajectory_controller:
+      type: joint_trajectory_controller/JointTrajectoryController
+
+joint_trajectory_controller:
+  ros__parameters:
+    command_interfaces:
+      - position
+    state_interfaces:
+      - position
+      - velocity
+    joints:
+      - joint1
+    state_publish_rate: 50.0
+    action_monitor_rate: 20.0
+    allow_partial_joints_goal: false
+    constraints:
+      stopped_velocity_tolerance: 0.01
+      goal_time: 0.0
+      joint1:
+        trajectory: 0.05
+        goal: 0.01
+"""
+    rig = Rig(text, ["joint1"], ("position", "velocity"))
+    rig.spawn("joint_state_broadcaster", "joint_trajectory_controller")
+    jtc = rig.controller("joint_trajectory_controller")
+    assert jtc.get_parameter("constraints.joint1.goal") == 0.01
+    assert rig.manager.update_rate == 100
+
+
+@pytest.mark.parametrize("text, reason", [
+    ("controller_manager: {ros__parameters: {update_rate: -5}}", "update_rate"),
+    ("controller_manager: {ros__parameters: {jtc: {type: 7}}}", "jtc.type"),
+    ("- a\n- b", "top level"),
+    ("jtc: {params: 1}", "ros__parameters"),
+])
+def test_bad_config_is_refused_naming_the_key(text, reason):
+    with pytest.raises(ConfigError, match=reason.replace(".", r"\.")):
+        parse_config(yaml.safe_load(text))
+
+
+def test_bad_parameter_value_refuses_load_with_the_name():
+    text = LAB_YAML.replace("state_publish_rate: 50.0", "state_publish_rate: fast")
+    rig = Rig(text, ["joint1"], ("position", "velocity"))
+    with pytest.raises(ManagerError, match="state_publish_rate"):
+        rig.manager.load("joint_trajectory_controller")
+
+
+def test_unknown_joint_refuses_configure():
+    text = LAB_YAML.replace("      - joint1\n    state_publish_rate", "      - joint9\n    state_publish_rate")
+    rig = Rig(text, ["joint1"], ("position", "velocity"))
+    rig.manager.load("joint_trajectory_controller")
+    with pytest.raises(ManagerError, match="joint9/position"):
+        rig.manager.configure("joint_trajectory_controller")
+    assert rig.manager.controllers["joint_trajectory_controller"].state == "unconfigured"
+
+
+# --- JTC --------------------------------------------------------------------------------------------------
+def test_jtc_holds_position_on_activation_and_goal_reaches_target():
+    rig = lab_rig()
+    rig.plant.pos["joint1"] = 0.3
+    rig.step(0.05)
+    assert rig.sent[-1] == (["joint1"], ["position"], [pytest.approx(0.3)])  # hold, no jump
+    ok, reason, handle = rig.send_goal("joint_trajectory_controller",
+                                       {"trajectory": trajectory(["joint1"], [(3.0, [1.57])])})
+    assert ok, reason
+    rig.step(3.5)
+    assert handle.status == SUCCEEDED and handle.result.error_code == SUCCESSFUL
+    assert abs(rig.plant.pos["joint1"] - 1.57) < 0.01
+    assert handle.feedback and list(handle.feedback[-1].joint_names) == ["joint1"]
+    # feedback at action_monitor_rate (20 Hz) over ~3 s of sim time
+    assert 40 <= len(handle.feedback) <= 80
+
+
+def test_jtc_first_command_after_a_new_trajectory_continues_the_previous_one():
+    rig = lab_rig()
+    rig.publish("joint_trajectory_controller/joint_trajectory",
+                msgs.from_dict(JointTrajectory, trajectory(["joint1"], [(1.0, [1.0])])))
+    rig.step(0.5)
+    before = rig.sent[-1][2][0]
+    rig.publish("joint_trajectory_controller/joint_trajectory",
+                msgs.from_dict(JointTrajectory, trajectory(["joint1"], [(1.0, [-1.0])])))
+    rig.step(0.01)
+    after = rig.sent[-1][2][0]
+    assert abs(after - before) < 0.02  # continues from the last command, no step to -1
+
+
+def test_jtc_goal_tolerance_violation_is_reported():
+    rig = lab_rig(tau=0.5)  # a sluggish joint that cannot settle within 0.2 s
+    ok, _, handle = rig.send_goal("joint_trajectory_controller", {
+        "trajectory": trajectory(["joint1"], [(0.5, [1.0])]),
+        "path_tolerance": [{"name": "joint1", "position": -1.0}],  # -1: path not checked
+        "goal_tolerance": [{"name": "joint1", "position": 0.0001}],
+        "goal_time_tolerance": {"sec": 0, "nanosec": 200_000_000}})
+    assert ok
+    rig.step(1.0)
+    assert handle.status == ABORTED and handle.result.error_code == GOAL_TOLERANCE_VIOLATED
+    assert "joint1" in handle.result.error_string
+
+
+def test_jtc_path_tolerance_violation_aborts_and_holds():
+    rig = lab_rig(tau=0.3)
+    ok, _, handle = rig.send_goal("joint_trajectory_controller",
+                                  {"trajectory": trajectory(["joint1"], [(0.2, [1.5])])})
+    assert ok
+    rig.step(0.3)
+    assert handle.status == ABORTED and handle.result.error_code == PATH_TOLERANCE_VIOLATED
+    held = rig.sent[-1][2][0]
+    rig.step(0.2)
+    assert rig.sent[-1][2][0] == pytest.approx(held)
+
+
+def test_jtc_new_goal_preempts_and_cancel_holds_position():
+    rig = lab_rig()
+    _, _, first = rig.send_goal("joint_trajectory_controller", {"trajectory": trajectory(["joint1"], [(3.0, [1.0])])})
+    rig.step(0.5)
+    _, _, second = rig.send_goal("joint_trajectory_controller", {"trajectory": trajectory(["joint1"], [(3.0, [-1.0])])})
+    rig.step(0.5)
+    assert first.status == ABORTED and first.result.error_code == INVALID_GOAL
+    assert "preempted" in first.result.error_string
+    assert second.status == 2
+    second.cancel()
+    rig.step(0.02)
+    assert second.status == CANCELED
+    held = rig.sent[-1][2][0]
+    rig.step(1.0)
+    assert rig.sent[-1][2][0] == pytest.approx(held)
+    assert abs(rig.plant.pos["joint1"] - held) < 0.01
+
+
+@pytest.mark.parametrize("traj, reason", [
+    (trajectory(["nope"], [(1.0, [1.0])]), "unknown joint 'nope'"),
+    (trajectory(["joint1"], [(1.0, [1.0, 2.0])]), "expected 1"),
+    (trajectory(["joint1"], [(1.0, [1.0]), (0.5, [2.0])]), "increase strictly"),
+    (trajectory(["joint1"], [(1.0, [1.0])], stamp=1.0), "ends in the past"),
+])
+def test_jtc_rejects_invalid_goals_and_topics_and_keeps_the_previous_command(traj, reason):
+    rig = lab_rig()
+    rig.step(5.0)
+    before = rig.sent[-1]
+    ok, why, _ = rig.send_goal("joint_trajectory_controller", {"trajectory": traj})
+    assert not ok and reason in why
+    rig.publish("joint_trajectory_controller/joint_trajectory", msgs.from_dict(JointTrajectory, traj))
+    assert reason in rig.logger.text("error")
+    rig.step(0.1)
+    assert rig.sent[-1] == before
+
+
+def test_jtc_rejects_nan_positions():
+    rig = lab_rig()
+    traj = msgs.from_dict(JointTrajectory, trajectory(["joint1"], [(1.0, [0.0])]))
+    traj.points[0].positions = [math.nan]  # msgs refuses NaN on the wire; the controller checks too
+    rig.publish("joint_trajectory_controller/joint_trajectory", traj)
+    assert "not finite" in rig.logger.text("error")
+
+
+def test_jtc_cmd_timeout_holds_position_after_a_stale_topic_command():
+    text = LAB_YAML.replace("allow_partial_joints_goal: false", "allow_partial_joints_goal: false\n    cmd_timeout: 0.5")
+    rig = Rig(text, ["joint1"], ("position", "velocity"), tau=0.5)
+    rig.spawn("joint_trajectory_controller")
+    rig.publish("joint_trajectory_controller/joint_trajectory",
+                msgs.from_dict(JointTrajectory, trajectory(["joint1"], [(0.1, [1.0])])))
+    rig.step(0.3)
+    assert rig.sent[-1][2][0] == pytest.approx(1.0)
+    rig.step(0.5)
+    assert rig.sent[-1][2][0] < 0.99  # stale: holding where the joint is, not the old target
+    assert "timed out" in rig.logger.text("warn")
+
+
+def test_jtc_sine_trajectory_is_tracked():
+    rig = lab_rig(tau=0.01)
+    points = [(i * 0.1, [1.57 * math.sin(2 * math.pi * 0.1 * i * 0.1)]) for i in range(100)]
+    _, _, handle = rig.send_goal("joint_trajectory_controller", {"trajectory": trajectory(["joint1"], points)})
+    errors = []
+    for _ in range(1000):
+        rig.step(0.01)
+        desired = 1.57 * math.sin(2 * math.pi * 0.1 * (rig.t - 0.01))
+        errors.append(rig.plant.pos["joint1"] - desired)
+    rig.step(0.5)
+    assert handle.status == SUCCEEDED, handle.result
+    assert math.sqrt(sum(e * e for e in errors) / len(errors)) < 0.05
+
+
+# --- forward command, PID, broadcaster --------------------------------------------------------------
+def test_forward_position_controller_applies_commands_and_rejects_wrong_length():
+    rig = Rig(LAB_YAML, ["joint1"], ("position", "velocity"))
+    rig.spawn("joint_group_position_controller")
+    rig.step(0.1)
+    assert rig.sent[-1] == ([], [], [])  # nothing commanded yet: the hardware keeps its own
+    rig.publish("joint_group_position_controller/commands", Float64MultiArray(data=[1.57]))
+    rig.step(1.0)
+    assert rig.plant.pos["joint1"] == pytest.approx(1.57, abs=1e-3)
+    rig.publish("joint_group_position_controller/commands", Float64MultiArray(data=[0.0, 1.0]))
+    assert "data has 2 values, expected 1" in rig.logger.text("error")
+    rig.step(0.5)
+    assert rig.plant.pos["joint1"] == pytest.approx(1.57, abs=1e-3)
+
+
+def test_pid_reaches_target_without_overshoot_on_velocity_interface():
+    rig = Rig(LAB_YAML, ["joint1"], ("position", "velocity"))
+    rig.spawn("pid_controller")
+    rig.publish("pid_controller/reference", Float64MultiArray(data=[1.57]))
+    peak = 0.0
+    for _ in range(60):
+        rig.step(0.1)
+        peak = max(peak, rig.plant.pos["joint1"])
+    assert rig.sent[-1][1] == ["velocity"]
+    assert abs(rig.plant.pos["joint1"] - 1.57) < 0.02 * 1.57
+    assert peak < 1.57 * 1.10
+
+
+def test_pid_antiwindup_limits_the_integral_while_saturated():
+    from nodes.control.controllers.pid_controller import Pid
+
+    windup = Pid(p=1.0, i=5.0, d=0.0, i_min=-math.inf, i_max=math.inf, u_min=-0.1, u_max=0.1, antiwindup=False)
+    guarded = Pid(p=1.0, i=5.0, d=0.0, i_min=-math.inf, i_max=math.inf, u_min=-0.1, u_max=0.1, antiwindup=True)
+    for _ in range(100):
+        windup.compute(1.0, 0.0, 0.01)
+        guarded.compute(1.0, 0.0, 0.01)
+    assert windup.i_term == pytest.approx(5.0)
+    assert guarded.i_term < 0.2
+    clamped = Pid(p=1.0, i=5.0, d=0.0, i_min=-0.3, i_max=0.3, u_min=-math.inf, u_max=math.inf, antiwindup=False)
+    for _ in range(100):
+        clamped.compute(1.0, 0.0, 0.01)
+    assert clamped.i_term == pytest.approx(0.3)
+
+
+def test_pid_on_several_joints_with_effort_output():
+    text = """
+controller_manager: {ros__parameters: {update_rate: 1000, pid: {type: pid_controller/PidController}}}
+pid:
+  ros__parameters:
+    joints: [a, b]
+    command_interface: effort
+    gains:
+      a: {p: 20.0, i: 1.0, d: 2.0, i_clamp: 0.5}
+      b: {p: 20.0, i: 1.0, d: 2.0, i_clamp: 0.5}
+"""
+    rig = Rig(text, ["a", "b"], ("effort",), rate=1000)
+    rig.spawn("pid")
+    rig.publish("pid/reference", Float64MultiArray(data=[0.5, -0.5]))
+    rig.step(3.0)
+    assert rig.plant.pos["a"] == pytest.approx(0.5, abs=0.01)
+    assert rig.plant.pos["b"] == pytest.approx(-0.5, abs=0.01)
+
+
+def test_joint_state_broadcaster_publishes_every_joint_in_order():
+    rig = lab_rig()
+    rig.plant.pos["joint1"] = 0.25
+    rig.step(0.05)
+    pub = rig.contexts["joint_state_broadcaster"].publishers["joint_states"]
+    msg = pub.messages[-1]
+    assert list(msg.name) == ["joint1"] and msg.position[0] == pytest.approx(0.25)
+    assert len(msg.velocity) == 1 and len(msg.effort) == 1
+    assert msg.header.stamp.sec == 0 and msg.header.stamp.nanosec > 0
+
+
+# --- manager ---------------------------------------------------------------------------------------------
+def test_interface_conflict_is_refused_with_the_reason():
+    rig = lab_rig()
+    rig.spawn("joint_group_position_controller", activate=False)
+    ok, message = rig.manager.switch(["joint_group_position_controller"], [], STRICT)
+    assert not ok and "joint1/position" in message and "joint_trajectory_controller" in message
+    ok, message = rig.manager.switch(["joint_group_position_controller"], [], BEST_EFFORT)
+    assert not ok and "conflict" in message
+    assert rig.manager.controllers["joint_group_position_controller"].state == "inactive"
+    # Swapping in one switch is fine.
+    ok, message = rig.manager.switch(["joint_group_position_controller"], ["joint_trajectory_controller"], STRICT)
+    assert ok, message
+    assert rig.manager.claims["joint1/position"] == "joint_group_position_controller"
+
+
+def test_crashing_controller_is_deactivated_while_others_keep_running():
+    class Crashing(Controller):
+        type_name = "test/Crashing"
+
+        def command_interface_configuration(self):
+            return ["b/position"]
+
+        def update(self, time, period):
+            if time > 0.1:
+                raise RuntimeError("boom")
+
+    CONTROLLER_TYPES[Crashing.type_name] = Crashing
+    try:
+        text = """
+controller_manager: {ros__parameters: {update_rate: 100, bad: {type: test/Crashing}, jtc: {type: joint_trajectory_controller/JointTrajectoryController}}}
+jtc: {ros__parameters: {joints: [a]}}
+"""
+        rig = Rig(text, ["a", "b"])
+        rig.spawn("bad", "jtc")
+        rig.publish("jtc/joint_trajectory", msgs.from_dict(JointTrajectory, trajectory(["a"], [(0.5, [1.0])])))
+        rig.step(1.0)
+        states = {c["name"]: c for c in rig.manager.list_controllers()}
+        assert states["bad"]["state"] == "inactive" and "boom" in states["bad"]["last_error"]
+        assert states["jtc"]["state"] == "active"
+        assert rig.plant.pos["a"] == pytest.approx(1.0, abs=0.01)
+        assert "b/position" not in rig.manager.claims
+        assert "controller 'bad' deactivated" in rig.logger.text("error")
+    finally:
+        del CONTROLLER_TYPES[Crashing.type_name]
+
+
+def test_lifecycle_errors_are_clear():
+    rig = lab_rig()
+    with pytest.raises(ManagerError, match="already loaded"):
+        rig.manager.load("joint_trajectory_controller")
+    with pytest.raises(ManagerError, match="has no type"):
+        rig.manager.load("ghost")
+    with pytest.raises(ManagerError, match="deactivate it before unloading"):
+        rig.manager.unload("joint_trajectory_controller")
+    rig.manager.load("pid_controller")
+    ok, message = rig.manager.switch(["pid_controller"], [], STRICT)
+    assert not ok and "unconfigured" in message
+    ok, message = rig.manager.switch([], ["joint_trajectory_controller"], STRICT)
+    assert ok, message
+    rig.manager.unload("joint_trajectory_controller")
+    assert "joint_trajectory_controller" not in rig.manager.controllers
+    assert rig.contexts["joint_trajectory_controller"].destroyed >= 1
+    commands, _ = rig.manager.list_interfaces()
+    assert {c["name"]: c["is_claimed"] for c in commands} == {"joint1/position": False, "joint1/velocity": False}

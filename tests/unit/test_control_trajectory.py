@@ -1,0 +1,109 @@
+"""Trajectory validation and interpolation (pure logic, no Zenoh)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from nodes.control.trajectory import TrajectoryError, validate_trajectory
+
+JOINTS = ["a", "b"]
+
+
+def point(t: float, positions, velocities=None, accelerations=None) -> dict:
+    sec = int(t)
+    p = {"positions": positions, "time_from_start": {"sec": sec, "nanosec": int(round((t - sec) * 1e9))}}
+    if velocities is not None:
+        p["velocities"] = velocities
+    if accelerations is not None:
+        p["accelerations"] = accelerations
+    return p
+
+
+def traj(points, joints=JOINTS, stamp=0.0) -> dict:
+    return {"header": {"stamp": {"sec": int(stamp), "nanosec": int((stamp % 1) * 1e9)}},
+            "joint_names": joints, "points": points}
+
+
+def test_linear_interpolation_starts_from_the_start_state_without_a_jump():
+    t = validate_trajectory(traj([point(1.0, [1.0, -1.0])]), JOINTS, now=10.0)
+    t.start_time = 10.0
+    t.set_start_state(np.array([0.2, 0.0]), np.zeros(2))
+    s0 = t.sample(10.0)
+    assert np.allclose(s0.positions, [0.2, 0.0])  # the first command equals the start state
+    mid = t.sample(10.5)
+    assert np.allclose(mid.positions, [0.6, -0.5])
+    assert np.allclose(mid.velocities, [0.8, -1.0])
+    end = t.sample(11.0)
+    assert end.past_end and np.allclose(end.positions, [1.0, -1.0])
+
+
+def test_cubic_matches_positions_and_velocities_at_both_ends():
+    t = validate_trajectory(traj([point(0.0, [0.0, 0.0], [0.0, 0.0]), point(2.0, [1.0, 2.0], [0.5, 0.0])]),
+                            JOINTS, now=0.0)
+    t.set_start_state(np.zeros(2), np.zeros(2))
+    eps = 1e-6
+    near_end = t.sample(2.0 - eps)
+    assert np.allclose(near_end.positions, [1.0, 2.0], atol=1e-5)
+    assert np.allclose(near_end.velocities, [0.5, 0.0], atol=1e-4)
+    start = t.sample(0.0)
+    assert np.allclose(start.velocities, [0.0, 0.0])
+    # Cubic with zero end velocities on joint b is symmetric: half way at half time.
+    assert t.sample(1.0).positions[1] == pytest.approx(1.0)
+
+
+def test_quintic_matches_accelerations_at_both_ends():
+    t = validate_trajectory(traj([
+        point(0.0, [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]),
+        point(1.0, [1.0, 1.0], [0.0, 1.0], [0.0, -2.0])]), JOINTS, now=0.0)
+    t.set_start_state(np.zeros(2), np.zeros(2))
+    s = t.sample(1.0 - 1e-7)
+    assert np.allclose(s.positions, [1.0, 1.0], atol=1e-5)
+    assert np.allclose(s.velocities, [0.0, 1.0], atol=1e-4)
+    assert np.allclose(s.accelerations, [0.0, -2.0], atol=1e-3)
+    assert np.allclose(t.sample(0.0).accelerations, [0.0, 0.0])
+    # A quintic rest-to-rest move is at half way at half time, a linear one would be too but with
+    # a velocity jump; here the velocity at the start is zero.
+    assert t.sample(0.5).positions[0] == pytest.approx(0.5)
+
+
+def test_interpolation_none_steps_at_points():
+    t = validate_trajectory(traj([point(1.0, [1.0, 1.0]), point(2.0, [2.0, 2.0])]), JOINTS, now=0.0)
+    t.set_start_state(np.zeros(2), np.zeros(2))
+    assert np.allclose(t.sample(1.5, interpolate_points=False).positions, [1.0, 1.0])
+    assert np.allclose(t.sample(1.5).positions, [1.5, 1.5])
+
+
+@pytest.mark.parametrize("msg, reason", [
+    (traj([point(1.0, [1.0, 1.0])], joints=["a", "zz"]), "unknown joint 'zz'"),
+    (traj([point(1.0, [1.0])]), "positions has 1 values, expected 2"),
+    (traj([point(1.0, [1.0, 1.0]), point(1.0, [2.0, 2.0])]), "must increase strictly"),
+    (traj([point(1.0, [1.0, 1.0]), point(0.5, [2.0, 2.0])]), "must increase strictly"),
+    (traj([point(1.0, [1.0, 1.0])], stamp=3.0), "ends in the past"),
+    (traj([point(1.0, [math.nan, 1.0])]), "positions[0] is not finite"),
+    (traj([point(1.0, [1.0, 1.0], [0.0, math.inf])]), "velocities[1] is not finite"),
+    (traj([]), "points is empty"),
+    (traj([point(1.0, [1.0])], joints=["a"]), "missing joints ['b']"),
+    (traj([point(1.0, [1.0, 1.0])], joints=["a", "a"]), "appears twice"),
+    (traj([point(1.0, [1.0, 1.0], [1.0])]), "velocities has 1 values"),
+])
+def test_invalid_trajectories_are_rejected_with_the_reason(msg, reason):
+    with pytest.raises(TrajectoryError) as info:
+        validate_trajectory(msg, JOINTS, now=10.0)
+    assert reason in str(info.value)
+
+
+def test_partial_goal_allowed_when_configured():
+    t = validate_trajectory(traj([point(1.0, [1.0])], joints=["b"]), JOINTS, now=0.0,
+                            allow_partial_joints_goal=True)
+    assert t.joint_indices == [1]
+
+
+def test_stamped_trajectory_in_the_future_waits_at_its_start_state():
+    t = validate_trajectory(traj([point(1.0, [1.0, 1.0])], stamp=20.0), JOINTS, now=10.0)
+    assert not t.starts_on_receipt and t.start_time == pytest.approx(20.0)
+    t.set_start_state(np.array([0.3, 0.3]), np.zeros(2))
+    s = t.sample(15.0)
+    assert s.before_start and np.allclose(s.positions, [0.3, 0.3])
