@@ -1,0 +1,276 @@
+"""Everything the visualiser writes to Rerun, with plain numbers in (no Zenoh, no messages).
+
+Entity layout (one subtree per robot namespace, so a deleted robot is one recursive Clear):
+
+- ``world/ground``                                   the ground plane
+- ``world/<ns>/links/<link>/visual_<i>``              URDF visual geometry, in named frame ``<ns>/<link>``
+- ``world/<ns>/frames/<child>``                      one frame relation each: tf, tf_static, and the
+                                                     root link in ``tf#/world`` from sim/model_states
+- ``world/<ns>/markers/{com,zmp,com_path,support_polygon,ee_paths,target}``
+- ``plots/<ns>/joint_states/{position,velocity,effort}``  one series per joint
+- ``plots/<ns>/<controller>/<joint>``                 commanded vs actual (the rqt_plot view)
+- ``plots/<ns>/balance/{com,zmp,is_balanced}``
+
+Time: every call takes the sim time (``sim_time`` timeline, a duration) and stamps the wall clock
+(``wall_time`` timeline) itself.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+
+from .kinematics import ForwardKinematics, matrix_to_quat, quat_to_matrix, rpy_to_matrix
+from .urdf_model import RobotModel, Visual
+
+SIM_TIMELINE = "sim_time"
+WALL_TIMELINE = "wall_time"
+WORLD_FRAME = "tf#/world"  # Rerun's implicit frame of the entity "world": the 3-D view's root
+SOLID = rr.components.FillMode.Solid
+PATH_LENGTH = 600  # points kept per marker path (a minute at 10 Hz)
+TRANSLATION = rr.Transform3D.descriptor_translation()
+QUATERNION = rr.Transform3D.descriptor_quaternion()
+
+
+def frame_name(namespace: str, frame: str, world_frames: Sequence[str] = ("world", "map", "odom")) -> str:
+    """A tf frame id as a Rerun frame: world-like frames map to the scene root, others get ``<ns>/``."""
+    frame = frame.lstrip("/")
+    if frame in world_frames or frame == "":
+        return WORLD_FRAME
+    if frame.startswith(f"{namespace}/"):
+        return frame
+    return f"{namespace}/{frame}"
+
+
+def rgba8(rgba: Sequence[float]) -> list[int]:
+    return [int(round(max(0.0, min(1.0, c)) * 255)) for c in rgba]
+
+
+class SceneTime:
+    """Sets both timelines on a recording before each log call."""
+
+    def __init__(self, recording: rr.RecordingStream) -> None:
+        self.recording = recording
+
+    def __call__(self, sim_time: float) -> None:
+        self.recording.set_time(SIM_TIMELINE, duration=max(0.0, sim_time))
+        self.recording.set_time(WALL_TIMELINE, timestamp=time.time())
+
+
+def log_ground(recording: rr.RecordingStream, half_extent: float = 2.0) -> None:
+    recording.log("world/ground", rr.Boxes3D(
+        half_sizes=[[half_extent, half_extent, 0.002]], centers=[[0.0, 0.0, -0.002]],
+        colors=[[90, 95, 100, 255]], fill_mode=SOLID), static=True)
+    ticks = np.arange(-half_extent, half_extent + 1e-9, 0.5)
+    lines = [[[x, -half_extent, 0.001], [x, half_extent, 0.001]] for x in ticks]
+    lines += [[[-half_extent, y, 0.001], [half_extent, y, 0.001]] for y in ticks]
+    recording.log("world/ground/grid", rr.LineStrips3D(lines, colors=[[140, 145, 150, 255]], radii=0.002),
+                  static=True)
+
+
+def visual_archetype(visual: Visual, mesh_root: Path | None = None) -> rr.AsComponents | None:
+    """The Rerun archetype of one URDF visual in its link frame (None for an unresolvable mesh)."""
+    center = [list(visual.origin.xyz)]
+    quat = [list(matrix_to_quat(rpy_to_matrix(*visual.origin.rpy)))]
+    color = [rgba8(visual.rgba)]
+    if visual.kind == "box":
+        return rr.Boxes3D(half_sizes=[[s / 2 for s in visual.size]], centers=center, quaternions=quat,
+                          colors=color, fill_mode=SOLID)
+    if visual.kind == "cylinder":  # URDF and Rerun cylinders both run along local z
+        return rr.Cylinders3D(lengths=[visual.length], radii=[visual.radius], centers=center,
+                              quaternions=quat, colors=color, fill_mode=SOLID)
+    if visual.kind == "sphere":
+        return rr.Ellipsoids3D(half_sizes=[[visual.radius] * 3], centers=center, quaternions=quat,
+                               colors=color, fill_mode=SOLID)
+    path = Path(visual.filename.removeprefix("file://"))
+    if not path.is_absolute() and mesh_root is not None:
+        path = mesh_root / path
+    if visual.filename.startswith("package://") or not path.is_file():
+        return None
+    return rr.Asset3D(path=path, albedo_factor=color[0])
+
+
+class RobotScene:
+    """The Rerun side of one robot: geometry, frames, plots and markers under its namespace."""
+
+    def __init__(self, recording: rr.RecordingStream, namespace: str, model: RobotModel,
+                 end_effectors: Sequence[str] = (), world_frames: Sequence[str] = ("world", "map", "odom"),
+                 path_length: int = PATH_LENGTH) -> None:
+        self.recording = recording
+        self.namespace = namespace
+        self.model = model
+        self.fk = ForwardKinematics(model)
+        self.world_frames = tuple(world_frames)
+        self.set_time = SceneTime(recording)
+        wanted = [link for link in end_effectors if link]
+        unknown = [link for link in wanted if link not in model.links]
+        if unknown:
+            raise ValueError(f"end_effectors: unknown links {unknown} in robot '{model.name}'")
+        self.end_effectors = wanted or model.leaf_links()
+        self.world = f"world/{namespace}"
+        self.plots = f"plots/{namespace}"
+        self.root_frame = frame_name(namespace, model.root_link, self.world_frames)
+        self.relations: dict[str, tuple[str, list]] = {}  # child frame -> (parent frame, frame components)
+        self.base_pose = np.eye(4)
+        self.base_from_tf = False  # once tf names the root's parent, model_states no longer places it
+        self.positions: dict[str, float] = {}
+        self.joint_series: tuple[str, ...] = ()
+        self.controller_series: set[tuple[str, str]] = set()
+        self.com_path: deque[list[float]] = deque(maxlen=path_length)
+        self.ee_paths: dict[str, deque[list[float]]] = {link: deque(maxlen=path_length) for link in self.end_effectors}
+        self.skipped_meshes: list[str] = []
+
+    # -- model ---------------------------------------------------------------------------------------
+    def log_model(self, sim_time: float, mesh_root: Path | None = None) -> int:
+        """Log every visual in its link frame; returns how many entities were logged."""
+        self.set_time(sim_time)
+        count = 0
+        for link, visuals in self.model.links.items():
+            frame = rr.CoordinateFrame(frame_name(self.namespace, link, self.world_frames))
+            for index, visual in enumerate(visuals):
+                archetype = visual_archetype(visual, mesh_root)
+                if archetype is None:
+                    self.skipped_meshes.append(visual.filename)
+                    continue
+                self.recording.log(f"{self.world}/links/{link}/visual_{index}", archetype, frame)
+                count += 1
+        # Until a pose arrives, the robot stands at the origin rather than floating in no frame at all.
+        self.log_base_pose(sim_time, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+        return count
+
+    def clear(self, sim_time: float) -> None:
+        """The robot was deleted: hide its whole subtree from this time on."""
+        self.set_time(sim_time)
+        self.recording.log(self.world, rr.Clear(recursive=True))
+        self.recording.log(self.plots, rr.Clear(recursive=True))
+
+    # -- frames --------------------------------------------------------------------------------------
+    def log_transforms(self, sim_time: float,
+                       transforms: Sequence[tuple[str, str, Sequence[float], Sequence[float]]]) -> None:
+        """``(parent, child, xyz, quat_xyzw)`` rows from a TFMessage (tf or tf_static).
+
+        One entity per child frame (``world/<ns>/frames/<child>``): the viewer resolves only one
+        frame relation per Transform3D row, and a relation may live on one entity only. The frame-name
+        components are built once per relation and reused, which halves the cost of a log call.
+        """
+        self.set_time(sim_time)
+        for parent, child, xyz, quat in transforms:
+            parent_frame = frame_name(self.namespace, parent, self.world_frames)
+            child_frame = frame_name(self.namespace, child, self.world_frames)
+            if child_frame == WORLD_FRAME or child_frame == parent_frame:
+                continue
+            if child_frame == self.root_frame and parent_frame == WORLD_FRAME:
+                self.base_from_tf = True
+            self._log_relation(parent_frame, child_frame, xyz, quat)
+
+    def _log_relation(self, parent_frame: str, child_frame: str, xyz: Sequence[float],
+                      quat: Sequence[float]) -> None:
+        cached = self.relations.get(child_frame)
+        if cached is None or cached[0] != parent_frame:
+            frames = list(rr.Transform3D.from_fields(parent_frame=parent_frame,
+                                                     child_frame=child_frame).as_component_batches())
+            cached = (parent_frame, frames)
+            self.relations[child_frame] = cached
+        entity = f"{self.world}/frames/{rr.escape_entity_path_part(child_frame.removeprefix(self.namespace + '/'))}"
+        self.recording.log(entity, [
+            *cached[1],
+            rr.components.Translation3DBatch([list(xyz)]).described(TRANSLATION),
+            rr.components.RotationQuatBatch([list(quat)]).described(QUATERNION),
+        ])
+
+    def log_fk_transforms(self, sim_time: float, positions: Mapping[str, float]) -> None:
+        """Fallback without a state publisher: link frames from our own forward kinematics."""
+        rows = []
+        for child, (parent, transform) in self.fk.joint_transforms(positions).items():
+            rows.append((parent, child, transform[:3, 3], matrix_to_quat(transform[:3, :3])))
+        self.log_transforms(sim_time, rows)
+
+    def log_base_pose(self, sim_time: float, position: Sequence[float], orientation_xyzw: Sequence[float]) -> None:
+        """The root link in the world (from sim/model_states), unless tf already places it."""
+        self.base_pose = np.eye(4)
+        self.base_pose[:3, :3] = quat_to_matrix(orientation_xyzw)
+        self.base_pose[:3, 3] = position
+        if self.base_from_tf:
+            return
+        self.set_time(sim_time)
+        self._log_relation(WORLD_FRAME, self.root_frame, position, orientation_xyzw)
+
+    # -- plots ---------------------------------------------------------------------------------------
+    def log_joint_states(self, sim_time: float, names: Sequence[str], position: Sequence[float],
+                         velocity: Sequence[float], effort: Sequence[float]) -> None:
+        """One Scalars batch per quantity (one series per joint), not one log call per joint."""
+        names = tuple(names)
+        self.positions.update(zip(names, position, strict=False))
+        if names != self.joint_series:
+            self.joint_series = names
+            for quantity in ("position", "velocity", "effort"):
+                self.recording.log(f"{self.plots}/joint_states/{quantity}",
+                                   rr.SeriesLines(names=list(names)), static=True)
+        self.set_time(sim_time)
+        for quantity, values in (("position", position), ("velocity", velocity), ("effort", effort)):
+            if len(values) == len(names) and names:
+                self.recording.log(f"{self.plots}/joint_states/{quantity}", rr.Scalars(np.asarray(values, float)))
+
+    def log_controller_state(self, sim_time: float, controller: str, joint_names: Sequence[str],
+                             commanded: Sequence[float], actual: Sequence[float]) -> None:
+        """Commanded vs actual position per joint: ``plots/<ns>/<controller>/<joint>``."""
+        self.set_time(sim_time)
+        for joint, cmd, act in zip(joint_names, commanded, actual, strict=False):
+            entity = f"{self.plots}/{controller}/{joint}"
+            if (controller, joint) not in self.controller_series:
+                self.controller_series.add((controller, joint))
+                self.recording.log(entity, rr.SeriesLines(names=["commanded", "actual"],
+                                                          colors=[[255, 140, 0], [40, 120, 255]]), static=True)
+            self.recording.log(entity, rr.Scalars([cmd, act]))
+
+    def log_balance(self, sim_time: float, com: Sequence[float], zmp: Sequence[float], is_balanced: bool,
+                    support_polygon: Sequence[Sequence[float]]) -> None:
+        self.set_time(sim_time)
+        self.recording.log(f"{self.plots}/balance/com", rr.Scalars(np.asarray(com, float)))
+        self.recording.log(f"{self.plots}/balance/zmp", rr.Scalars(np.asarray(zmp, float)))
+        self.recording.log(f"{self.plots}/balance/is_balanced", rr.Scalars([1.0 if is_balanced else 0.0]))
+        self.com_path.append(list(com))
+        markers = f"{self.world}/markers"
+        color = [60, 200, 90, 255] if is_balanced else [230, 60, 50, 255]
+        self.recording.log(f"{markers}/com", rr.Points3D([com, [com[0], com[1], 0.0]], radii=[0.03, 0.015],
+                                                          colors=[color, color]))
+        self.recording.log(f"{markers}/zmp", rr.Points3D([[zmp[0], zmp[1], 0.003]], radii=0.02,
+                                                          colors=[[250, 220, 40, 255]]))
+        if len(support_polygon) >= 2:
+            ring = [[p[0], p[1], max(p[2], 0.0) + 0.003] for p in support_polygon]
+            self.recording.log(f"{markers}/support_polygon", rr.LineStrips3D(
+                [ring + [ring[0]]], colors=[color], radii=0.006))
+
+    def log_paths(self, sim_time: float) -> None:
+        """End-effector (from forward kinematics on the latest joint positions) and CoM paths as line strips."""
+        poses = self.fk.link_poses(self.positions, self.base_pose)
+        for link, path in self.ee_paths.items():
+            path.append(poses[link][:3, 3].tolist())
+        self.set_time(sim_time)
+        markers = f"{self.world}/markers"
+        strips = [list(path) for path in self.ee_paths.values() if len(path) >= 2]
+        if strips:
+            self.recording.log(f"{markers}/ee_paths", rr.LineStrips3D(
+                strips, radii=0.004, colors=[[230, 60, 200, 255]]))
+        if len(self.com_path) >= 2:
+            self.recording.log(f"{markers}/com_path", rr.LineStrips3D([list(self.com_path)], radii=0.004,
+                                                                       colors=[[60, 200, 90, 255]]))
+
+    def log_target(self, sim_time: float, controller: str, target: Mapping[str, float]) -> None:
+        """The target pose of the active trajectory: a skeleton of the robot at the target joint values."""
+        positions = dict(self.positions)
+        positions.update(target)
+        poses = self.fk.link_poses(positions, self.base_pose)
+        segments = [[poses[j.parent][:3, 3].tolist(), poses[j.child][:3, 3].tolist()]
+                    for j in self.fk.ordered]
+        self.set_time(sim_time)
+        entity = f"{self.world}/markers/target"
+        self.recording.log(entity, rr.LineStrips3D(segments, radii=0.006, colors=[[255, 140, 0, 160]]))
+        self.recording.log(f"{entity}/end_effectors", rr.Points3D(
+            [poses[link][:3, 3].tolist() for link in self.end_effectors], radii=0.025,
+            colors=[[255, 140, 0, 255]]))

@@ -1,0 +1,125 @@
+"""Where the recording goes: a native viewer, a served web viewer, and/or an ``.rrd`` file.
+
+Headless by default when there is no display. The web viewer is hosted by Rerun's own CLI
+(``python -m rerun --serve-web --bind 127.0.0.1``) because ``rr.serve_web_viewer`` binds every
+interface; our recording streams into that server over gRPC on loopback.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import rerun as rr
+import rerun.blueprint as rrb
+
+
+def has_display() -> bool:
+    """A native viewer can open: an X11 or Wayland display on Linux, always elsewhere."""
+    if sys.platform.startswith("linux"):
+        return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    return True
+
+
+def free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_for_port(port: int, timeout: float) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+            if s.connect_ex(("127.0.0.1", port)) == 0:
+                return True
+        time.sleep(0.05)
+    return False
+
+
+@dataclass
+class OutputPlan:
+    """What the user asked for, resolved against the environment."""
+
+    save: Path | None = None
+    serve: bool = False
+    spawn: bool = False
+    web_port: int = 9090
+    grpc_port: int = 9876
+    notes: list[str] = field(default_factory=list)
+
+    @classmethod
+    def resolve(cls, save: str | None, serve: bool, spawn: bool, headless: bool | None,
+                web_port: int, grpc_port: int) -> OutputPlan:
+        plan = cls(save=Path(save) if save else None, serve=serve, spawn=spawn, web_port=web_port,
+                   grpc_port=grpc_port)
+        display = has_display() if headless is None else not headless
+        if plan.spawn and not display:
+            # rr.spawn() without a display silently loses the data (FACTS): serve instead.
+            plan.spawn, plan.serve = False, True
+            plan.notes.append("no display: serving the web viewer instead of spawning the native viewer")
+        if not (plan.save or plan.serve or plan.spawn):
+            if display:
+                plan.spawn = True
+            else:
+                plan.serve = True
+                plan.notes.append("no display: serving the web viewer")
+        return plan
+
+
+class Output:
+    """Attaches the sinks of an ``OutputPlan`` to a recording; ``close()`` flushes and stops the server."""
+
+    def __init__(self, recording: rr.RecordingStream, plan: OutputPlan, blueprint: rrb.Blueprint) -> None:
+        self.recording = recording
+        self.plan = plan
+        self.server: subprocess.Popen | None = None
+        self.viewer_url = ""
+        sinks: list = []
+        if plan.save:
+            plan.save.parent.mkdir(parents=True, exist_ok=True)
+            sinks.append(rr.FileSink(str(plan.save)))
+        if plan.serve:
+            grpc_url = self._start_web_server()
+            sinks.append(rr.GrpcSink(grpc_url))
+        if plan.spawn:
+            # The native viewer listens for gRPC; connecting through a sink lets it sit beside the others.
+            port = free_port() if plan.serve else (plan.grpc_port or free_port())
+            recording.spawn(port=port, connect=False)
+            sinks.append(rr.GrpcSink(f"rerun+http://127.0.0.1:{port}/proxy"))
+        if sinks:
+            recording.set_sinks(*sinks, default_blueprint=blueprint)
+
+    def _start_web_server(self) -> str:
+        grpc_port = self.plan.grpc_port or free_port()
+        web_port = self.plan.web_port or free_port()
+        self.server = subprocess.Popen(
+            [sys.executable, "-m", "rerun", "--serve-web", "--bind", "127.0.0.1", "--port", str(grpc_port),
+             "--web-viewer-port", str(web_port), "--server-memory-limit", "512MiB"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+        )
+        if not wait_for_port(grpc_port, 20.0) or self.server.poll() is not None:
+            self.close()
+            raise RuntimeError(f"the Rerun web viewer server did not start on ports {grpc_port}/{web_port}")
+        grpc_url = f"rerun+http://127.0.0.1:{grpc_port}/proxy"
+        self.viewer_url = f"http://127.0.0.1:{web_port}/?url={grpc_url.replace('+', '%2B')}"
+        return grpc_url
+
+    def close(self) -> None:
+        try:
+            self.recording.flush()
+        except Exception:  # noqa: BLE001 - shutting down: nothing useful to do with a flush error
+            pass
+        if self.server is not None and self.server.poll() is None:
+            self.server.terminate()
+            try:
+                self.server.wait(5)
+            except subprocess.TimeoutExpired:
+                self.server.kill()
+                self.server.wait()
+        self.server = None
