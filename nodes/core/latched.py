@@ -1,0 +1,71 @@
+"""Latched topics (ROS "transient local"): the last message is also answered as a queryable on the same key.
+
+A publisher of rarely-changing data (``robot_description``, ``tf_static``) publishes normally *and* keeps the
+last payload; anyone who joins later runs ``fetch_latched`` (a Zenoh get on the topic key) and receives it,
+then subscribes for changes. Wire format is identical to the topic's (msgpack map of the message).
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import TYPE_CHECKING, Any
+
+import zenoh
+
+import msgs
+from nodes.core.endpoints import ENCODING, Publisher, encoding_for
+
+if TYPE_CHECKING:
+    from nodes.core.node import Node
+
+
+class LatchedPublisher:
+    def __init__(self, node: Node, msg_type: Any, topic: str) -> None:
+        self.node = node
+        self.msg_type = msg_type
+        self.key = node.resolve(topic)
+        self._publisher = Publisher(node, msg_type, self.key)
+        self._encoding = encoding_for(msg_type._type)
+        self._last: bytes | None = None
+        self._lock = threading.Lock()
+        self._queryable = node.session.declare_queryable(self.key, self._on_query, complete=True)
+        node._entities.append(self)
+
+    @property
+    def has_message(self) -> bool:
+        return self._last is not None
+
+    def publish(self, msg: Any) -> None:
+        if getattr(msg, "_type", None) != self.msg_type._type:
+            raise TypeError(f"latched publisher on '{self.key}' sends {self.msg_type._type}, got {type(msg).__name__}")
+        payload = msgs.encode(msg)
+        with self._lock:
+            self._last = payload
+        self._publisher.publish_raw(payload)
+
+    def _on_query(self, query: zenoh.Query) -> None:
+        # Runs on a Zenoh thread: only reads the last payload (swapped atomically under the lock).
+        with self._lock:
+            payload = self._last
+        try:
+            if payload is not None:
+                query.reply(self.key, payload, encoding=self._encoding)
+        finally:
+            query.drop()
+
+    def destroy(self) -> None:
+        self._queryable.undeclare()
+        self._publisher.destroy()
+
+
+def fetch_latched(session: zenoh.Session, msg_type: Any, key: str, timeout: float = 2.0) -> Any | None:
+    """The latched message on ``key`` (already resolved), or None when nobody answers in ``timeout`` s.
+
+    Raises ``msgs.DecodeError`` when the answer does not decode as ``msg_type``.
+    """
+    replies = session.get(key, encoding=zenoh.Encoding(ENCODING), timeout=timeout,
+                          target=zenoh.QueryTarget.BEST_MATCHING)
+    for reply in replies:
+        if reply.ok is not None:
+            return msgs.decode(msg_type, reply.ok.payload.to_bytes())
+    return None
