@@ -162,18 +162,29 @@ class ServiceServer:
 
 
 def call_raw(session: zenoh.Session, key: str, payload: bytes, timeout: float) -> bytes:
-    """One query; returns the first ok reply's payload or raises ServiceError."""
-    replies = session.get(key, payload=payload, encoding=zenoh.Encoding(ENCODING), timeout=timeout,
-                          target=zenoh.QueryTarget.BEST_MATCHING)
-    for reply in replies:
-        if reply.ok is not None:
-            return reply.ok.payload.to_bytes()
-        err = reply.err.payload.to_bytes()
-        try:
-            reason = msgpack.unpackb(err, raw=False).get("error", err)
-        except Exception:  # noqa: BLE001 - a non-zenroid server may send any bytes
-            reason = err.decode(errors="replace")
-        raise ServiceError(f"service '{key}' returned an error: {reason}")
+    """One request; returns the first ok reply's payload or raises ServiceError.
+
+    A query that finds no server returns at once; it is retried until ``timeout`` because a fresh
+    session needs a few milliseconds before routes to existing queryables form, and a server may be
+    starting (the ros2_control spawner race).
+    """
+    deadline = time.monotonic() + timeout
+    while True:
+        remaining = max(0.01, deadline - time.monotonic())
+        replies = session.get(key, payload=payload, encoding=zenoh.Encoding(ENCODING), timeout=remaining,
+                              target=zenoh.QueryTarget.BEST_MATCHING)
+        for reply in replies:
+            if reply.ok is not None:
+                return reply.ok.payload.to_bytes()
+            err = reply.err.payload.to_bytes()
+            try:
+                reason = msgpack.unpackb(err, raw=False).get("error", err)
+            except Exception:  # noqa: BLE001 - a non-zenroid server may send any bytes
+                reason = err.decode(errors="replace")
+            raise ServiceError(f"service '{key}' returned an error: {reason}")
+        if time.monotonic() >= deadline - 0.02:
+            break
+        time.sleep(0.02)
     raise ServiceError(f"no response from service '{key}' within {timeout:g} s (is its server running?)")
 
 

@@ -29,6 +29,7 @@ class EchoNode(LifecycleNode):
         self.create_service(SetBool, "~/fail", self.on_fail)
         self.create_action_server(Navigate, "~/navigate", execute_callback=self.navigate, single_goal=True,
                                   cancel_callback=lambda handle: True)
+        self.logger.info("ready")
 
     def on_trigger(self, request: Any) -> Any:
         self.calls += 1

@@ -1,0 +1,192 @@
+"""The node runtime across real processes over a real router: pub/sub of every message family,
+services, actions (feedback, result, cancel, preemption), lifecycle, the graph and bad input."""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+import msgpack
+import pytest
+
+import msgs
+from nodes.core import Node, graph
+from nodes.core.action import ABORTED, CANCELED, SUCCEEDED, ActionClient
+from nodes.core.endpoints import ServiceError
+from tests.conftest import ROOT, wait_until
+from tests.support.samples import sample_message
+
+MESSAGE_TYPES = [t for t in msgs.list_types() if "/msg/" in t]
+Navigate = msgs.get_type("humanoid_msgs/action/NavigateToGoal")
+Trigger = msgs.get_type("std_srvs/srv/Trigger")
+SetBool = msgs.get_type("std_srvs/srv/SetBool")
+Log = msgs.get_type("rcl_interfaces/msg/Log")
+
+
+@pytest.fixture
+def echo(processes):
+    proc = processes.start("-m", "tests.support.echo_node", "--param", f"types:=[{', '.join(MESSAGE_TYPES)}]",
+                           name="echo")
+    wait_until(lambda: "ready" in processes.output(proc), timeout=30, message="echo node ready")
+    return proc
+
+
+@pytest.fixture
+def client(router):
+    node = Node("test_client", connect=[router])
+    yield node
+    node.destroy()
+
+
+def cli(router: str, *argv: str, timeout: float = 30) -> subprocess.CompletedProcess:
+    env = dict(os.environ, ZENOH_CONNECT=router, PYTHONPATH=str(ROOT))
+    return subprocess.run([sys.executable, "-m", "nodes.tools", *argv], capture_output=True, text=True,
+                          env=env, timeout=timeout, cwd=ROOT)
+
+
+def test_every_message_family_round_trips_between_processes(echo, client) -> None:
+    received: dict[str, object] = {}
+    lock = threading.Lock()
+    publishers = {}
+    for type_name in MESSAGE_TYPES:
+        cls = msgs.get_type(type_name)
+
+        def store(msg, type_name=type_name):
+            with lock:
+                received[type_name] = msg
+
+        client.create_subscription(cls, f"/echo/out/{type_name}", store, inline=True)
+        publishers[type_name] = client.create_publisher(cls, f"/echo/in/{type_name}")
+    expected = {t: sample_message(t) for t in MESSAGE_TYPES}
+
+    def all_back() -> bool:
+        for type_name, pub in publishers.items():
+            if type_name not in received:
+                pub.publish(expected[type_name])
+        return len(received) == len(MESSAGE_TYPES)
+
+    wait_until(all_back, timeout=20, interval=0.2, message="every type echoed back")
+    for type_name in MESSAGE_TYPES:
+        assert received[type_name] == expected[type_name], type_name
+    families = {t.split("/")[0] for t in MESSAGE_TYPES}
+    assert {"sensor_msgs", "trajectory_msgs", "geometry_msgs", "tf2_msgs", "control_msgs", "gazebo_msgs",
+            "humanoid_msgs", "std_msgs", "rosgraph_msgs"} <= families
+
+
+def test_service_call_from_client_and_cli(echo, client, router) -> None:
+    trigger = client.create_client(Trigger, "/echo/trigger")
+    assert trigger.wait_for_service(5.0)
+    assert trigger.call(timeout=5).message == "call 1"
+    result = cli(router, "service", "call", "/echo/trigger", "std_srvs/srv/Trigger")
+    assert result.returncode == 0, result.stderr
+    assert "success: true" in result.stdout and "call 2" in result.stdout
+    # a handler that raises answers with an error; the node keeps serving
+    with pytest.raises(ServiceError, match="always fails"):
+        client.create_client(SetBool, "/echo/fail").call(SetBool.Request(data=True), timeout=5)
+    # a request the server cannot decode gets an error naming the field
+    with pytest.raises(ServiceError, match="data: expected a bool"):
+        from nodes.core.endpoints import call_raw
+
+        call_raw(client.session, "echo/fail", msgpack.packb({"data": "yes"}), 5)
+    assert trigger.call(timeout=5).message == "call 3"
+    assert echo.poll() is None
+
+
+def test_action_feedback_result_cancel_and_preemption(echo, client) -> None:
+    action = ActionClient(client, Navigate, "echo/navigate")
+    assert action.wait_for_server(5.0)
+    feedback = []
+    handle = action.send_goal(Navigate.Goal(max_velocity=0.4), feedback_callback=feedback.append)
+    assert handle.accepted
+    status, result = handle.get_result(timeout=10)
+    assert status == SUCCEEDED and result.success and result.message == "arrived"
+    assert len(feedback) >= 2 and feedback[-1].distance_remaining > 0
+
+    long_goal = action.send_goal(Navigate.Goal(max_velocity=3.0))
+    time.sleep(0.3)
+    cancel = long_goal.cancel()
+    assert cancel.return_code == 0 and len(cancel.goals_canceling) == 1
+    status, result = long_goal.get_result(timeout=10)
+    assert status == CANCELED and result.message == "canceled"
+
+    first = action.send_goal(Navigate.Goal(max_velocity=3.0))
+    time.sleep(0.3)
+    second = action.send_goal(Navigate.Goal(max_velocity=0.2))
+    assert first.get_result(timeout=10)[0] == ABORTED  # preempted by the new goal
+    assert second.get_result(timeout=10)[0] == SUCCEEDED
+    assert first.cancel().return_code == 3  # ERROR_GOAL_TERMINATED
+
+
+def test_bad_payload_is_logged_on_rosout_and_node_keeps_state(echo, client) -> None:
+    logs = []
+    client.create_subscription(Log, "/rosout", logs.append, inline=True)
+    JointState = msgs.get_type("sensor_msgs/msg/JointState")
+    back = []
+    client.create_subscription(JointState, "/echo/out/sensor_msgs/msg/JointState", back.append, inline=True)
+    time.sleep(0.5)
+    bad = msgpack.packb({"name": ["a", "b"], "position": [1.0]})
+    client.session.put("echo/in/sensor_msgs/msg/JointState", bad)
+    client.session.put("echo/in/sensor_msgs/msg/JointState", b"\xc1garbage")
+    wait_until(lambda: any("position: has 1 entries but name has 2" in log.msg for log in logs), timeout=10,
+               message="a rosout line naming the bad field")
+    pub = client.create_publisher(JointState, "/echo/in/sensor_msgs/msg/JointState")
+    wait_until(lambda: back or pub.publish(JointState(name=["ok"], position=[1.0])), timeout=10,
+               message="valid messages still echoed")
+    assert back[0].name == ["ok"] and echo.poll() is None
+
+
+def test_lifecycle_transitions_over_cli(echo, router) -> None:
+    assert "unconfigured" in cli(router, "lifecycle", "get", "/echo").stdout
+    assert cli(router, "lifecycle", "set", "/echo", "activate").returncode == 1  # not from unconfigured
+    assert cli(router, "lifecycle", "set", "/echo", "configure").returncode == 0
+    assert cli(router, "lifecycle", "set", "/echo", "activate").returncode == 0
+    assert "active [3]" in cli(router, "lifecycle", "get", "/echo").stdout
+
+
+def test_graph_sees_node_within_1s_and_loses_it_within_2s_of_kill9(processes, client, router) -> None:
+    proc = processes.start("-m", "tests.support.echo_node", "--name", "graph_probe", name="probe")
+    seen_ready = wait_until(lambda: "ready" in processes.output(proc) and time.monotonic(), timeout=30,
+                            message="probe node ready")
+    # the token is declared when the node starts, before "ready": it must be visible right away
+    appeared = wait_until(lambda: "/graph_probe" in graph.node_names(client.session, 0.3) and time.monotonic(),
+                          timeout=5, interval=0.01, message="graph_probe in the graph")
+    assert appeared - seen_ready < 1.0
+    listed = cli(router, "node", "list")
+    assert "/graph_probe" in listed.stdout.split()
+    os.killpg(proc.pid, signal.SIGKILL)
+    killed = time.monotonic()
+    wait_until(lambda: "/graph_probe" not in graph.node_names(client.session, 0.3), timeout=5, interval=0.05,
+               message="graph_probe gone after kill -9")
+    assert time.monotonic() - killed < 2.0
+
+
+def test_cli_topic_pub_echo_and_list(echo, router) -> None:
+    env = dict(os.environ, ZENOH_CONNECT=router, PYTHONPATH=str(ROOT))
+    echo_proc = subprocess.Popen(
+        [sys.executable, "-m", "nodes.tools", "topic", "echo", "/echo/out/sensor_msgs/msg/JointState", "--once",
+         "--timeout", "20"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT)
+    try:
+        deadline = time.monotonic() + 20
+        while echo_proc.poll() is None and time.monotonic() < deadline:
+            pub = cli(router, "topic", "pub", "/echo/in/sensor_msgs/msg/JointState", "sensor_msgs/msg/JointState",
+                      "{name: [left_knee], position: [0.4]}", "--once")
+            assert pub.returncode == 0, pub.stderr
+            try:
+                echo_proc.wait(1.0)
+            except subprocess.TimeoutExpired:
+                pass
+        out, err = echo_proc.communicate(timeout=5)
+    finally:
+        if echo_proc.poll() is None:
+            echo_proc.kill()
+    assert echo_proc.returncode == 0, err
+    assert re.search(r"name: \[left_knee\]", out) and "position: [0.4]" in out
+    listed = cli(router, "topic", "list", "-t")
+    assert "/echo/out/sensor_msgs/msg/JointState [sensor_msgs/msg/JointState]" in listed.stdout
+    bad = cli(router, "topic", "pub", "/x", "sensor_msgs/msg/JointState", "{name: [a], position: [1, 2]}")
+    assert bad.returncode == 2 and "position: has 2 entries but name has 1" in bad.stderr

@@ -1,0 +1,171 @@
+"""Codec: every error path names the type, the field and the reason; round trips are exact."""
+
+from __future__ import annotations
+
+import math
+import os
+
+import msgpack
+import pytest
+
+import msgs
+from msgs import DecodeError, Limits, decode, encode
+
+JointState = msgs.get_type("sensor_msgs/msg/JointState")
+JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
+UUID = msgs.get_type("unique_identifier_msgs/msg/UUID")
+Log = msgs.get_type("rcl_interfaces/msg/Log")
+
+
+def packed(obj: object) -> bytes:
+    return msgpack.packb(obj, use_bin_type=True)
+
+
+def expect_error(cls: object, obj: object, field: str, reason: str) -> DecodeError:
+    with pytest.raises(DecodeError) as info:
+        decode(cls, obj if isinstance(obj, bytes) else packed(obj))
+    err = info.value
+    assert err.type_name == cls._type
+    assert err.path == field, str(err)
+    assert reason in err.reason, str(err)
+    assert cls._type in str(err)
+    return err
+
+
+def test_joint_state_round_trip_and_third_party_view() -> None:
+    js = JointState(name=["left_knee", "right_knee"], position=[0.4, 0.0], velocity=[0.1, -0.1], effort=[1.0, 2.0])
+    js.header.stamp.sec = 12
+    js.header.frame_id = "pelvis"
+    data = encode(js)
+    assert decode(JointState, data) == js
+    plain = msgpack.unpackb(data, raw=False)  # what a client without our code sees
+    assert plain["name"] == ["left_knee", "right_knee"]
+    assert plain["position"] == [0.4, 0.0]
+    assert plain["header"] == {"stamp": {"sec": 12, "nanosec": 0}, "frame_id": "pelvis"}
+
+
+def test_missing_fields_take_ros_defaults() -> None:
+    msg = decode(JointState, packed({"name": ["a"]}))
+    assert msg.position == [] and msg.header.frame_id == "" and msg.header.stamp.sec == 0
+    q = decode(msgs.get_type("geometry_msgs/msg/Quaternion"), packed({}))
+    assert (q.x, q.y, q.z, q.w) == (0.0, 0.0, 0.0, 1.0)  # the .msg default, as ROS does
+
+
+def test_wrong_type_names_field() -> None:
+    expect_error(JointState, {"name": "knee"}, "name", "expected a list")
+    expect_error(JointState, {"name": [1]}, "name[0]", "expected a string")
+    expect_error(JointState, {"name": ["a"], "position": ["x"]}, "position[0]", "expected a number")
+    expect_error(JointState, {"header": {"stamp": {"sec": 1.5}}}, "header.stamp.sec", "expected an integer")
+    expect_error(JointState, {"header": []}, "header", "expected a map")
+    expect_error(JointState, [1, 2], "", "expected a map")
+    expect_error(msgs.get_type("std_msgs/msg/Bool"), {"data": 1}, "data", "expected a bool")
+
+
+def test_integer_ranges() -> None:
+    expect_error(Log, {"level": 256}, "level", "out of range for uint8")
+    expect_error(Log, {"stamp": {"nanosec": -1}}, "stamp.nanosec", "out of range for uint32")
+
+
+def test_unknown_field_is_rejected() -> None:
+    expect_error(JointState, {"positions": [1.0]}, "positions", "unknown field")
+
+
+def test_mismatched_lengths() -> None:
+    expect_error(JointState, {"name": ["a", "b"], "position": [1.0]}, "position", "has 1 entries but name has 2")
+    expect_error(JointState, {"name": ["a"], "effort": [1.0, 2.0]}, "effort", "has 2 entries")
+
+
+def test_fixed_size_array() -> None:
+    expect_error(UUID, {"uuid": b"\x01" * 15}, "uuid", "exactly 16")
+    assert decode(UUID, packed({"uuid": list(range(16))})).uuid == bytes(range(16))  # list of ints accepted
+    expect_error(UUID, {"uuid": [300] + [0] * 15}, "uuid[0]", "out of range")
+
+
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_non_finite_floats(bad: float) -> None:
+    expect_error(JointState, {"name": ["a", "b"], "position": [0.0, bad]}, "position[1]", "not a finite number")
+    point = {"positions": [bad], "time_from_start": {"sec": 1}}
+    expect_error(JointTrajectory, {"joint_names": ["j"], "points": [point]}, "points[0].positions[0]", "finite")
+    allowed = decode(JointState, packed({"name": ["a"], "position": [bad]}), Limits(allow_nonfinite=True))
+    assert allowed.position[0] != 0.0
+
+
+def test_oversized_message_and_arrays() -> None:
+    limits = Limits(max_message_bytes=1000, max_array_length=10, max_string_length=8)
+    with pytest.raises(DecodeError, match="over the 1000-byte limit"):
+        decode(JointState, packed({"name": ["a"] * 500}), limits)
+    with pytest.raises(DecodeError, match="not a valid msgpack"):
+        decode(JointState, packed({"name": ["a"] * 11}), limits)  # msgpack's own array limit
+    with pytest.raises(DecodeError, match="not a valid msgpack"):
+        decode(JointState, packed({"header": {"frame_id": "x" * 9}}), limits)
+
+
+def test_truncated_and_random_bytes() -> None:
+    data = encode(JointState(name=["a"], position=[1.0]))
+    for cut in range(1, len(data) - 1, 7):
+        with pytest.raises(DecodeError):
+            decode(JointState, data[:cut])
+    rng = __import__("random").Random(7)
+    for _ in range(300):
+        blob = bytes(rng.getrandbits(8) for _ in range(rng.randint(0, 64)))
+        try:
+            decode(JointState, blob)
+        except DecodeError:
+            pass  # the only acceptable failure mode
+    with pytest.raises(DecodeError):
+        decode(JointState, os.urandom(0))
+
+
+def test_numpy_arrays_encode() -> None:
+    np = pytest.importorskip("numpy")
+    js = JointState(name=["a", "b"], position=np.array([0.1, 0.2]))
+    assert decode(JointState, encode(js)).position == [0.1, 0.2]
+
+
+def test_every_builtin_type_has_a_class_and_encodes_its_default() -> None:
+    types = msgs.list_types()
+    assert len(types) >= 60
+    for name in types:
+        t = msgs.get_type(name)
+        if isinstance(t, msgs.Service):
+            classes = [t.Request, t.Response]
+        elif isinstance(t, msgs.Action):
+            classes = [t.Goal, t.Result, t.Feedback, t.SendGoalRequest, t.GetResultResponse, t.FeedbackMessage]
+        else:
+            classes = [t]
+        for cls in classes:
+            assert decode(cls, encode(cls())) == cls()
+
+
+def test_constants_and_imports() -> None:
+    from msgs.action_msgs import GoalStatus
+    from msgs.control_msgs import FollowJointTrajectory
+
+    assert GoalStatus.STATUS_SUCCEEDED == 4
+    assert FollowJointTrajectory.Result.GOAL_TOLERANCE_VIOLATED == -5
+    assert msgs.HumanoidState is msgs.get_type("humanoid_msgs/msg/HumanoidState")
+
+
+def test_user_message_package(tmp_path) -> None:
+    pkg = tmp_path / "my_robot_msgs" / "msg"
+    pkg.mkdir(parents=True)
+    (pkg / "GraspCommand.msg").write_text(
+        "# hand configuration\nstd_msgs/Header header\nstring hand\nfloat64[5] finger_positions\nfloat64 force 2.5\n")
+    msgs.add_search_path(tmp_path)
+    Grasp = msgs.get_type("my_robot_msgs/msg/GraspCommand")
+    g = Grasp(hand="left")
+    assert g.force == 2.5 and g.finger_positions == [0.0] * 5
+    assert decode(Grasp, encode(g)) == g
+    with pytest.raises(DecodeError, match="finger_positions: expected exactly 5"):
+        decode(Grasp, packed({"finger_positions": [1.0]}))
+
+
+def test_bad_definitions_are_clear() -> None:
+    from msgs.idl import DefinitionError, parse_message
+
+    with pytest.raises(DefinitionError, match="line 2"):
+        parse_message("float64 x\nfloat64[ y\n", "p/msg/T")
+    with pytest.raises(DefinitionError, match="duplicate field"):
+        parse_message("float64 x\nint32 x\n", "p/msg/T")
+    with pytest.raises(DefinitionError, match="not an integer"):
+        parse_message("int32 X = 1.5\n", "p/msg/T")
