@@ -1,0 +1,320 @@
+"""The controller manager process: ros2_control's controller_manager over the simulator's hardware frames.
+
+It asks ``<ns>/hardware/info`` for the joints (retrying until the simulator answers), then offers the
+``<ns>/controller_manager/*`` services and answers every ``<ns>/hardware/state`` with exactly one
+``<ns>/hardware/command`` (same ``step``), after running every active controller's ``update`` on the
+state's sim time. The hot path (state in, command out) uses raw msgpack on Zenoh's thread.
+"""
+
+from __future__ import annotations
+
+import collections
+import json
+import math
+import threading
+import time
+from typing import Any
+
+import msgpack
+
+import msgs
+from nodes.control.config import (
+    ConfigError,
+    ControllerConfig,
+    ManagerConfig,
+    load_config_file,
+    parse_controller_yaml,
+)
+from nodes.control.controller import ACTIVE
+from nodes.control.interfaces import COMMAND_KINDS, HardwareInterfaces, JointInfo
+from nodes.control.manager import BEST_EFFORT, STRICT, ControllerManager, ManagerError
+from nodes.core import Node, ServiceError
+
+ListControllers = msgs.get_type("controller_manager_msgs/srv/ListControllers")
+LoadController = msgs.get_type("controller_manager_msgs/srv/LoadController")
+ConfigureController = msgs.get_type("controller_manager_msgs/srv/ConfigureController")
+SwitchController = msgs.get_type("controller_manager_msgs/srv/SwitchController")
+UnloadController = msgs.get_type("controller_manager_msgs/srv/UnloadController")
+ListHardwareInterfaces = msgs.get_type("controller_manager_msgs/srv/ListHardwareInterfaces")
+ControllerState = msgs.get_type("controller_manager_msgs/msg/ControllerState")
+HardwareInterfaceMsg = msgs.get_type("controller_manager_msgs/msg/HardwareInterface")
+GetHardwareInfo = msgs.get_type("zenroid_msgs/srv/GetHardwareInfo")
+HardwareState = msgs.get_type("zenroid_msgs/msg/HardwareState")
+HardwareCommand = msgs.get_type("zenroid_msgs/msg/HardwareCommand")
+SetParameters = msgs.get_type("zenroid_msgs/srv/SetParameters")
+Trigger = msgs.get_type("std_srvs/srv/Trigger")
+
+
+class NodeControllerContext:
+    """The handle a controller gets: endpoints on the manager's node, named after the controller."""
+
+    def __init__(self, node: ControllerManagerNode, controller_name: str) -> None:
+        self.node = node
+        self.controller_name = controller_name
+        self.logger = node.logger
+        self._entities: list[Any] = []
+
+    def _resolve(self, name: str) -> str:
+        return f"{self.controller_name}/{name[2:]}" if name.startswith("~/") else name
+
+    def _keep(self, entity: Any) -> Any:
+        self._entities.append(entity)
+        return entity
+
+    def now(self) -> float:
+        return self.node.control_time
+
+    def create_publisher(self, msg_type: Any, topic: str) -> Any:
+        return self._keep(self.node.create_publisher(msg_type, self._resolve(topic)))
+
+    def create_subscription(self, msg_type: Any, topic: str, callback: Any) -> Any:
+        # Inline: commands reach the controller without waiting for the executor (lowest latency);
+        # controllers hand them to update() through an atomic assignment or a deque.
+        return self._keep(self.node.create_subscription(msg_type, self._resolve(topic), callback, inline=True))
+
+    def create_service(self, srv_type: Any, name: str, handler: Any) -> Any:
+        return self._keep(self.node.create_service(srv_type, self._resolve(name), handler))
+
+    def create_action_server(self, action_type: Any, name: str, **callbacks: Any) -> Any:
+        return self._keep(self.node.create_action_server(action_type, self._resolve(name), **callbacks))
+
+    def destroy_all(self) -> None:
+        for entity in reversed(self._entities):
+            try:
+                entity.destroy()
+            except Exception as exc:  # noqa: BLE001 - best effort; never stop the manager
+                self.logger.warn(f"{self.controller_name}: could not close an endpoint: {exc}")
+            if entity in self.node._entities:
+                self.node._entities.remove(entity)
+        self._entities.clear()
+
+
+class ControllerManagerNode(Node):
+    """ros2_control controller manager: controllers from YAML, run against the simulator's hardware."""
+
+    default_name = "controller_manager"
+
+    def __init__(self, *, cli_args: Any = None, **kwargs: Any) -> None:
+        super().__init__("controller_manager", **kwargs)
+        self.update_rate = int(self.declare_parameter(
+            "update_rate", 100.0, type=float, min_value=1.0, max_value=100_000.0,
+            description="controller update rate (Hz); the simulator steps physics_rate/update_rate per command"))
+        self.hardware_timeout = self.declare_parameter(
+            "hardware_timeout", 1.0, type=float, min_value=0.01,
+            description="wall s without hardware/state before the hardware is reported lost")
+        self.autostart = self.declare_parameter(
+            "activate", [], type=list, description="controllers to load, configure and activate on start")
+        self.config = self._load_config(cli_args)
+        for path_param in ("controllers_file",):
+            extra = self.declare_parameter(path_param, "", type=str, description="extra ros2_control YAML")
+            if extra:
+                self.config.merge(load_config_file(extra, self.name))
+        self.control_time = 0.0
+        self.manager: ControllerManager | None = None
+        self.hardware: HardwareInterfaces | None = None
+        self._last_time: float | None = None
+        self._last_state_wall = 0.0
+        self._started_wall = time.monotonic()
+        self._lost = False
+        self._cycles = 0
+        self._cycle_us: collections.deque[float] = collections.deque(maxlen=20_000)
+        self._bad_frames = 0
+        threading.Thread(target=self._discover, daemon=True, name="hardware-discovery").start()
+
+    def _load_config(self, cli_args: Any) -> ManagerConfig:
+        config = ManagerConfig()
+        for path in getattr(cli_args, "params_file", None) or []:
+            try:
+                config.merge(load_config_file(path, self.name))
+            except ConfigError as exc:
+                raise ValueError(str(exc)) from None
+        if config.update_rate is not None and not self.has_parameter_override("update_rate"):
+            self.update_rate = config.update_rate
+        # Controller types given as node parameters (``--param jtc.type:=...``) count too.
+        for key, value in self.parameter_overrides().items():
+            if key.endswith(".type") and isinstance(value, str):
+                config.controllers.setdefault(key[:-5], ControllerConfig(key[:-5])).type = value
+        return config
+
+    # --- start-up -----------------------------------------------------------------------------------
+    def _discover(self) -> None:
+        """Ask the simulator for the robot's joints until it answers (it may start after us)."""
+        client = self.create_client(GetHardwareInfo, "hardware/info")
+        attempt = 0
+        while self.ok:
+            try:
+                info = client.call(timeout=1.0)
+            except ServiceError as exc:
+                if attempt % 10 == 0:
+                    self.logger.info(f"waiting for the hardware at '{client.key}' ({exc})")
+                attempt += 1
+                time.sleep(0.3)
+                continue
+            self._enqueue(lambda found=info: self._start(found), where="hardware start")
+            return
+
+    def _start(self, info: Any) -> None:
+        joints = []
+        for j in info.joints:
+            kinds = [k for k in j.command_interfaces if k in COMMAND_KINDS]
+            joints.append(JointInfo(j.name, kinds, list(j.state_interfaces), j.min_position, j.max_position,
+                                    j.max_velocity, j.max_effort))
+        self.hardware = HardwareInterfaces(joints)
+        self.manager = ControllerManager(self.hardware, self.config, self.update_rate, self._make_context,
+                                         self.logger)
+        self.logger.info(f"hardware '{info.robot_name}' ({info.mode}, {len(joints)} joints); "
+                         f"update rate {self.update_rate} Hz; controllers in config: "
+                         f"{sorted(self.config.controllers)}")
+        self._cmd_pub = self.create_publisher(HardwareCommand, "hardware/command", express=True)
+        self.create_subscription(HardwareState, "hardware/state", self._on_state, inline=True, raw=True)
+        self.create_service(ListControllers, "~/list_controllers", self._srv_list)
+        self.create_service(LoadController, "~/load_controller", self._srv_load)
+        self.create_service(ConfigureController, "~/configure_controller", self._srv_configure)
+        self.create_service(SwitchController, "~/switch_controller", self._srv_switch)
+        self.create_service(UnloadController, "~/unload_controller", self._srv_unload)
+        self.create_service(ListHardwareInterfaces, "~/list_hardware_interfaces", self._srv_interfaces)
+        self.create_service(SetParameters, "~/set_controller_parameters", self._srv_set_controller_params)
+        self.create_service(Trigger, "~/statistics", self._srv_statistics)
+        self.create_timer(0.25, self._watchdog, sim_time=False)
+        for name in self.autostart:
+            try:
+                self.manager.load(name)
+                self.manager.configure(name)
+                ok, message = self.manager.switch([name], [], STRICT)
+                if not ok:
+                    raise ManagerError(message)
+            except ManagerError as exc:
+                self.logger.error(f"could not start controller '{name}': {exc}")
+        self._last_state_wall = time.monotonic()
+        self.logger.info("controller manager ready")
+
+    def _make_context(self, name: str) -> NodeControllerContext:
+        return NodeControllerContext(self, name)
+
+    # --- hardware loop (Zenoh thread) -------------------------------------------------------------------
+    def _on_state(self, payload: bytes) -> None:
+        started = time.perf_counter()
+        try:
+            state = msgpack.unpackb(payload, raw=False)
+            step = state["step"]
+            stamp = state["stamp"]
+            t = stamp["sec"] + stamp["nanosec"] * 1e-9
+            names, positions = state["name"], state["position"]
+            velocities, efforts = state.get("velocity") or [], state.get("effort") or []
+            if not isinstance(step, int) or not isinstance(names, list) or len(positions) != len(names):
+                raise ValueError("step must be an integer and position[] one value per name[]")
+            if len(velocities) not in (0, len(names)) or len(efforts) not in (0, len(names)):
+                raise ValueError("velocity[] / effort[] must be empty or one value per name[]")
+            if not math.isfinite(t):
+                raise ValueError("stamp is not finite")
+        except Exception as exc:  # noqa: BLE001 - a malformed frame is dropped, the loop lives on
+            self._bad_frames += 1
+            self.logger.warn_throttle(1.0, f"dropped a malformed hardware/state frame: {type(exc).__name__}: {exc}")
+            return
+        manager = self.manager
+        with manager.lock:
+            if self._lost:
+                self._lost = False
+                self._last_time = None
+                self.logger.info("hardware is back: controllers resume")
+            self.hardware.read_state(names, positions, velocities, efforts)
+            if self._last_time is None:
+                period = 1.0 / self.update_rate
+            else:
+                period = t - self._last_time
+                if period < 0.0:
+                    self.logger.warn(f"sim time went back from {self._last_time:.3f} to {t:.3f} s (reset?)")
+                    period = 0.0
+            self._last_time = t
+            self.control_time = t
+            manager.update(t, period)
+            cmd_names, cmd_kinds, cmd_values = manager.command()
+            self._last_state_wall = time.monotonic()
+        self._cmd_pub.publish_raw(msgpack.packb({
+            "step": step, "update_rate": self.update_rate, "name": cmd_names, "interface": cmd_kinds,
+            "value": cmd_values}, use_bin_type=True))
+        self._cycles += 1
+        self._cycle_us.append((time.perf_counter() - started) * 1e6)
+
+    def _watchdog(self) -> None:
+        silent = time.monotonic() - self._last_state_wall
+        if not self._lost and silent > self.hardware_timeout:
+            self._lost = True
+            self.logger.error(f"lost the hardware: no hardware/state for {silent:.1f} s; controllers keep their "
+                              "state and resume when it returns")
+
+    # --- services (executor thread) ---------------------------------------------------------------------
+    def _srv_list(self, _request: Any) -> Any:
+        rows = self.manager.list_controllers()
+        return ListControllers.Response(controller=[ControllerState(
+            name=r["name"], state=r["state"], type=r["type"], claimed_interfaces=r["claimed_interfaces"],
+            required_command_interfaces=r["required_command_interfaces"],
+            required_state_interfaces=r["required_state_interfaces"]) for r in rows])
+
+    def _attempt(self, what: str, fn: Any) -> bool:
+        try:
+            fn()
+            return True
+        except ManagerError as exc:
+            self.logger.error(f"{what}: {exc}")
+            return False
+
+    def _srv_load(self, request: Any) -> Any:
+        return LoadController.Response(ok=self._attempt("load_controller", lambda: self.manager.load(request.name)))
+
+    def _srv_configure(self, request: Any) -> Any:
+        return ConfigureController.Response(
+            ok=self._attempt("configure_controller", lambda: self.manager.configure(request.name)))
+
+    def _srv_unload(self, request: Any) -> Any:
+        return UnloadController.Response(
+            ok=self._attempt("unload_controller", lambda: self.manager.unload(request.name)))
+
+    def _srv_switch(self, request: Any) -> Any:
+        strictness = request.strictness if request.strictness in (BEST_EFFORT, STRICT) else BEST_EFFORT
+        ok, message = self.manager.switch(list(request.activate_controllers), list(request.deactivate_controllers),
+                                          strictness)
+        if not ok:
+            self.logger.error(f"switch_controller refused: {message}")
+        return SwitchController.Response(ok=ok, message=message)
+
+    def _srv_interfaces(self, _request: Any) -> Any:
+        commands, states = self.manager.list_interfaces()
+        return ListHardwareInterfaces.Response(
+            command_interfaces=[HardwareInterfaceMsg(**c) for c in commands],
+            state_interfaces=[HardwareInterfaceMsg(**s) for s in states])
+
+    def _srv_set_controller_params(self, request: Any) -> Any:
+        """names[i] = controller name, values_yaml[i] = its parameters (a YAML map, may include ``type``)."""
+        if len(request.names) != len(request.values_yaml):
+            raise ValueError(f"{len(request.names)} names but {len(request.values_yaml)} values_yaml")
+        ok, reasons = [], []
+        for name, text in zip(request.names, request.values_yaml, strict=True):
+            try:
+                self.manager.set_controller_params(name, parse_controller_yaml(text, f"parameters of '{name}'"))
+                ok.append(True)
+                reasons.append("")
+            except (ConfigError, ManagerError) as exc:
+                ok.append(False)
+                reasons.append(str(exc))
+        return SetParameters.Response(successful=ok, reasons=reasons)
+
+    def _srv_statistics(self, _request: Any) -> Any:
+        samples = sorted(self._cycle_us)
+
+        def pct(q: float) -> float:
+            return samples[min(len(samples) - 1, int(q * len(samples)))] if samples else 0.0
+
+        return Trigger.Response(success=True, message=json.dumps({
+            "cycles": self._cycles, "bad_frames": self._bad_frames, "cycle_p50_us": pct(0.5),
+            "cycle_p99_us": pct(0.99), "cycle_max_us": samples[-1] if samples else 0.0,
+            "active": [r["name"] for r in self.manager.list_controllers() if r["state"] == ACTIVE],
+        }))
+
+    def on_process_exit(self) -> None:
+        manager = self.manager
+        if manager is None:
+            return
+        active = [name for name, e in manager.controllers.items() if e.state == ACTIVE]
+        if active:
+            manager.switch([], active, BEST_EFFORT)  # ends running goals (aborted) before the session closes
