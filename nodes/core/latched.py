@@ -8,12 +8,13 @@ then subscribes for changes. Wire format is identical to the topic's (msgpack ma
 from __future__ import annotations
 
 import threading
+import time
 from typing import TYPE_CHECKING, Any
 
 import zenoh
 
 import msgs
-from nodes.core.endpoints import ENCODING, Publisher, encoding_for
+from nodes.core.endpoints import Publisher, encoding_for
 
 if TYPE_CHECKING:
     from nodes.core.node import Node
@@ -61,11 +62,17 @@ class LatchedPublisher:
 def fetch_latched(session: zenoh.Session, msg_type: Any, key: str, timeout: float = 2.0) -> Any | None:
     """The latched message on ``key`` (already resolved), or None when nobody answers in ``timeout`` s.
 
+    Retries until the deadline: a session that has just opened may not know the queryable yet (declarations
+    propagate asynchronously), and a query that matches nothing returns at once with no reply.
     Raises ``msgs.DecodeError`` when the answer does not decode as ``msg_type``.
     """
-    replies = session.get(key, encoding=zenoh.Encoding(ENCODING), timeout=timeout,
-                          target=zenoh.QueryTarget.BEST_MATCHING)
-    for reply in replies:
-        if reply.ok is not None:
-            return msgs.decode(msg_type, reply.ok.payload.to_bytes())
-    return None
+    deadline = time.monotonic() + timeout
+    while True:
+        remaining = deadline - time.monotonic()
+        if remaining <= 0:
+            return None
+        replies = session.get(key, timeout=min(remaining, 1.0), target=zenoh.QueryTarget.BEST_MATCHING)
+        for reply in replies:
+            if reply.ok is not None:
+                return msgs.decode(msg_type, reply.ok.payload.to_bytes())
+        time.sleep(min(0.05, max(0.0, deadline - time.monotonic())))
