@@ -204,3 +204,27 @@ def test_broken_description_exits_2_with_the_reason(processes, zenoh_port) -> No
                               f"robot_description_file:={ROOT / 'tests/data/urdf_broken/billion_laughs.urdf'}")
     assert hostile.wait(timeout=60) == 2
     assert "declares entities" in processes.output(hostile)
+
+
+def test_description_change_republishes_and_a_bad_one_is_refused(processes, zenoh_port, session) -> None:
+    from nodes.core.endpoints import call_raw
+
+    start_publisher(processes, zenoh_port, "arm", f"robot_description_file:={ROOT / 'robots/simple_2dof_arm.urdf'}")
+    wait_until(lambda: fetch_latched(session, String, "arm/robot_description", timeout=0.5), timeout=30,
+               message="robot_description")
+    SetParameters = msgs.get_type("zenroid_msgs/srv/SetParameters")
+
+    def set_file(path: Path):
+        request = SetParameters.Request(names=["robot_description_file"], values_yaml=[str(path)])
+        raw = call_raw(session, "arm/robot_state_publisher/set_parameters", msgs.encode(request), timeout=10.0)
+        return msgs.decode(SetParameters.Response, raw)
+
+    refused = set_file(ROOT / "tests/data/urdf_broken/missing_child_link.urdf")
+    assert refused.successful == [False] and "child link 'ghost' does not exist" in refused.reasons[0]
+    assert "simple_2dof_arm" in fetch_latched(session, String, "arm/robot_description", timeout=5.0).data
+
+    new = ROOT / "robots" / "lab_robot.urdf"
+    assert set_file(new).successful == [True]
+    assert fetch_latched(session, String, "arm/robot_description", timeout=5.0).data == new.read_text()
+    static = fetch_latched(session, TFMessage, "arm/tf_static", timeout=5.0)
+    assert {t.child_frame_id for t in static.transforms} == {"stand", "torso"}

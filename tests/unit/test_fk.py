@@ -152,3 +152,38 @@ def test_quaternion_of_half_turns_is_exact() -> None:
         assert np.allclose(np.abs(matrix_to_quaternion(rotation)), [*axis, 0.0], atol=1e-15)
     pose = pose_matrix([1, 2, 3], [0, 0, math.sin(0.25), math.cos(0.25)])
     assert np.allclose(pose[:3, 3], [1, 2, 3]) and np.isclose(pose[1, 0], math.sin(0.5))
+
+
+def test_state_publisher_transforms_compose_to_fk_and_include_mimic_joints() -> None:
+    from nodes.state_publisher import TransformTree
+
+    xml = MIMIC_URDF.format(mimic_b='<mimic joint="ja" multiplier="2" offset="0.1"/>', mimic_c="")
+    tree = TransformTree(xml, frame_prefix="r/")
+    unknown = tree.update(["jc", "ja", "ghost", "js"], [0.3, -0.4, 9.0, 0.2])
+    assert unknown == ["ghost"]
+    stamp = {"sec": 1, "nanosec": 0}
+    transforms = tree.movable_transforms(stamp) + tree.static_transforms(stamp)
+    assert {t["child_frame_id"] for t in transforms} == {"r/a", "r/b", "r/c", "r/slider"}  # jb (mimic) too
+    assert tree.static_transforms(stamp) == []
+    # Walk the published tree from the root: it must reproduce the FK of every link.
+    by_child = {t["child_frame_id"]: t for t in transforms}
+    fk = tree.kinematics.link_transforms(tree.positions)
+    for link in ("a", "b", "c", "slider"):
+        pose, frame = np.eye(4), "r/" + link
+        while frame != tree.root_frame:
+            t = by_child[frame]
+            tr, rot = t["transform"]["translation"], t["transform"]["rotation"]
+            pose = pose_matrix([tr["x"], tr["y"], tr["z"]], [rot[k] for k in "xyzw"]) @ pose
+            frame = t["header"]["frame_id"]
+        assert np.allclose(pose, fk[tree.kinematics.link_index[link]], atol=1e-12), link
+    # Missing joints keep their last value.
+    tree.update(["js"], [0.4])
+    assert tree.positions[tree.kinematics.dof_index["ja"]] == -0.4
+
+
+def test_state_publisher_refuses_an_invalid_description() -> None:
+    from nodes.state_publisher import TransformTree
+    from nodes.urdf import UrdfError
+
+    with pytest.raises(UrdfError, match="lower limit"):
+        TransformTree((ROBOTS.parent / "tests/data/urdf_broken/limits_inverted.urdf").read_text())
