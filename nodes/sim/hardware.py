@@ -59,6 +59,14 @@ class HardwareInterface:
         self.target = np.zeros(n)          # command value per joint, in its active interface's unit
         self._rest = np.full(n, np.nan)    # rest positions last given to DART (skip redundant calls)
         self.last_effort = np.zeros(n)
+        with np.errstate(divide="ignore"):
+            self._reach = np.where(self.kp > 0, self.max_effort / np.where(self.kp > 0, self.kp, 1.0), np.inf)
+        self._position_mask = np.ones(n, dtype=bool)
+        self._velocity_joints: list[int] = []
+        self._effort_joints: list[int] = []
+        self._plans: dict = {}
+        for i in range(n):
+            self._set_mode(i, "position")
         self.hold_position()
 
     # -- state ------------------------------------------------------------------------------------------
@@ -76,7 +84,8 @@ class HardwareInterface:
         """Every joint back to position control at its current position (no controller / timeout)."""
         current = self.positions()
         for i in range(len(self.names)):
-            self._set_mode(i, "position")
+            if self.mode[i] != "position":
+                self._set_mode(i, "position")
         self.target = np.clip(current, self.position_bounds[:, 0], self.position_bounds[:, 1])
 
     def _warn(self, key: str, message: str) -> None:
@@ -93,8 +102,46 @@ class HardwareInterface:
         if not (len(names) == len(interfaces) == len(values)):
             raise CommandError(f"name ({len(names)}), interface ({len(interfaces)}) and value ({len(values)}) "
                                "must have the same length")
-        applied = 0
-        for name, interface, value in zip(names, interfaces, values, strict=True):
+        try:
+            array = np.asarray(values, dtype=float)
+        except (TypeError, ValueError):
+            raise CommandError("value must be a list of numbers") from None
+        plan = self._plan(tuple(names), tuple(interfaces))
+        entries, indices, lo, hi, modes = plan
+        if not len(indices):
+            return 0
+        chosen = array[entries]
+        finite = np.isfinite(chosen)
+        if not finite.all():
+            for k in np.nonzero(~finite)[0]:
+                name = self.names[indices[k]]
+                self._warn(f"nan:{name}", f"{self.entity.name}: non-finite {modes[k]} command {chosen[k]!r} "
+                                          f"for joint {name!r} rejected")
+        clamped = np.clip(chosen, lo, hi)
+        outside = finite & (clamped != chosen)
+        if outside.any():
+            for k in np.nonzero(outside)[0]:
+                name = self.names[indices[k]]
+                self._warn(f"range:{name}:{modes[k]}",
+                           f"{self.entity.name}: {modes[k]} command {chosen[k]:.4g} for joint {name!r} is outside "
+                           f"[{lo[k]:.4g}, {hi[k]:.4g}]; clamped")
+        for k, i in enumerate(indices):
+            if finite[k] and self.mode[i] != modes[k]:
+                self._set_mode(int(i), modes[k])
+        self.target[indices[finite]] = clamped[finite]
+        return int(finite.sum())
+
+    def _plan(self, names: tuple[str, ...], interfaces: tuple[str, ...]):
+        """Which entries of a command (by its name/interface lists) apply to which joint, with bounds.
+
+        Controller managers send the same lists every period, so the plan is computed once and cached.
+        """
+        key = (names, interfaces)
+        plan = self._plans.get(key)
+        if plan is not None:
+            return plan
+        entries, indices, lows, highs, modes = [], [], [], [], []
+        for k, (name, interface) in enumerate(zip(names, interfaces, strict=True)):
             i = self.index.get(name)
             if i is None:
                 self._warn(f"unknown:{name}", f"{self.entity.name}: command for unknown joint {name!r} ignored")
@@ -105,21 +152,18 @@ class HardwareInterface:
                            f"{self.entity.name}: joint {name!r} has no {interface!r} command interface "
                            f"(has {joint.command_interfaces}); command ignored")
                 continue
-            if not isinstance(value, (int, float)) or not math.isfinite(value):
-                self._warn(f"nan:{name}", f"{self.entity.name}: non-finite {interface} command {value!r} "
-                                          f"for joint {name!r} rejected")
-                continue
             lo, hi = joint.bounds(interface)
-            if not lo <= value <= hi:
-                self._warn(f"range:{name}:{interface}",
-                           f"{self.entity.name}: {interface} command {value:.4g} for joint {name!r} is outside "
-                           f"[{lo:.4g}, {hi:.4g}]; clamped")
-                value = min(max(value, lo), hi)
-            if self.mode[i] != interface:
-                self._set_mode(i, interface)
-            self.target[i] = float(value)
-            applied += 1
-        return applied
+            entries.append(k)
+            indices.append(i)
+            lows.append(lo)
+            highs.append(hi)
+            modes.append(interface)
+        plan = (np.array(entries, dtype=int), np.array(indices, dtype=int), np.array(lows, dtype=float),
+                np.array(highs, dtype=float), modes)
+        if len(self._plans) > 64:
+            self._plans.clear()
+        self._plans[key] = plan
+        return plan
 
     def _set_mode(self, i: int, interface: str) -> None:
         assert interface in INTERFACES
@@ -141,29 +185,28 @@ class HardwareInterface:
             joint.setDampingCoefficient(0, 0.0)
         self._rest[i] = np.nan
         self.mode[i] = interface
+        self._position_mask = np.array([m == "position" for m in self.mode], dtype=bool)
+        self._velocity_joints = [k for k, m in enumerate(self.mode) if m == "velocity"]
+        self._effort_joints = [k for k, m in enumerate(self.mode) if m == "effort"]
 
     # -- physics-rate servo -----------------------------------------------------------------------------
     def before_step(self) -> None:
         """Feed the current commands to DART (forces and servo commands are cleared by every step)."""
         q = self.positions()
         qd = self.velocities()
-        for i, mode in enumerate(self.mode):
-            dof = int(self.dofs[i])
-            if mode == "position":
-                kp = self.kp[i]
-                # keep |kp * (rest - q)| within the effort limit: the spring itself is not clamped by DART
-                reach = self.max_effort[i] / kp if kp > 0 else math.inf
-                rest = min(max(self.target[i], q[i] - reach), q[i] + reach)
-                if rest != self._rest[i]:
-                    self.dart_joints[i].setRestPosition(0, float(rest))
-                    self._rest[i] = rest
-                self.last_effort[i] = kp * (rest - q[i]) - self.kd[i] * qd[i]
-            elif mode == "velocity":
-                self.skeleton.setCommand(dof, float(self.target[i]))
-                self.last_effort[i] = 0.0
-            else:
-                self.skeleton.setForce(dof, float(self.target[i]))
-                self.last_effort[i] = self.target[i]
+        # position joints: keep |kp * (rest - q)| within the effort limit (DART does not clamp springs)
+        rest = np.clip(self.target, q - self._reach, q + self._reach)
+        changed = self._position_mask & (rest != self._rest)
+        if changed.any():
+            for i in np.nonzero(changed)[0]:
+                self.dart_joints[i].setRestPosition(0, float(rest[i]))
+            self._rest[changed] = rest[changed]
+        self.last_effort = np.where(self._position_mask, self.kp * (rest - q) - self.kd * qd, 0.0)
+        for i in self._velocity_joints:
+            self.skeleton.setCommand(int(self.dofs[i]), float(self.target[i]))
+        for i in self._effort_joints:
+            self.skeleton.setForce(int(self.dofs[i]), float(self.target[i]))
+            self.last_effort[i] = self.target[i]
 
     def after_step(self) -> None:
         """Enforce the URDF velocity limits, which DART ignores."""

@@ -44,10 +44,6 @@ from nodes.sim.stepping import Pacer
 from nodes.sim.urdf_info import UrdfError
 from nodes.sim.world import COLLISION_DETECTORS, PhysicsWorld
 
-_Pose = msgs.get_type("geometry_msgs/msg/Pose")
-_Point = msgs.get_type("geometry_msgs/msg/Point")
-_Quaternion = msgs.get_type("geometry_msgs/msg/Quaternion")
-_Twist = msgs.get_type("geometry_msgs/msg/Twist")
 _Vector3 = msgs.get_type("geometry_msgs/msg/Vector3")
 
 MAX_STEP_REQUEST = 1_000_000
@@ -114,6 +110,7 @@ class SimulatorNode(Node):
         self._diag_steps = 0
         self._startup_deadline = time.monotonic() + 30.0
         self._next_startup_try = 0.0
+        self._next_drain = 0.0
 
         self.clock_pub = self.create_publisher(Clock, "/sim/clock", express=True)
         self.model_states_pub = self.create_publisher(ModelStates, "/sim/model_states")
@@ -317,21 +314,21 @@ class SimulatorNode(Node):
             self._next_clock = _next_due(self._next_clock, t, 1.0 / self.clock_rate)
         if force or t + eps >= self._next_state:
             self._publish_model_states()
-            header = msgs.get_type("std_msgs/msg/Header")(stamp=msgs.time_from_sec(t))
             for link in self.robots.values():
-                link.publish_humanoid_state(header)
+                link.publish_humanoid_state(t)
             self._next_state = _next_due(self._next_state, t, 1.0 / self.state_rate)
 
     def _publish_model_states(self) -> None:
+        # packed directly as the gazebo_msgs/ModelStates map: building dataclasses costs more than the physics
         names, poses, twists = [], [], []
         for name, pose, linear, angular in self.sim.model_states():
             names.append(name)
-            poses.append(_Pose(position=_Point(x=pose.position[0], y=pose.position[1], z=pose.position[2]),
-                               orientation=_Quaternion(x=pose.orientation[0], y=pose.orientation[1],
-                                                       z=pose.orientation[2], w=pose.orientation[3])))
-            twists.append(_Twist(linear=_Vector3(x=float(linear[0]), y=float(linear[1]), z=float(linear[2])),
-                                 angular=_Vector3(x=float(angular[0]), y=float(angular[1]), z=float(angular[2]))))
-        self.model_states_pub.publish(ModelStates(name=names, pose=poses, twist=twists))
+            px, py, pz = pose.position
+            qx, qy, qz, qw = pose.orientation
+            poses.append({"position": {"x": px, "y": py, "z": pz}, "orientation": {"x": qx, "y": qy, "z": qz, "w": qw}})
+            twists.append({"linear": dict(zip("xyz", map(float, linear), strict=True)),
+                           "angular": dict(zip("xyz", map(float, angular), strict=True))})
+        self.model_states_pub.publish_raw(msgs_packb({"name": names, "pose": poses, "twist": twists}))
 
     def _publish_diagnostics(self) -> None:
         now = time.monotonic()
@@ -358,6 +355,9 @@ class SimulatorNode(Node):
 
     def _drain(self) -> None:
         """Run every queued service/timer callback (bounded, so a request flood cannot stall physics)."""
+        if self._queue.empty() and time.monotonic() < self._next_drain:
+            return   # nothing queued: skip the executor's bookkeeping (this runs every control period)
+        self._next_drain = time.monotonic() + 0.01
         for _ in range(100):
             if not self.spin_once(0.0):
                 return

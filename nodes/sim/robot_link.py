@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import msgpack
 
@@ -15,8 +16,53 @@ from nodes.sim.stepping import CommandInbox
 if TYPE_CHECKING:
     from nodes.sim.node import SimulatorNode
 
-_Point = msgs.get_type("geometry_msgs/msg/Point")
 _HardwareJoint = msgs.get_type("zenroid_msgs/msg/HardwareJoint")
+
+
+COMMAND_FIELDS = ("step", "update_rate", "name", "interface", "value")
+
+
+@dataclass(slots=True)
+class Command:
+    """A decoded zenroid_msgs/HardwareCommand (values checked for finiteness when applied)."""
+
+    step: int
+    update_rate: int
+    name: list[str]
+    interface: list[str]
+    value: list[float]
+
+
+def parse_command(payload: bytes) -> Command:
+    """Decode a HardwareCommand without the generic codec (this runs once per control period).
+
+    Raises CommandError naming the field; NaN values pass here and are rejected per joint when applied.
+    """
+    try:
+        obj = msgpack.unpackb(payload, raw=False)
+    except Exception as exc:  # msgpack raises several types for garbage
+        raise CommandError(f"not a msgpack payload ({type(exc).__name__})") from None
+    if not isinstance(obj, dict):
+        raise CommandError(f"expected a map, got {type(obj).__name__}")
+    for key in obj:
+        if key not in COMMAND_FIELDS:
+            raise CommandError(f"unknown field {key!r}")
+    fields: dict[str, Any] = {}
+    for key in ("step", "update_rate"):
+        value = obj.get(key, 0)
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise CommandError(f"{key}: expected a non-negative integer, got {value!r}")
+        fields[key] = value
+    for key in ("name", "interface"):
+        value = obj.get(key, [])
+        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+            raise CommandError(f"{key}: expected a list of strings")
+        fields[key] = value
+    value = obj.get("value", [])
+    if not isinstance(value, list) or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
+        raise CommandError("value: expected a list of numbers")
+    fields["value"] = value
+    return Command(**fields)
 
 
 def time_map(t: float) -> dict[str, int]:
@@ -40,8 +86,8 @@ class RobotLink:
         self.state_pub = node.create_publisher(HardwareState, f"{ns}/hardware/state", express=True)
         self.humanoid_pub = node.create_publisher(HumanoidState, f"{ns}/humanoid_state")
         # inline: commands go straight into the inbox from Zenoh's thread; the physics thread picks them up
-        self.command_sub = node.create_subscription(HardwareCommand, f"{ns}/hardware/command", self.inbox.put,
-                                                    inline=True)
+        self.command_sub = node.create_subscription(HardwareCommand, f"{ns}/hardware/command", self._on_command,
+                                                    inline=True, raw=True)
         self.info_srv = node.create_service(GetHardwareInfo, f"{ns}/hardware/info", self._on_info)
         self._endpoints = [self.state_pub, self.humanoid_pub, self.command_sub, self.info_srv]
 
@@ -53,6 +99,15 @@ class RobotLink:
                 pass
             if endpoint in self.node._entities:
                 self.node._entities.remove(endpoint)
+
+    def _on_command(self, payload: bytes) -> None:
+        try:
+            command = parse_command(payload)
+        except CommandError as exc:
+            self.node.logger.warn_throttle(1.0, f"{self.namespace}/hardware/command: dropped a malformed "
+                                           f"message: {exc}", key=f"cmdparse:{self.namespace}")
+            return
+        self.inbox.put(command)
 
     # -- hardware frames --------------------------------------------------------------------------------
     def publish_state(self, step: int, sim_time: float) -> None:
@@ -82,20 +137,21 @@ class RobotLink:
         self.holding = True
 
     # -- outputs ----------------------------------------------------------------------------------------
-    def publish_humanoid_state(self, header) -> None:
+    def publish_humanoid_state(self, sim_time: float) -> None:
+        """humanoid_msgs/HumanoidState, packed directly (same map the codec would produce)."""
         hw = self.hardware
         balance = self.node.sim.balance(self.namespace)
         com = balance.center_of_mass
-        self.humanoid_pub.publish(HumanoidState(
-            header=header,
-            joint_names=list(hw.names),
-            joint_positions=hw.positions().tolist(),
-            joint_velocities=hw.velocities().tolist(),
-            joint_efforts=hw.efforts().tolist(),
-            center_of_mass=_Point(x=com[0], y=com[1], z=com[2]),
-            support_polygon=[_Point(x=x, y=y, z=z) for x, y, z in balance.support_polygon],
-            zmp_x=balance.zmp[0], zmp_y=balance.zmp[1], is_balanced=balance.is_balanced,
-        ))
+        self.humanoid_pub.publish_raw(msgpack.packb({
+            "header": {"stamp": time_map(sim_time), "frame_id": "world"},
+            "joint_names": hw.names,
+            "joint_positions": hw.positions().tolist(),
+            "joint_velocities": hw.velocities().tolist(),
+            "joint_efforts": hw.efforts().tolist(),
+            "center_of_mass": {"x": com[0], "y": com[1], "z": com[2]},
+            "support_polygon": [{"x": x, "y": y, "z": z} for x, y, z in balance.support_polygon],
+            "zmp_x": balance.zmp[0], "zmp_y": balance.zmp[1], "is_balanced": balance.is_balanced,
+        }, use_bin_type=True))
 
     def _on_info(self, _request) -> object:
         return GetHardwareInfo.Response(
