@@ -85,12 +85,22 @@ def _field_encoder(f: FieldSpec) -> Callable[[Any], Any]:
         scalar = _scalar_encoder(f.base)
         if f.is_array:
             if f.base in FLOAT_TYPES:
-                return lambda v: v.tolist() if hasattr(v, "tolist") else [float(x) for x in v]
+                return _encode_float_list
+            if f.base in STRING_TYPES:
+                return lambda v: v if type(v) is list and all(type(x) is str for x in v) else [str(x) for x in v]
             return lambda v: [scalar(x) for x in v]
         return scalar
     if f.is_array:
         return lambda v, t=f.base: [_encoder(t)(x) for x in v]
     return lambda v, t=f.base: _encoder(t)(v)
+
+
+def _encode_float_list(v: Any) -> list[float]:
+    if type(v) is list and all(type(x) is float for x in v):
+        return v
+    if hasattr(v, "tolist"):  # numpy arrays
+        return [float(x) for x in v.tolist()]
+    return [float(x) for x in v]
 
 
 def _scalar_encoder(base: str) -> Callable[[Any], Any]:
@@ -124,112 +134,175 @@ def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFA
 
 def from_dict(cls: Any, obj: Any, limits: Limits = DEFAULT_LIMITS) -> Any:
     """Build a validated ``cls`` message from plain data (missing fields take ROS defaults)."""
-    return _decode_message(cls._type, obj, "", limits, cls._type)
+    try:
+        return _decoder(cls._type, limits)(obj)
+    except _FieldError as exc:
+        raise DecodeError(cls._type, ".".join(reversed(exc.path)).replace(".[", "["), exc.reason) from None
 
 
-def _decode_message(type_name: str, obj: Any, path: str, limits: Limits, root: str) -> Any:
-    if not isinstance(obj, dict):
-        raise DecodeError(root, path, f"expected a map for {type_name}, got {_kind(obj)}")
+class _FieldError(Exception):
+    """Raised inside compiled decoders; the path is collected (innermost first) on the way out."""
+
+    def __init__(self, reason: str, path: list[str] | None = None) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.path = path or []
+
+
+_decoders: dict[tuple[str, Limits], Callable[[Any], Any]] = {}
+_MISSING = object()
+
+
+def _decoder(type_name: str, limits: Limits) -> Callable[[Any], Any]:
+    """A compiled validating decoder for ``type_name``: fast on valid data, precise on errors."""
+    key = (type_name, limits)
+    dec = _decoders.get(key)
+    if dec is not None:
+        return dec
     spec = get_spec(type_name)
     cls = get_class(type_name)
-    known = spec.fields
-    for key in obj:
-        if not any(key == f.name for f in known):
-            raise DecodeError(root, _join(path, str(key)), f"unknown field of {type_name}")
-    values: dict[str, Any] = {}
-    for f in known:
-        fpath = _join(path, f.name)
-        if f.name in obj:
-            values[f.name] = _decode_field(f, obj[f.name], fpath, limits, root)
-        else:
-            values[f.name] = default_value(f)
+    # Placeholder first: recursive types resolve through the cache.
+    _decoders[key] = lambda obj: _decoders[key](obj)
+    steps = [(f.name, _field_decoder(f, limits), f) for f in spec.fields]
+    names = frozenset(f.name for f in spec.fields)
     rule = _EQUAL_LENGTH_RULES.get(type_name)
-    if rule:
-        ref, others, empty_ok = rule
-        n = len(values[ref])
-        for other in others:
-            m = len(values[other])
-            if m != n and not (empty_ok and m == 0):
-                raise DecodeError(root, _join(path, other),
-                                  f"has {m} entries but {ref} has {n}" + (" (must be equal or empty)" if empty_ok else ""))
-    return cls(**values)
+
+    def dec(obj: Any) -> Any:
+        if type(obj) is not dict:
+            raise _FieldError(f"expected a map for {type_name}, got {_kind(obj)}")
+        for k in obj:
+            if k not in names:
+                raise _FieldError(f"unknown field of {type_name}", [str(k)])
+        values = {}
+        for name, fdec, f in steps:
+            v = obj.get(name, _MISSING)
+            if v is _MISSING:
+                values[name] = default_value(f)
+                continue
+            try:
+                values[name] = fdec(v)
+            except _FieldError as exc:
+                exc.path.append(name)
+                raise
+        if rule:
+            ref, others, empty_ok = rule
+            n = len(values[ref])
+            for other in others:
+                m = len(values[other])
+                if m != n and not (empty_ok and m == 0):
+                    raise _FieldError(f"has {m} entries but {ref} has {n}"
+                                      + (" (must be equal or empty)" if empty_ok else ""), [other])
+        return cls(**values)
+
+    _decoders[key] = dec
+    return dec
 
 
-def _decode_field(f: FieldSpec, value: Any, path: str, limits: Limits, root: str) -> Any:
+def _field_decoder(f: FieldSpec, limits: Limits) -> Callable[[Any], Any]:
     if f.is_array:
-        if f.is_bytes:
-            if isinstance(value, (bytes, bytearray)):
-                items: Any = bytes(value)
-            elif isinstance(value, list):
-                items = bytes(_decode_int(f.base, x, f"{path}[{i}]", root) for i, x in enumerate(value))
-            else:
-                raise DecodeError(root, path, f"expected bytes or a list of ints, got {_kind(value)}")
-        else:
-            if not isinstance(value, list):
-                raise DecodeError(root, path, f"expected a list, got {_kind(value)}")
-            items = value
-        n = len(items)
-        if n > limits.max_array_length:
-            raise DecodeError(root, path, f"{n} entries, over the limit of {limits.max_array_length}")
-        if f.array_size is not None and n != f.array_size:
-            raise DecodeError(root, path, f"expected exactly {f.array_size} entries, got {n}")
-        if f.upper_bound is not None and n > f.upper_bound:
-            raise DecodeError(root, path, f"at most {f.upper_bound} entries allowed, got {n}")
-        if f.is_bytes:
-            return items
-        if f.base in FLOAT_TYPES:
-            return _decode_float_list(items, path, limits, root)
-        return [_decode_scalar(f, x, f"{path}[{i}]", limits, root) for i, x in enumerate(items)]
-    return _decode_scalar(f, value, path, limits, root)
+        return _array_decoder(f, limits)
+    return _scalar_decoder(f, limits)
 
 
-def _decode_float_list(items: list, path: str, limits: Limits, root: str) -> list[float]:
-    # Fast path: all floats and a finite sum means every element is finite.
-    if all(type(x) is float for x in items) and (limits.allow_nonfinite or math.isfinite(sum(items))):
-        return items
-    return [_decode_float(x, f"{path}[{i}]", limits, root) for i, x in enumerate(items)]
-
-
-def _decode_scalar(f: FieldSpec, value: Any, path: str, limits: Limits, root: str) -> Any:
+def _scalar_decoder(f: FieldSpec, limits: Limits) -> Callable[[Any], Any]:
     base = f.base
     if base in FLOAT_TYPES:
-        return _decode_float(value, path, limits, root)
+        allow = limits.allow_nonfinite
+
+        def dec_float(v: Any) -> float:
+            if type(v) is float and (allow or math.isfinite(v)):
+                return v
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise _FieldError(f"expected a number, got {_kind(v)}")
+            v = float(v)
+            if not allow and not math.isfinite(v):
+                raise _FieldError(f"not a finite number ({v})")
+            return v
+
+        return dec_float
     if base in INT_RANGES:
-        return _decode_int(base, value, path, root)
+        lo, hi = INT_RANGES[base]
+
+        def dec_int(v: Any) -> int:
+            if type(v) is not int:
+                raise _FieldError(f"expected an integer ({base}), got {_kind(v)}")
+            if not lo <= v <= hi:
+                raise _FieldError(f"{v} is out of range for {base} [{lo}, {hi}]")
+            return v
+
+        return dec_int
     if base == "bool":
-        if not isinstance(value, bool):
-            raise DecodeError(root, path, f"expected a bool, got {_kind(value)}")
-        return value
+        def dec_bool(v: Any) -> bool:
+            if type(v) is not bool:
+                raise _FieldError(f"expected a bool, got {_kind(v)}")
+            return v
+
+        return dec_bool
     if base in STRING_TYPES:
-        if not isinstance(value, str):
-            raise DecodeError(root, path, f"expected a string, got {_kind(value)}")
         bound = f.string_bound if f.string_bound is not None else limits.max_string_length
-        if len(value) > bound:
-            raise DecodeError(root, path, f"string of {len(value)} characters, over the limit of {bound}")
-        return value
-    return _decode_message(base, value, path, limits, root)
+
+        def dec_str(v: Any) -> str:
+            if type(v) is not str:
+                raise _FieldError(f"expected a string, got {_kind(v)}")
+            if len(v) > bound:
+                raise _FieldError(f"string of {len(v)} characters, over the limit of {bound}")
+            return v
+
+        return dec_str
+    nested = f.base
+    return lambda v: _decoder(nested, limits)(v)
 
 
-def _decode_float(value: Any, path: str, limits: Limits, root: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise DecodeError(root, path, f"expected a number, got {_kind(value)}")
-    value = float(value)
-    if not limits.allow_nonfinite and not math.isfinite(value):
-        raise DecodeError(root, path, f"not a finite number ({value})")
-    return value
+def _array_decoder(f: FieldSpec, limits: Limits) -> Callable[[Any], Any]:
+    item = _scalar_decoder(f, limits)
+    max_len = limits.max_array_length
+    fixed, bound = f.array_size, f.upper_bound
+    is_float = f.base in FLOAT_TYPES
+    is_str = f.base in STRING_TYPES
+    allow = limits.allow_nonfinite
 
+    def check_len(n: int) -> None:
+        if n > max_len:
+            raise _FieldError(f"{n} entries, over the limit of {max_len}")
+        if fixed is not None and n != fixed:
+            raise _FieldError(f"expected exactly {fixed} entries, got {n}")
+        if bound is not None and n > bound:
+            raise _FieldError(f"at most {bound} entries allowed, got {n}")
 
-def _decode_int(base: str, value: Any, path: str, root: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise DecodeError(root, path, f"expected an integer ({base}), got {_kind(value)}")
-    lo, hi = INT_RANGES[base]
-    if not lo <= value <= hi:
-        raise DecodeError(root, path, f"{value} is out of range for {base} [{lo}, {hi}]")
-    return value
+    def items(v: list) -> list:
+        out = []
+        for i, x in enumerate(v):
+            try:
+                out.append(item(x))
+            except _FieldError as exc:
+                exc.path.append(f"[{i}]")
+                raise
+        return out
 
+    if f.is_bytes:
+        def dec_bytes(v: Any) -> bytes:
+            if isinstance(v, (bytes, bytearray)):
+                check_len(len(v))
+                return bytes(v)
+            if isinstance(v, list):
+                check_len(len(v))
+                return bytes(items(v))
+            raise _FieldError(f"expected bytes or a list of ints, got {_kind(v)}")
 
-def _join(path: str, name: str) -> str:
-    return f"{path}.{name}" if path else name
+        return dec_bytes
+
+    def dec_list(v: Any) -> list:
+        if type(v) is not list:
+            raise _FieldError(f"expected a list, got {_kind(v)}")
+        check_len(len(v))
+        # Fast paths: all floats with a finite sum (so every element is finite); all strings.
+        if is_float and all(type(x) is float for x in v) and (allow or math.isfinite(sum(v))):
+            return v
+        if is_str and all(type(x) is str for x in v) and all(len(x) <= limits.max_string_length for x in v):
+            return v
+        return items(v)
+
+    return dec_list
 
 
 def _kind(value: Any) -> str:
