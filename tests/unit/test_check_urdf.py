@@ -126,3 +126,9 @@ def test_cli_process_exit_codes() -> None:
     bad = subprocess.run(run + ["check_urdf", str(BROKEN / "several_roots.urdf")], cwd=ROOT, capture_output=True,
                          text=True)
     assert bad.returncode == 2 and bad.stderr.strip().endswith("(a URDF must be one tree)")
+
+
+def test_xacro_text_given_as_a_parameter_is_expanded_with_args() -> None:
+    text = (ROOT / "robots" / "simple_robot.urdf.xacro").read_text()
+    model = parse_urdf(load_robot_description(xml=text, xacro_args={"length": "0.6"}))
+    assert model.links["link1"].inertial.origin[0, 3] == pytest.approx(0.3)
