@@ -7,6 +7,7 @@ import importlib.util
 import re
 import shlex
 import shutil
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -143,6 +144,17 @@ def parse_bool(text: str, what: str, source: Source) -> bool:
     raise LaunchError(f"{what} must be true or false, got '{text}'", source)
 
 
+def evaluate_condition(text: str, what: str, source: Source) -> bool:
+    """``true``/``false`` (and 1/0, yes/no, on/off), or a text comparison ``A == B`` / ``A != B``."""
+    for operator in ("==", "!="):
+        if operator in text:
+            left, _, right = text.partition(operator)
+            if operator in right:
+                raise LaunchError(f"{what}: one comparison only, got '{text}'", source)
+            return (left.strip() == right.strip()) == (operator == "==")
+    return parse_bool(text, what, source)
+
+
 def join_namespace(parent: str, child: str | None) -> str:
     if not child:
         return parent
@@ -200,11 +212,12 @@ class _Resolver:
 
     def condition(self, action: Action, scope: _Scope) -> bool:
         if action.condition_if is not None:
-            if not parse_bool(self.text(action.condition_if, scope, action.source, "'if'"), "'if'", action.source):
+            if not evaluate_condition(self.text(action.condition_if, scope, action.source, "'if'"), "'if'",
+                                      action.source):
                 return False
         if action.condition_unless is not None:
-            if parse_bool(self.text(action.condition_unless, scope, action.source, "'unless'"), "'unless'",
-                          action.source):
+            if evaluate_condition(self.text(action.condition_unless, scope, action.source, "'unless'"),
+                                  "'unless'", action.source):
                 return False
         return True
 
@@ -301,7 +314,8 @@ class _Resolver:
             _check_module(module, at("module"))
         else:
             program = self.text(f["exec"], scope, at("exec"), "node 'exec'")
-            executable = shutil.which(program)
+            # "python" means the launcher's own interpreter (the one that has this project installed).
+            executable = sys.executable if program in ("python", "python3") else shutil.which(program)
             if executable is None:
                 raise LaunchError(f"node '{name}': program '{program}' not found", at("exec"))
         args = self.word_list(f.get("args"), scope, decl, "args", split=True)
@@ -315,7 +329,7 @@ class _Resolver:
             path = path if path.is_absolute() else scope.file.resolve().parent / path
             if not path.is_file():
                 raise LaunchError(f"node '{name}': parameter file not found: {entry}", at("param_file"))
-            param_files.append(str(path))
+            param_files.append(str(path.resolve()))
         remaps = self.remaps(f.get("remap"), scope, decl)
         env = {}
         for key, value in (f.get("env") or {}).items():
@@ -404,10 +418,13 @@ def _check_module(module: str, source: Source) -> None:
     if not _MODULE_RE.match(module):
         raise LaunchError(f"'{module}' is not a Python module name", source)
     try:
-        found = importlib.util.find_spec(module) is not None
+        spec = importlib.util.find_spec(module)
+        if spec is not None and spec.submodule_search_locations is not None:  # a package runs its __main__
+            if importlib.util.find_spec(f"{module}.__main__") is None:
+                raise LaunchError(f"package '{module}' has no __main__ module to run", source)
     except (ImportError, ValueError):
-        found = False
-    if not found:
+        spec = None
+    if spec is None:
         raise LaunchError(f"Python module '{module}' not found", source)
 
 

@@ -1,6 +1,6 @@
 """Launch substitutions: ``$(var NAME)``, ``$(env NAME [default])``, ``$(dirname)``, ``$(robot NAME)``.
 
-Pure text replacement, never evaluation. Substitutions do not nest; ``$$(`` is a literal ``$(``.
+Pure text replacement, never evaluation. Substitutions nest; ``$$(`` is a literal ``$(``.
 """
 
 from __future__ import annotations
@@ -71,27 +71,29 @@ def has_substitution(text: str) -> bool:
 
 
 def substitute(text: str, ctx: SubstitutionContext, source: Source) -> str:
-    """Replace every ``$(...)`` in ``text``; errors name the file and line of ``source``."""
+    """Replace every ``$(...)`` in ``text`` (inner ones first: ``$(robot $(var robot))``); results are
+    never re-scanned. Errors name the file and line of ``source``."""
+    result, _ = _expand(text, 0, ctx, source, nested=False)
+    return result
+
+
+def _expand(text: str, pos: int, ctx: SubstitutionContext, source: Source, nested: bool) -> tuple[str, int]:
     out: list[str] = []
-    i = 0
-    while True:
-        start = text.find("$(", i)
-        if start < 0:
-            out.append(text[i:])
-            return "".join(out)
-        if start > 0 and text[start - 1] == "$":  # "$$(" escapes a literal "$("
-            out.append(text[i:start - 1] + "$(")
-            i = start + 2
-            continue
-        end = text.find(")", start)
-        if end < 0:
-            raise LaunchError(f"unterminated substitution in '{text}' (missing ')')", source)
-        inner = text[start + 2:end]
-        if "$(" in inner:
-            raise LaunchError(f"nested substitutions are not supported: '{text[start:end + 1]}'", source)
-        words = inner.split()
-        if not words:
-            raise LaunchError("empty substitution '$()'", source)
-        out.append(text[i:start])
-        out.append(_evaluate(words[0], words[1:], ctx, source))
-        i = end + 1
+    while pos < len(text):
+        if text.startswith("$$(", pos):  # "$$(" escapes a literal "$("
+            out.append("$(")
+            pos += 3
+        elif text.startswith("$(", pos):
+            inner, pos = _expand(text, pos + 2, ctx, source, nested=True)
+            words = inner.split()
+            if not words:
+                raise LaunchError("empty substitution '$()'", source)
+            out.append(_evaluate(words[0], words[1:], ctx, source))
+        elif nested and text[pos] == ")":
+            return "".join(out), pos + 1
+        else:
+            out.append(text[pos])
+            pos += 1
+    if nested:
+        raise LaunchError(f"unterminated substitution in '{text}' (missing ')')", source)
+    return "".join(out), pos

@@ -40,7 +40,10 @@ launch:
       params: {x: $(var x), mode: $(var mode), gains: [1, "$(var x)"], label: "x=$(var x)"}
       remap: {joint_states: /other/joint_states}
       args: [--exit-after, "1"]
+  - arg: {name: commander, default: joint_commander}
   - node: {name: viewer, module: launch.dummy_node, if: $(var gui)}
+  - node: {name: commander, module: launch.dummy_node, unless: "$(var commander) == none"}
+  - node: {name: tool, exec: python, args: [-m, launch.dummy_node], if: "$(var commander) != joint_commander"}
   - node: {name: headless, module: launch.dummy_node, unless: $(var gui)}
   - group:
       namespace: inner
@@ -52,20 +55,22 @@ launch:
 def test_good_file_resolves_with_typed_params_namespaces_and_conditions(tmp_path: Path) -> None:
     plan = resolve(write(tmp_path, GOOD), {"mode": "lockstep"})
     names = [n.name for n in plan.nodes]
-    assert names == ["talker", "headless", "grouped"]
+    assert names == ["talker", "commander", "headless", "grouped"]
     talker = plan.nodes[0]
     assert talker.params == {"x": 0.5, "mode": "lockstep", "gains": [1, 0.5], "label": "x=0.5"}
     assert talker.remaps == [("joint_states", "/other/joint_states")]
     assert talker.full_name == "humanoid/talker"
-    assert plan.nodes[2].namespace == "inner/deeper"
-    assert plan.nodes[2].remaps == [("a", "b")]
-    assert plan.args == {"x": "0.5", "mode": "lockstep", "gui": "false"}
+    assert plan.nodes[3].namespace == "inner/deeper"
+    assert plan.nodes[3].remaps == [("a", "b")]
+    assert plan.args == {"x": "0.5", "mode": "lockstep", "gui": "false", "commander": "joint_commander"}
     command = talker.command("python", Path("/tmp/p.yaml"))
     assert command[:5] == ["python", "-m", "launch.dummy_node", "--name", "talker"]
     assert "--ns" in command and command[command.index("--ns") + 1] == "humanoid"
     assert command[-2:] == ["--exit-after", "1"]
-    gui_plan = resolve(write(tmp_path, GOOD), {"gui": "true"})
-    assert [n.name for n in gui_plan.nodes] == ["talker", "viewer", "grouped"]
+    gui_plan = resolve(write(tmp_path, GOOD), {"gui": "true", "commander": "none"})
+    assert [n.name for n in gui_plan.nodes] == ["talker", "viewer", "tool", "grouped"]
+    tool = gui_plan.nodes[2]
+    assert tool.command("ignored", None) == [sys.executable, "-m", "launch.dummy_node"]
 
 
 @pytest.mark.parametrize(
@@ -174,8 +179,14 @@ def test_substitutions() -> None:
     assert substitute("cost $$(var a) plain", ctx, src) == "cost $(var a) plain"
     with pytest.raises(LaunchError, match="takes one argument"):
         substitute("$(var a b)", ctx, src)
-    with pytest.raises(LaunchError, match="nested"):
+    assert substitute("$(robot bot$(var a))", ctx, src) == "/robots/bot1.urdf"
+    with pytest.raises(LaunchError, match="no launch argument '1'"):
         substitute("$(var $(var a))", ctx, src)
+    with pytest.raises(LaunchError, match="unterminated"):
+        substitute("$(robot $(var a)", ctx, src)
+    # a substituted value is never re-scanned for substitutions
+    ctx.variables = {"a": "$(env HOME)"}
+    assert substitute("$(var a)", ctx, src) == "$(env HOME)"
     with pytest.raises(LaunchError, match="empty substitution"):
         substitute("$()", ctx, src)
 
