@@ -10,19 +10,24 @@ import fnmatch
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
-from nodes.core.paths import CONFIG_DIR, ROBOTS_DIR
-from nodes.sim.hardware import Gains
+from nodes.core.paths import CONFIG_DIR
+from nodes.sim.robot_files import ConfigError
 
 DEFAULT_CONFIG = CONFIG_DIR / "sim.yaml"
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Joint servo gains: spring stiffness (Nm/rad) and damping (Nms/rad)."""
+
+    kp: float
+    kd: float
+
+
 # Used when no pattern matches: stiff enough to hold the humanoid's legs (FACTS: Kp ~1000+ on legs).
 FALLBACK_GAINS = Gains(kp=2000.0, kd=20.0)
-
-
-class ConfigError(ValueError):
-    """A simulator setting that cannot be used; the message names it."""
 
 
 def _number(where: str, value: Any, minimum: float = 0.0) -> float:
@@ -105,29 +110,3 @@ def parse_entities(items: Any) -> list[StartupEntity]:
             joints={str(k): _number(f"{where}.joints.{k}", v, -math.inf) for k, v in joints.items()},
         ))
     return result
-
-
-def resolve_robot_file(file: str) -> Path:
-    """A path as given, else a robot name from ``robots/`` (``humanoid`` → robots/humanoid.urdf)."""
-    path = Path(file).expanduser()
-    if path.is_file():
-        return path.resolve()
-    for candidate in (ROBOTS_DIR / file, ROBOTS_DIR / f"{file}.urdf", ROBOTS_DIR / f"{file}.urdf.xacro"):
-        if candidate.is_file():
-            return candidate
-    raise ConfigError(f"robot file {file!r} not found (neither a path nor a robot in {ROBOTS_DIR})")
-
-
-def read_robot_xml(path: Path) -> str:
-    """URDF text of a file; xacro files are expanded first."""
-    if path.name.endswith(".xacro"):
-        import xacro  # only needed for xacro sources
-
-        try:
-            return xacro.process_file(str(path)).toprettyxml(indent="  ")
-        except Exception as exc:  # xacro raises many exception types; report them uniformly
-            raise ConfigError(f"{path}: xacro failed: {exc}") from None
-    try:
-        return path.read_text()
-    except OSError as exc:
-        raise ConfigError(f"{path}: {exc.strerror}") from None

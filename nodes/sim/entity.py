@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import dartpy as dart
 import numpy as np
 
+from nodes.sim.geometry import pose_from_xyz_rpy, quaternion_from_rotation
 from nodes.sim.urdf_info import RobotInfo, parse_urdf
 
 
@@ -25,12 +26,8 @@ class Pose:
     @classmethod
     def from_xyz_rpy(cls, x: float, y: float, z: float, roll: float = 0.0, pitch: float = 0.0,
                      yaw: float = 0.0) -> Pose:
-        cr, sr = math.cos(roll / 2), math.sin(roll / 2)
-        cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-        cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-        quaternion = (sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
-                      cr * cp * sy - sr * sp * cy, cr * cp * cy + sr * sp * sy)
-        return cls((float(x), float(y), float(z)), quaternion)
+        position, orientation = pose_from_xyz_rpy(x, y, z, roll, pitch, yaw)
+        return cls(position, orientation)
 
     def validated(self) -> Pose:
         """The same pose with a normalised quaternion; raises SpawnError on NaN/inf or a zero quaternion."""
@@ -63,24 +60,6 @@ class Pose:
 
     def compose(self, child: Pose) -> Pose:
         return Pose.from_matrix(self.to_isometry().matrix() @ child.to_isometry().matrix())
-
-
-def quaternion_from_rotation(r: np.ndarray) -> tuple[float, float, float, float]:
-    """(x, y, z, w) of a rotation matrix (Shepperd's method, numerically safe for every angle)."""
-    trace = r[0, 0] + r[1, 1] + r[2, 2]
-    if trace > 0:
-        s = math.sqrt(trace + 1.0) * 2
-        q = ((r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s)
-    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
-        s = math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2]) * 2
-        q = (0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s, (r[2, 1] - r[1, 2]) / s)
-    elif r[1, 1] > r[2, 2]:
-        s = math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2]) * 2
-        q = ((r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s, (r[0, 2] - r[2, 0]) / s)
-    else:
-        s = math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2
-        q = ((r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s, (r[1, 0] - r[0, 1]) / s)
-    return tuple(float(v) for v in q)  # type: ignore[return-value]
 
 
 @dataclass

@@ -12,22 +12,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import dartpy as dart
 import numpy as np
 
+from nodes.sim.config import Gains
 from nodes.sim.entity import Entity
 from nodes.sim.urdf_info import INTERFACES
 
 # Stand-in for an infinite effort limit where DART needs a number (SERVO force bounds).
 UNLIMITED_EFFORT = 1e6
-
-
-@dataclass(frozen=True)
-class Gains:
-    kp: float
-    kd: float
 
 
 class CommandError(ValueError):

@@ -8,6 +8,9 @@ import msgs
 
 msgs.add_search_path(Path(__file__).resolve().parent / "definitions")
 
+# Stepping modes (DESIGN §6): lockstep with the controller manager, wall-clock realtime, kinematic playback.
+MODES = ("lockstep", "realtime", "kinematic")
+
 SpawnEntity = msgs.get_type("zenroid_sim_msgs/srv/SpawnEntity")
 SetPhysicsProperties = msgs.get_type("zenroid_sim_msgs/srv/SetPhysicsProperties")
 GetPhysicsProperties = msgs.get_type("zenroid_sim_msgs/srv/GetPhysicsProperties")

@@ -17,17 +17,11 @@ import msgpack
 
 import msgs
 from nodes.core import Node
-from nodes.core.endpoints import ServiceError, call_raw
-from nodes.sim.config import (
-    ConfigError,
-    StartupEntity,
-    parse_entities,
-    parse_gains,
-    read_robot_xml,
-    resolve_robot_file,
-)
+from nodes.core.endpoints import ServiceError
+from nodes.sim.config import StartupEntity, parse_entities, parse_gains
 from nodes.sim.entity import EntitySpec, Pose, SpawnError
 from nodes.sim.interfaces import (
+    MODES,
     Clock,
     DeleteEntity,
     Empty,
@@ -38,8 +32,9 @@ from nodes.sim.interfaces import (
     StepSimulation,
     String,
 )
+from nodes.sim.robot_files import ConfigError, fetch_robot_description, read_robot_xml, resolve_robot_file
 from nodes.sim.robot_link import RobotLink, time_map
-from nodes.sim.simulation import MODES, Simulation
+from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import Pacer
 from nodes.sim.urdf_info import UrdfError
 from nodes.sim.world import COLLISION_DETECTORS, PhysicsWorld
@@ -430,13 +425,3 @@ def _next_due(previous_due: float, now: float, period: float) -> float:
 
 def msgs_packb(obj: dict) -> bytes:
     return msgpack.packb(obj, use_bin_type=True)
-
-
-def fetch_robot_description(node: Node, key: str, timeout: float = 2.0) -> str:
-    """The URDF from a latched ``robot_description`` (a queryable answering std_msgs/String)."""
-    resolved = node.resolve(key)
-    data = call_raw(node.session, resolved, b"", timeout)
-    try:
-        return msgs.decode(String, data).data
-    except msgs.DecodeError as exc:
-        raise ServiceError(f"{resolved}: not a std_msgs/String: {exc}") from None

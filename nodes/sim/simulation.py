@@ -9,12 +9,12 @@ from collections.abc import Callable
 
 import numpy as np
 
+from nodes.sim.config import Gains
 from nodes.sim.entity import Entity, EntitySpec, Pose, SpawnError
-from nodes.sim.hardware import Gains, HardwareInterface
+from nodes.sim.hardware import HardwareInterface
 from nodes.sim.humanoid_state import BalanceState, balance_state, robot_contacts
+from nodes.sim.interfaces import MODES
 from nodes.sim.world import GROUND_NAME, PhysicsWorld
-
-MODES = ("lockstep", "realtime", "kinematic")
 
 
 class Simulation:

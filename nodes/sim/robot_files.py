@@ -1,0 +1,58 @@
+"""Getting a robot's URDF text: from a file (xacro expanded) or a latched ``robot_description`` key.
+
+No DART here: ``zenroid spawn`` uses this too and must start quickly.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import msgs
+from nodes.core import Node
+from nodes.core.endpoints import ServiceError, call_raw
+from nodes.core.paths import ROBOTS_DIR
+
+String = msgs.get_type("std_msgs/msg/String")
+
+
+class ConfigError(ValueError):
+    """A simulator setting or robot source that cannot be used; the message names it."""
+
+
+def resolve_robot_file(file: str) -> Path:
+    """A path as given, else a robot name from ``robots/`` (``humanoid`` → robots/humanoid.urdf)."""
+    path = Path(file).expanduser()
+    if path.is_file():
+        return path.resolve()
+    for candidate in (ROBOTS_DIR / file, ROBOTS_DIR / f"{file}.urdf", ROBOTS_DIR / f"{file}.urdf.xacro"):
+        if candidate.is_file():
+            return candidate
+    raise ConfigError(f"robot file {file!r} not found (neither a path nor a robot in {ROBOTS_DIR})")
+
+
+def read_robot_xml(path: Path) -> str:
+    """URDF text of a file; xacro files are expanded first."""
+    if path.name.endswith(".xacro"):
+        import xacro  # only needed for xacro sources
+
+        try:
+            return xacro.process_file(str(path)).toprettyxml(indent="  ")
+        except Exception as exc:  # xacro raises many exception types; report them uniformly
+            raise ConfigError(f"{path}: xacro failed: {exc}") from None
+    try:
+        return path.read_text()
+    except OSError as exc:
+        raise ConfigError(f"{path}: {exc.strerror}") from None
+
+
+def fetch_robot_description(node: Node, key: str, timeout: float = 2.0) -> str:
+    """The URDF from a latched ``robot_description`` (a queryable answering std_msgs/String)."""
+    resolved = node.resolve(key)
+    data = call_raw(node.session, resolved, b"", timeout)
+    try:
+        text = msgs.decode(String, data).data
+    except msgs.DecodeError as exc:
+        raise ServiceError(f"{resolved}: not a std_msgs/String: {exc}") from None
+    if not text.strip():
+        raise ServiceError(f"{resolved}: empty robot description")
+    return text
