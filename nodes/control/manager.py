@@ -207,6 +207,20 @@ class ControllerManager:
                                  f"{[e.name for e in to_deactivate]}")
             return not refused, message
 
+    def restart_active(self, reason: str) -> None:
+        """Deactivate and re-activate every active controller (claims kept): after the hardware was
+        replaced or reset, they re-read the joints and hold where they are instead of replaying old goals."""
+        with self.lock:
+            for entry in list(self._active):
+                self._deactivate(entry)
+                try:
+                    self._activate(entry)
+                except Exception as exc:  # noqa: BLE001 - it stays inactive, the others go on
+                    entry.last_error = f"re-activation failed: {exc}"
+                    self.logger.error(f"controller '{entry.name}' {entry.last_error}")
+            self._rebuild_active()
+            self.logger.info(f"controllers restarted ({reason}): {[e.name for e in self._active]}")
+
     def _activate(self, entry: ControllerEntry) -> None:
         controller = entry.controller
         commands = controller.command_interface_configuration()

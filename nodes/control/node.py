@@ -213,18 +213,21 @@ class ControllerManagerNode(Node):
             return
         manager = self.manager
         with manager.lock:
+            self.hardware.read_state(names, positions, velocities, efforts)
             if self._lost:
                 self._lost = False
-                self._last_time = None
                 self.logger.info("hardware is back: controllers resume")
-            self.hardware.read_state(names, positions, velocities, efforts)
             if self._last_time is None:
                 period = 1.0 / self.update_rate
             else:
                 period = t - self._last_time
                 if period < 0.0:
-                    self.logger.warn(f"sim time went back from {self._last_time:.3f} to {t:.3f} s (reset?)")
-                    period = 0.0
+                    # A new or reset simulation: restart the controllers so they hold the joints where they
+                    # are now, instead of driving them back to the old simulation's commands.
+                    self.logger.warn(f"sim time went back from {self._last_time:.3f} to {t:.3f} s (reset or a "
+                                     "new simulator)")
+                    manager.restart_active("hardware reset")
+                    period = 1.0 / self.update_rate
             self._last_time = t
             self.control_time = t
             manager.update(t, period)
