@@ -1,0 +1,127 @@
+"""Simulator input checking without DART stepping: URDF limits/ros2_control, gains, entities, commands."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import msgpack
+import pytest
+
+from nodes.sim.config import FALLBACK_GAINS, parse_entities, parse_gains
+from nodes.sim.hardware import CommandError
+from nodes.sim.robot_files import ConfigError
+from nodes.sim.robot_link import parse_command
+from nodes.sim.urdf_info import UrdfError, parse_urdf
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+ARM = (DATA / "sim_arm.urdf").read_text()
+HUMANOID = (Path(__file__).resolve().parents[2] / "robots" / "humanoid.urdf").read_text()
+
+
+def test_arm_limits_and_ros2_control_interfaces():
+    info = parse_urdf(ARM)
+    shoulder, elbow = info.joint("shoulder"), info.joint("elbow")
+    assert info.root_link == "base" and info.has_ros2_control
+    assert shoulder.command_interfaces == ["position", "velocity", "effort"]
+    assert elbow.command_interfaces == ["position"]
+    assert elbow.state_interfaces == ["position", "velocity"]
+    # <param name="min/max"> narrows the URDF limit for that interface only
+    assert shoulder.bounds("position") == (-0.8, 0.8)
+    assert shoulder.bounds("velocity") == (-2.0, 2.0)
+    assert shoulder.bounds("effort") == (-40.0, 40.0)
+    assert elbow.bounds("position") == (-1.5, 1.5)
+
+
+def test_humanoid_has_22_position_joints_with_limits():
+    info = parse_urdf(HUMANOID)
+    assert len(info.joints) == 22
+    knee = info.joint("left_knee")
+    assert knee.command_interfaces == ["position"]
+    assert math.isfinite(knee.upper) and knee.max_effort > 0
+
+
+def test_without_ros2_control_every_movable_joint_gets_position_control():
+    xml = ARM[: ARM.index("<ros2_control")] + "</robot>"
+    info = parse_urdf(xml)
+    assert not info.has_ros2_control
+    assert [j.command_interfaces for j in info.joints] == [["position"], ["position"]]
+
+
+@pytest.mark.parametrize("mutate, expected", [
+    (lambda x: x.replace("</robot>", ""), "line"),                                   # XML syntax error
+    (lambda x: x.replace('<child link="lower"/>', '<child link="nowhere"/>'), "'nowhere'"),
+    (lambda x: x.replace('velocity="3.0"', 'velocity="fast"'), "velocity='fast'"),
+    (lambda x: x.replace('lower="-1.5" upper="1.5"', 'lower="1.5" upper="-1.5"'), "lower limit"),
+    (lambda x: x.replace('<command_interface name="position"/>', '<command_interface name="torque"/>'), "torque"),
+    (lambda x: x.replace('<joint name="elbow">', '<joint name="wrist">'), "'wrist'"),
+    (lambda x: x.replace('<param name="min">-0.8</param>', '<param name="min">nan</param>'), "NaN"),
+    (lambda x: "", "empty"),
+])
+def test_bad_urdf_errors_name_line_and_reason(mutate, expected):
+    with pytest.raises(UrdfError) as info:
+        parse_urdf(mutate(ARM))
+    message = str(info.value)
+    assert expected in message
+    if expected != "empty":
+        assert message.startswith("line "), message
+
+
+def test_gain_patterns_first_match_wins_and_fallback():
+    gains_for = parse_gains({"*_knee": {"p": 100, "d": 2}, "left_*": {"p": 50}})
+    assert (gains_for("left_knee").kp, gains_for("left_knee").kd) == (100.0, 2.0)
+    assert (gains_for("left_hip").kp, gains_for("left_hip").kd) == (50.0, 0.0)
+    assert gains_for("neck") == FALLBACK_GAINS
+
+
+@pytest.mark.parametrize("table, where", [
+    ({"*": 5}, "gains.*"),
+    ({"*": {"p": -1}}, "gains.*.p"),
+    ({"*": {"p": float("nan")}}, "gains.*.p"),
+    ({"*": {"kp": 1}}, "unknown keys"),
+    ({"*": {"d": 1}}, "missing p"),
+])
+def test_bad_gains_are_named(table, where):
+    with pytest.raises(ConfigError, match=None) as info:
+        parse_gains(table)
+    assert where in str(info.value)
+
+
+def test_startup_entities_parse_and_reject_bad_entries():
+    [entity] = parse_entities([{"name": "humanoid", "file": "humanoid", "z": 0.915, "Y": 1.57,
+                                "joints": {"left_knee": 0.4}, "fixed": False}])
+    assert entity.xyz == (0.0, 0.0, 0.915) and entity.rpy == (0.0, 0.0, 1.57)
+    assert entity.joints == {"left_knee": 0.4}
+    for bad, where in [
+        ([{"file": "x"}], "entities[0].name"),
+        ([{"name": "a"}], "exactly one of file and topic"),
+        ([{"name": "a", "file": "x", "topic": "y"}], "exactly one of file and topic"),
+        ([{"name": "a", "file": "x", "z": float("nan")}], "entities[0].z"),
+        ([{"name": "a", "file": "x", "colour": "red"}], "unknown keys"),
+        ([{"name": "a", "file": "x", "fixed": "yes"}], "entities[0].fixed"),
+        ("humanoid", "expected a list"),
+    ]:
+        with pytest.raises(ConfigError) as info:
+            parse_entities(bad)
+        assert where in str(info.value)
+
+
+def test_hardware_command_parsing_names_the_field():
+    good = msgpack.packb({"step": 3, "update_rate": 1000, "name": ["a"], "interface": ["position"],
+                          "value": [0.5]})
+    command = parse_command(good)
+    assert (command.step, command.name, command.value) == (3, ["a"], [0.5])
+    # NaN passes the parser: it is rejected per joint (and logged) when applied
+    assert math.isnan(parse_command(msgpack.packb({"value": [float("nan")]})).value[0])
+    for payload, field in [
+        (b"\xc1garbage", "msgpack"),
+        (msgpack.packb([1, 2]), "expected a map"),
+        (msgpack.packb({"step": -1}), "step"),
+        (msgpack.packb({"step": True}), "step"),
+        (msgpack.packb({"name": "a"}), "name"),
+        (msgpack.packb({"value": ["x"]}), "value"),
+        (msgpack.packb({"velocity": []}), "unknown field 'velocity'"),
+    ]:
+        with pytest.raises(CommandError) as info:
+            parse_command(payload)
+        assert field in str(info.value)
