@@ -34,12 +34,18 @@ class ListLogger:
 
 
 class FakePublisher:
-    def __init__(self, topic: str) -> None:
+    def __init__(self, topic: str, msg_type: Any = None) -> None:
         self.topic = topic
+        self.msg_type = msg_type
         self.messages: list[Any] = []
 
     def publish(self, msg: Any) -> None:
         self.messages.append(msg)
+
+    def publish_raw(self, payload: bytes) -> None:
+        import msgs
+
+        self.messages.append(msgs.decode(self.msg_type, payload))  # also proves the bytes decode as the type
 
 
 class FakeActionServer:
@@ -117,7 +123,7 @@ class FakeContext:
         return self.time
 
     def create_publisher(self, msg_type: Any, topic: str) -> FakePublisher:
-        pub = FakePublisher(self._resolve(topic))
+        pub = FakePublisher(self._resolve(topic), msg_type)
         self.publishers[pub.topic] = pub
         return pub
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import msgpack
+
 from nodes.control.controller import Controller, ControllerError
 from nodes.control.messages import msg_type
 
@@ -35,8 +37,6 @@ class JointStateBroadcaster(Controller):
         self.kinds = list(self.get_parameter("interfaces"))
         topic = "~/joint_states" if self.get_parameter("use_local_topics") else "joint_states"
         self._type = msg_type("sensor_msgs/msg/JointState")
-        self._header_type = msg_type("std_msgs/msg/Header")
-        self._time_type = msg_type("builtin_interfaces/msg/Time")
         self._pub = self.context.create_publisher(self._type, topic)
         rate = self.get_parameter("publish_rate")
         self._period = 1.0 / rate if rate > 0 else 0.0
@@ -64,8 +64,9 @@ class JointStateBroadcaster(Controller):
         if any(v != v for v in values.get("position", ())):  # NaN: no state has arrived yet
             return
         sec = int(time // 1)
-        stamp = self._time_type(sec=sec, nanosec=min(int((time - sec) * 1e9), 999_999_999))
-        self._pub.publish(self._type(
-            header=self._header_type(stamp=stamp, frame_id=self.frame_id), name=self.joints,
-            position=values.get("position", []), velocity=values.get("velocity", []),
-            effort=values.get("effort", [])))
+        # Hot path (every cycle): pack the sensor_msgs/JointState map directly, skipping the dataclass.
+        self._pub.publish_raw(msgpack.packb({
+            "header": {"stamp": {"sec": sec, "nanosec": min(int((time - sec) * 1e9), 999_999_999)},
+                       "frame_id": self.frame_id},
+            "name": self.joints, "position": values.get("position", []), "velocity": values.get("velocity", []),
+            "effort": values.get("effort", [])}, use_bin_type=True))

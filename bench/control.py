@@ -1,0 +1,196 @@
+"""Controller manager benchmark.
+
+1. Update cost: the manager's cycle (every active controller's ``update`` + collecting the hardware
+   command) with joint_state_broadcaster + joint_trajectory_controller on the humanoid's 22 joints, the JTC
+   following a trajectory and the broadcaster publishing on a real Zenoh session. Budget at 1 kHz: 1000 µs.
+2. Command latency (realtime mode, three processes): a JointTrajectory published by this process to the
+   first ``hardware/command`` from the controller manager process that carries it.
+
+Prints a small table, then one JSON line: update_p99_us, command_latency_p50_us, command_latency_p99_us.
+    python bench/control.py [--cycles 5000] [--samples 200]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import msgpack  # noqa: E402
+import numpy as np  # noqa: E402
+
+import msgs  # noqa: E402
+from nodes.control.config import load_config_file  # noqa: E402
+from nodes.control.interfaces import HardwareInterfaces, JointInfo  # noqa: E402
+from nodes.control.manager import STRICT, ControllerManager  # noqa: E402
+from nodes.control.node import NodeControllerContext  # noqa: E402
+from nodes.core import Node  # noqa: E402
+from nodes.core.session import loopback_endpoint, open_router  # noqa: E402
+
+JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def pct(values: list[float], q: float) -> float:
+    return float(np.percentile(np.asarray(values), q)) if values else float("nan")
+
+
+class _ContextHost:
+    """Just enough of ControllerManagerNode for NodeControllerContext: a node and the control time."""
+
+    def __init__(self, node: Node) -> None:
+        self.node = node
+        self.control_time = 0.0
+        self.logger = node.logger
+        self._entities = node._entities
+
+    def __getattr__(self, name: str):
+        return getattr(self.node, name)
+
+
+def bench_update(endpoint: str, cycles: int) -> dict[str, float]:
+    config = load_config_file(ROOT / "config" / "controllers.yaml")
+    joints = config.controllers["joint_trajectory_controller"].params["joints"]
+    hw = HardwareInterfaces([JointInfo(j, ["position"]) for j in joints])
+    node = Node("bench_control_manager", namespace="bench", connect=[endpoint], log_level="warn")
+    host = _ContextHost(node)
+    manager = ControllerManager(hw, config, 1000, lambda name: NodeControllerContext(host, name), node.logger)
+    for name in ("joint_state_broadcaster", "joint_trajectory_controller"):
+        manager.load(name)
+        manager.configure(name)
+    ok, message = manager.switch(["joint_state_broadcaster", "joint_trajectory_controller"], [], STRICT)
+    assert ok, message
+    jtc = manager.controllers["joint_trajectory_controller"].controller
+    positions = [0.0] * len(joints)
+    zeros = [0.0] * len(joints)
+    t, dt = 0.0, 0.001
+    samples: list[float] = []
+    try:
+        for i in range(cycles):
+            if i % 2000 == 0:  # a fresh 2 s trajectory with 4 points on every joint
+                jtc._on_trajectory_msg(msgs.from_dict(JointTrajectory, {"joint_names": joints, "points": [
+                    {"positions": [0.1 * k * ((i // 2000) % 2 * 2 - 1)] * len(joints),
+                     "time_from_start": {"sec": 0, "nanosec": 500_000_000 * k}} for k in range(1, 5)]}))
+            hw.read_state(joints, positions, zeros, zeros)
+            host.control_time = t
+            started = time.perf_counter()
+            manager.update(t, dt)
+            manager.command()
+            samples.append((time.perf_counter() - started) * 1e6)
+            t += dt
+    finally:
+        node.destroy()
+    warm = samples[len(samples) // 10:]
+    return {"p50": pct(warm, 50), "p99": pct(warm, 99), "max": max(warm), "n": len(warm)}
+
+
+def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
+    env = dict(os.environ, ZENOH_CONNECT=endpoint, PYTHONPATH=str(ROOT))
+    env.pop("ZENOH_CONFIG", None)
+    procs = [
+        subprocess.Popen([sys.executable, "-m", "nodes.sim", "--params-file", "config/sim.yaml", "--param",
+                          "mode:=realtime", "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}]"],
+                         cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+        subprocess.Popen([sys.executable, "-m", "nodes.control", "--ns", "humanoid", "--params-file",
+                          "config/controllers.yaml", "--param",
+                          "activate:=[joint_state_broadcaster, joint_trajectory_controller]"],
+                         cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+    ]
+    node = Node("bench_control_client", connect=[endpoint], log_level="warn")
+    lock = threading.Lock()
+    pending: dict[str, float] = {}  # target -> publish time
+    latencies: list[float] = []
+    commands = [0]
+
+    def on_command(payload: bytes) -> None:
+        received = time.perf_counter()
+        frame = msgpack.unpackb(payload)
+        commands[0] += 1
+        with lock:
+            if not pending:
+                return
+            target, sent = next(iter(pending.items()))
+            for name, value in zip(frame["name"], frame["value"], strict=True):
+                if name == "neck_pitch" and abs(value - float(target)) < 1e-9:
+                    latencies.append((received - sent) * 1e6)
+                    pending.clear()
+                    return
+
+    try:
+        node.create_subscription(None, "/humanoid/hardware/command", on_command, inline=True, raw=True)
+        pub = node.create_publisher(JointTrajectory, "/humanoid/joint_trajectory_controller/joint_trajectory")
+        deadline = time.monotonic() + 120
+        while commands[0] < 2000 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        if commands[0] < 2000:
+            raise RuntimeError("the simulator and controller manager did not start within 120 s")
+        stats = node.create_client(msgs.get_type("std_srvs/srv/Trigger"), "/humanoid/controller_manager/statistics")
+        for i in range(samples):
+            target = f"{0.1 + 0.0001 * i:.4f}"  # a distinct neck position per sample
+            msg = msgs.from_dict(JointTrajectory, {"joint_names": ["neck_pitch"], "points": [
+                {"positions": [float(target)], "time_from_start": {"sec": 0, "nanosec": 0}}]})
+            with lock:
+                pending.clear()
+                pending[target] = time.perf_counter()
+            pub.publish(msg)
+            time.sleep(0.03 + 0.01 * (i % 3) / 3)  # not phase-locked to the 1 kHz cycle
+        time.sleep(0.2)
+        manager_stats = json.loads(stats.call(timeout=5.0).message)
+    finally:
+        node.destroy()
+        for proc in procs:
+            proc.send_signal(2)
+        for proc in procs:
+            try:
+                proc.wait(10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+    return {"p50": pct(latencies, 50), "p99": pct(latencies, 99), "n": len(latencies), "sent": samples,
+            "cycle_p50": manager_stats["cycle_p50_us"], "cycle_p99": manager_stats["cycle_p99_us"]}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--cycles", type=int, default=5000)
+    parser.add_argument("--samples", type=int, default=200)
+    args = parser.parse_args()
+    port = free_port()
+    router = open_router(port)
+    try:
+        endpoint = loopback_endpoint(port)
+        update = bench_update(endpoint, args.cycles)
+        latency = bench_latency(endpoint, port, args.samples)
+    finally:
+        router.close()
+    rows = [
+        ("manager update (JSB + JTC, 22 joints), in-process", update["p50"], update["p99"], "1000 budget, goal p99 < 200"),
+        ("manager cycle in the process (decode+update+publish)", latency["cycle_p50"], latency["cycle_p99"], ""),
+        (f"JointTrajectory -> hardware/command ({latency['n']}/{latency['sent']})", latency["p50"], latency["p99"],
+         "goal p50 < 1000, p99 < 3000"),
+    ]
+    print(f"{'measurement':<58} {'p50 µs':>9} {'p99 µs':>9}  note")
+    for label, p50, p99, note in rows:
+        print(f"{label:<58} {p50:>9.1f} {p99:>9.1f}  {note}")
+    print(json.dumps({"update_p99_us": round(update["p99"], 1), "update_p50_us": round(update["p50"], 1),
+                      "cycle_p99_us": round(latency["cycle_p99"], 1),
+                      "command_latency_p50_us": round(latency["p50"], 1),
+                      "command_latency_p99_us": round(latency["p99"], 1)}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
