@@ -13,12 +13,14 @@ import sys
 import time
 from pathlib import Path
 
+import msgpack
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from nodes.kinematics import KinematicTree, matrix_to_quaternion  # noqa: E402
+from nodes.kinematics import KinematicTree  # noqa: E402
+from nodes.state_publisher import TransformTree  # noqa: E402
 from nodes.urdf import load_robot_description, parse_urdf  # noqa: E402
 
 
@@ -53,10 +55,13 @@ def main() -> None:
     def ours(q: np.ndarray) -> np.ndarray:
         return tree.link_transforms(q)
 
-    def ours_tf(q: np.ndarray) -> np.ndarray:
-        # What the state publisher does per update: local transforms + quaternions for every joint.
-        local = tree.local_transforms(q)
-        return matrix_to_quaternion(local[:, :3, :3])
+    tf_tree = TransformTree(xml)
+    stamp = {"sec": 0, "nanosec": 0}
+
+    def ours_tf(q: np.ndarray) -> bytes:
+        # What the state publisher does per tf message: joint poses -> TransformStamped maps -> msgpack.
+        tf_tree.positions[:] = q
+        return msgpack.packb({"transforms": tf_tree.movable_transforms(stamp)})
 
     def theirs(q: np.ndarray) -> list[np.ndarray]:
         urdf.update_cfg(q[yourdfpy_order])
@@ -76,7 +81,7 @@ def main() -> None:
 
     rows = [
         ("ours: all link transforms", ours_us),
-        ("ours: joint transforms + quaternions (tf)", tf_us),
+        ("ours: one encoded tf message (state publisher)", tf_us),
         ("ours: batched, per configuration (1000)", batch_us),
         ("yourdfpy: update_cfg + get_transform x links", theirs_us),
     ]

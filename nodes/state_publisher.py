@@ -25,7 +25,7 @@ import numpy as np
 import msgs
 from nodes.core import Node, ParameterError, run_node
 from nodes.core.latched import LatchedPublisher
-from nodes.kinematics import KinematicTree, matrix_to_quaternion
+from nodes.kinematics import KinematicTree
 from nodes.urdf import UrdfError, load_robot_description, parse_urdf, parse_xacro_args, validate
 
 JointState = msgs.get_type("sensor_msgs/msg/JointState")
@@ -93,9 +93,9 @@ class TransformTree:
         return unknown
 
     def _transforms(self, indices: np.ndarray, stamp: dict[str, int]) -> list[dict]:
-        local = self.kinematics.local_transforms(self.positions)[indices]
-        quats = matrix_to_quaternion(local[:, :3, :3]).tolist()
-        xyz = local[:, :3, 3].tolist()
+        translation, quaternion = self.kinematics.local_poses(self.positions)
+        quats = quaternion[indices].tolist()
+        xyz = translation[indices].tolist()
         return [
             _transform(stamp, self._parents[i], self._children[i], xyz[n], quats[n])
             for n, i in enumerate(indices.tolist())
@@ -159,7 +159,7 @@ class RobotStatePublisher(Node):
             self.create_subscription(ModelStates, "/sim/model_states", self.on_model_states)
 
         self.period = 1.0 / self.frequency
-        self.last_publish = -math.inf
+        self.tokens, self.token_time = 1.0, None  # token bucket: average <= frequency, tolerates jitter
         self.last_stamp: float | None = None
         self.stamp_s = 0.0
         self.dirty = False
@@ -229,7 +229,7 @@ class RobotStatePublisher(Node):
             self.logger.warn_throttle(
                 1.0, f"joint_states time moved backwards ({self.last_stamp:.3f} -> {stamp:.3f} s; bag replay?): "
                      "republishing transforms", key="time-backwards")
-            self.last_publish = -math.inf  # publish this one now, whatever the rate limit
+            self.tokens = max(self.tokens, 1.0)  # publish this one now, whatever the rate limit
         self.last_stamp = stamp
         self.stamp_s = stamp
         self.dirty = True
@@ -258,16 +258,28 @@ class RobotStatePublisher(Node):
         self._maybe_publish()
 
     # ---------------------------------------------------------------------------------- output
-    def _maybe_publish(self) -> None:
+    def _take_token(self) -> bool:
+        """Rate limit as a token bucket (capacity 2): input jitter does not cost output rate."""
         now = self.now()
-        if now - self.last_publish >= self.period * 0.999:
-            self._publish_tf(now)
+        if self.token_time is None or now < self.token_time:  # first call, or the (sim) clock was reset
+            self.tokens = max(self.tokens, 1.0)
+        else:
+            self.tokens = min(2.0, self.tokens + (now - self.token_time) * self.frequency)
+        self.token_time = now
+        if self.tokens >= 1.0:
+            self.tokens -= 1.0
+            return True
+        return False
+
+    def _maybe_publish(self) -> None:
+        if self._take_token():
+            self._publish_tf()
 
     def _flush(self) -> None:
-        if self.dirty and self.now() - self.last_publish >= self.period * 0.999:
-            self._publish_tf(self.now())
+        if self.dirty and self._take_token():
+            self._publish_tf()
 
-    def _publish_tf(self, now: float) -> None:
+    def _publish_tf(self) -> None:
         if self.last_stamp is None and self.base_pose is None:
             return  # nothing measured yet: publishing the zero pose would be a lie
         stamp = _stamp(self.stamp_s)
@@ -277,7 +289,6 @@ class RobotStatePublisher(Node):
             transforms.append(_transform(stamp, self.world_frame, self.tree.root_frame, xyz, quat))
         # Built as plain maps and packed directly: ~5x cheaper than through message objects.
         self.tf_pub.publish_raw(msgpack.packb({"transforms": transforms}, use_bin_type=True))
-        self.last_publish = now
         self.dirty = False
 
 

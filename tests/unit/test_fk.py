@@ -187,3 +187,14 @@ def test_state_publisher_refuses_an_invalid_description() -> None:
 
     with pytest.raises(UrdfError, match="lower limit"):
         TransformTree((ROBOTS.parent / "tests/data/urdf_broken/limits_inverted.urdf").read_text())
+
+
+@pytest.mark.parametrize("name", ["humanoid", "atlas"])
+def test_matrix_free_local_poses_equal_local_transforms(name: str) -> None:
+    tree = load_tree(robot_xml(name))
+    configs = np.random.default_rng(7).uniform(-math.pi, math.pi, size=(50, tree.num_dofs))
+    translation, quaternion = tree.local_poses(configs)
+    local = tree.local_transforms(configs)
+    assert np.allclose(np.linalg.norm(quaternion, axis=-1), 1.0, atol=1e-12)
+    assert np.allclose(quaternion_to_matrix(quaternion), local[..., :3, :3], atol=1e-12)
+    assert np.allclose(translation, local[..., :3, 3], atol=1e-12)
