@@ -59,6 +59,8 @@ def parse_config(data: Any, source: str = "<yaml>", manager_name: str = "control
     if not isinstance(data, dict):
         raise ConfigError(f"{source}: the top level must be a map of node names")
     config = ManagerConfig()
+    if not any(isinstance(v, dict) for v in data.values()):
+        return config  # a flat map of node parameters (no controllers in it)
     sections: dict[str, dict[str, Any]] = {}
     for key, section in data.items():
         if not isinstance(section, dict) or not isinstance(section.get("ros__parameters", {}), dict):
