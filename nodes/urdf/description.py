@@ -11,7 +11,7 @@ import tempfile
 from pathlib import Path
 
 from nodes.urdf.model import UrdfError
-from nodes.urdf.xml_safety import UnsafeXmlError, check_xml_safety
+from nodes.urdf.xml_safety import UnsafeXmlError, check_xml_safety, xml_text
 
 
 def parse_xacro_args(items: list[str] | tuple[str, ...] | str | None) -> dict[str, str]:
@@ -62,8 +62,8 @@ def load_robot_description(
         if not file.is_file():
             raise UrdfError(f"robot description file '{file}' does not exist")
         try:
-            text = file.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
+            text = xml_text(file.read_bytes())
+        except (OSError, ValueError) as exc:
             raise UrdfError(f"cannot read '{file}': {exc}") from None
         source = str(file)
     elif xml is not None:

@@ -7,25 +7,49 @@ document that declares entities, or points at an external DTD, is refused before
 
 from __future__ import annotations
 
+import codecs
 import re
 
 from lxml import etree
 
-_DOCTYPE = re.compile(rb"<!DOCTYPE", re.IGNORECASE)
-_ENTITY_DECL = re.compile(rb"<!ENTITY", re.IGNORECASE)
-_EXTERNAL_ID = re.compile(rb"<!DOCTYPE[^>\[]*\b(SYSTEM|PUBLIC)\b", re.IGNORECASE)
+_ENTITY_DECL = re.compile(r"<!ENTITY", re.IGNORECASE)
+_EXTERNAL_ID = re.compile(r"<!DOCTYPE[^>\[]*\b(SYSTEM|PUBLIC)\b", re.IGNORECASE)
+_XML_DECLARATION = re.compile(r"^\s*<\?xml[^>]*\?>")
+_BOMS = (
+    (codecs.BOM_UTF32_LE, "utf-32"), (codecs.BOM_UTF32_BE, "utf-32"),
+    (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"), (codecs.BOM_UTF8, "utf-8-sig"),
+)
 
 
 class UnsafeXmlError(ValueError):
     """The document declares entities or references an external DTD."""
 
 
+def xml_text(data: bytes | str) -> str:
+    """The document as text. Why decode ourselves: a check on raw bytes misses a UTF-16 document."""
+    if isinstance(data, str):
+        text = data
+    else:
+        for bom, encoding in _BOMS:
+            if data.startswith(bom):
+                text = data.decode(encoding)
+                break
+        else:
+            try:
+                text = data.decode("utf-8")
+            except UnicodeDecodeError as exc:
+                raise ValueError(f"XML is not UTF-8 (nor UTF-16/32 with a byte order mark): {exc}") from None
+    if "\x00" in text:
+        raise ValueError("XML contains NUL characters (UTF-16 without a byte order mark?)")
+    return text
+
+
 def check_xml_safety(data: bytes | str) -> None:
-    """Raise UnsafeXmlError for entity declarations or external DTDs (checked on the raw text)."""
-    raw = data.encode("utf-8") if isinstance(data, str) else data
-    if _ENTITY_DECL.search(raw):
+    """Raise UnsafeXmlError for entity declarations or external DTDs (checked on the decoded text)."""
+    text = xml_text(data)
+    if _ENTITY_DECL.search(text):
         raise UnsafeXmlError("XML declares entities (<!ENTITY ...>): refused, entities are never expanded")
-    if _EXTERNAL_ID.search(raw):
+    if _EXTERNAL_ID.search(text):
         raise UnsafeXmlError("XML references an external DTD (DOCTYPE SYSTEM/PUBLIC): refused")
 
 
@@ -38,8 +62,10 @@ def _parser() -> etree.XMLParser:
 
 def parse_xml(data: bytes | str) -> etree._Element:
     """Parse a document after the safety check; raises UnsafeXmlError or ValueError with the parser's reason."""
-    check_xml_safety(data)
-    raw = data.encode("utf-8") if isinstance(data, str) else data
+    text = xml_text(data)
+    check_xml_safety(text)
+    # Parse the checked text, as UTF-8 whatever the declaration said (it was decoded above).
+    raw = _XML_DECLARATION.sub("", text, count=1).encode("utf-8")
     try:
         root = etree.fromstring(raw, parser=_parser())
     except etree.XMLSyntaxError as exc:

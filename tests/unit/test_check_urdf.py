@@ -132,3 +132,22 @@ def test_xacro_text_given_as_a_parameter_is_expanded_with_args() -> None:
     text = (ROOT / "robots" / "simple_robot.urdf.xacro").read_text()
     model = parse_urdf(load_robot_description(xml=text, xacro_args={"length": "0.6"}))
     assert model.links["link1"].inertial.origin[0, 3] == pytest.approx(0.3)
+
+
+def test_utf16_entity_attack_is_refused_not_expanded(tmp_path: Path, capsys) -> None:
+    text = (BROKEN / "billion_laughs.urdf").read_text().replace(
+        '<?xml version="1.0"?>', '<?xml version="1.0" encoding="UTF-16"?>')
+    hostile = tmp_path / "utf16.urdf"
+    hostile.write_bytes(text.encode("utf-16"))  # with a byte order mark: a bytes-level check would miss it
+    assert main(["check_urdf", str(hostile)]) == 2
+    assert "declares entities" in capsys.readouterr().err
+    with pytest.raises(UrdfError, match="declares entities"):
+        parse_urdf(text.encode("utf-16"))
+    no_bom = tmp_path / "nobom.urdf"
+    no_bom.write_bytes(text.encode("utf-16-le"))
+    assert main(["check_urdf", str(no_bom)]) == 2
+    assert "NUL characters" in capsys.readouterr().err
+    legit = tmp_path / "legit16.urdf"
+    legit.write_bytes((ROOT / "robots" / "simple_2dof_arm.urdf").read_text().replace(
+        '<?xml version="1.0"?>', '<?xml version="1.0" encoding="UTF-16"?>').encode("utf-16"))
+    assert main(["check_urdf", "-q", str(legit)]) == 0
