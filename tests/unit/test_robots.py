@@ -180,3 +180,26 @@ def test_generated_urdfs_are_up_to_date_with_the_generator(tmp_path: Path, monke
     spec.loader.exec_module(module)
     for name, build in module.BUILDERS.items():
         assert build().xml() == (ROBOTS / f"{name}.urdf").read_text(), f"{name}.urdf is stale: rerun the generator"
+
+
+def test_humanoid_centre_of_mass_is_over_the_feet_standing_and_squatting(tmp_path: Path) -> None:
+    """Statically stable in both tutorial poses: the CoM projects inside the feet's support polygon."""
+    import dartpy as dart
+
+    loader = dart.utils.DartLoader()
+    options = dart.utils.DartLoaderOptions()
+    options.mDefaultRootJointType = dart.utils.DartLoaderRootJointType.FIXED
+    loader.setOptions(options)
+    skeleton = loader.parseSkeleton(str(robot_file("humanoid")))
+    tree = KinematicTree(model("humanoid"))
+    bend = {f"{s}_{j}": v for s in ("left", "right") for j, v in
+            (("hip_pitch", -0.2), ("knee", 0.4), ("ankle_pitch", -0.2))}
+    for pose in ({}, bend):
+        q = tree.configuration(pose)
+        for name, value in zip(tree.dof_names, q, strict=True):
+            skeleton.getJoint(name).setPosition(0, value)
+        com = skeleton.getCOM()
+        corners = np.vstack([_sole_corners(tree, q, f"{side}_foot")[0] for side in ("left", "right")])
+        (x_min, y_min), (x_max, y_max) = corners[:, :2].min(axis=0), corners[:, :2].max(axis=0)
+        assert x_min + 0.03 < com[0] < x_max - 0.03, (pose, com)  # 3 cm margin front and back
+        assert y_min + 0.03 < com[1] < y_max - 0.03, (pose, com)
