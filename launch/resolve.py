@@ -164,11 +164,13 @@ def join_namespace(parent: str, child: str | None) -> str:
 
 
 def _typed(text: str) -> Any:
-    """A substituted parameter value gets its YAML scalar type back ("0.5" -> 0.5, "true" -> True)."""
+    """A substituted parameter value gets its YAML type back ("0.5" -> 0.5, "true" -> True, "[a, b]" -> list)."""
     try:
         value = yaml.safe_load(text)
     except yaml.YAMLError:
         return text
+    if isinstance(value, list) and text.lstrip().startswith("["):  # a flow list: "[point, sine]"
+        return value
     return value if isinstance(value, (bool, int, float, str)) else text
 
 

@@ -68,7 +68,7 @@ class TrajectorySender(Node):
             return
         self.logger.info("Connected to joint trajectory controller action server")
         for waveform in self.waveforms:
-            if not self.ok():
+            if not self.ok:
                 return
             goal = self.build_goal(waveform)
             points = len(goal.trajectory.points)

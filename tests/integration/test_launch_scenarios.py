@@ -1,0 +1,217 @@
+"""Each tutorial launch file, headless on a free port, produces its scenario's key output."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections import defaultdict
+from collections.abc import Callable
+from pathlib import Path
+
+import msgpack
+import psutil
+import pytest
+import zenoh
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+class Scenario:
+    """``python -m launch FILE gui:=false zenoh_port:=N`` plus a plain Zenoh subscriber on some keys."""
+
+    def __init__(self, tmp_path: Path, port: int, launch_file: str, *args: str) -> None:
+        self.port = port
+        self.out_path = tmp_path / "launch.out"
+        env = dict(os.environ)
+        env.pop("ZENOH_CONNECT", None)
+        env.pop("ZENOH_CONFIG", None)
+        with open(self.out_path, "wb") as out:
+            self.proc = subprocess.Popen(
+                [sys.executable, "-m", "launch", launch_file, "gui:=false", f"zenoh_port:={port}", *args,
+                 "--log-dir", str(tmp_path / "logs")],
+                cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+        self.lock = threading.Lock()
+        self.samples: dict[str, list[dict]] = defaultdict(list)
+        self.session: zenoh.Session | None = None
+        self.subs: list = []
+        self.pids: set[int] = set()
+
+    def output(self) -> str:
+        return self.out_path.read_text(errors="replace")
+
+    def connect(self, *keys: str) -> None:
+        deadline = time.monotonic() + 30
+        while "zenoh: embedded router" not in self.output():
+            assert self.proc.poll() is None and time.monotonic() < deadline, self.output()
+            time.sleep(0.05)
+        config = zenoh.Config()
+        config.insert_json5("mode", json.dumps("peer"))
+        config.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{self.port}"]))
+        config.insert_json5("listen/endpoints", json.dumps(["tcp/127.0.0.1:0"]))
+        config.insert_json5("scouting/multicast/enabled", "false")
+        self.session = zenoh.open(config)
+        for key in keys:
+            self.subs.append(self.session.declare_subscriber(key, self._collector(key)))
+
+    def _collector(self, key: str) -> Callable[[zenoh.Sample], None]:
+        def on_sample(sample: zenoh.Sample) -> None:
+            msg = msgpack.unpackb(sample.payload.to_bytes())
+            with self.lock:
+                self.samples[key].append(msg)
+        return on_sample
+
+    def snapshot(self, key: str) -> list[dict]:
+        with self.lock:
+            return list(self.samples[key])
+
+    def wait_for(self, predicate: Callable[[], bool], timeout: float, what: str) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            try:
+                self.pids.update([self.proc.pid] + [c.pid for c in psutil.Process(self.proc.pid).children(True)])
+            except psutil.NoSuchProcess:
+                pass
+            if predicate():
+                return
+            assert self.proc.poll() is None, f"launch ended early while waiting for {what}:\n{self.output()}"
+            time.sleep(0.1)
+        pytest.fail(f"timed out after {timeout:.0f} s waiting for {what}\n{self.output()[-6000:]}")
+
+    def close(self) -> None:
+        for sub in self.subs:
+            sub.undeclare()
+        if self.session is not None:
+            self.session.close()
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)
+        try:
+            self.proc.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+            self.proc.wait()
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline and any(_alive(p) for p in self.pids):
+            time.sleep(0.05)
+        assert not [p for p in self.pids if _alive(p)], "processes outlived the launch"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return False
+
+
+def positions(samples: list[dict], joint: str) -> list[float]:
+    return [m["position"][m["name"].index(joint)] for m in samples if joint in m["name"]]
+
+
+@pytest.mark.slow
+def test_lab_2_3_four_limbs_oscillate(tmp_path: Path, zenoh_port: int) -> None:
+    scenario = Scenario(tmp_path, zenoh_port, "lab_2_3.yaml", "mode:=lockstep")
+    try:
+        scenario.connect("lab_robot/joint_states")
+        limbs = {"left_arm_joint": 1.0, "right_arm_joint": 1.0, "left_leg_joint": 0.5, "right_leg_joint": 0.5}
+
+        def swinging() -> bool:
+            states = scenario.snapshot("lab_robot/joint_states")
+            return all(len(q := positions(states, j)) > 10 and max(q) > 0.6 * a and min(q) < -0.6 * a
+                       for j, a in limbs.items())
+
+        scenario.wait_for(swinging, 60, "all four limbs to swing both ways")
+        states = scenario.snapshot("lab_robot/joint_states")
+        for joint, amplitude in limbs.items():
+            q = positions(states, joint)
+            assert max(abs(v) for v in q) <= amplitude + 0.05, f"{joint} overshot its ±{amplitude} wave"
+        # arms in anti-phase: left ≈ -right at every sample
+        left, right = positions(states, "left_arm_joint"), positions(states, "right_arm_joint")
+        # (each limb has its own controller and message, so a sample may catch one a cycle ahead)
+        mismatch = sorted(abs(a + b) for a, b in zip(left, right))
+        assert mismatch[int(0.9 * len(mismatch))] < 0.05 and mismatch[-1] < 0.3, mismatch[-10:]
+        out = scenario.output()
+        assert "[robot_controller]" in out and "Left arm:" in out
+        assert "=== Joint States ===" in out and "left_leg_joint: pos=" in out
+    finally:
+        scenario.close()
+
+
+@pytest.mark.slow
+def test_controller_lab_joint1_reaches_1_57(tmp_path: Path, zenoh_port: int) -> None:
+    scenario = Scenario(tmp_path, zenoh_port, "controller_lab.yaml", "mode:=lockstep")
+    try:
+        scenario.connect("simple_robot/joint_states")
+
+        def goals_done() -> bool:
+            return "Point trajectory execution completed" in scenario.output()
+
+        scenario.wait_for(goals_done, 90, "the sine and point goals to finish")
+        time.sleep(0.5)
+        q = positions(scenario.snapshot("simple_robot/joint_states"), "joint1")
+        assert len(q) > 20 and all(abs(v - 1.57) < 0.02 for v in q[-5:]), f"joint1 ends at {q[-5:]}"
+        assert max(q) < 1.57 + 0.05, "joint1 overshot 1.57"
+        assert min(q) < -1.4, "the sine wave's negative half never showed"
+        out = scenario.output()
+        assert "Sine trajectory execution completed: SUCCEEDED" in out
+        assert "Point trajectory execution completed: SUCCEEDED" in out
+    finally:
+        scenario.close()
+
+
+@pytest.mark.slow
+def test_joint_animation_atlas_follows_playback_without_gravity(tmp_path: Path, zenoh_port: int) -> None:
+    scenario = Scenario(tmp_path, zenoh_port, "joint_animation.yaml")
+    try:
+        scenario.connect("atlas/joint_states", "sim/model_states")
+
+        def moved_through_the_wave() -> bool:
+            q = positions(scenario.snapshot("atlas/joint_states"), "back_mby")
+            return len(q) > 20 and max(q) > 0.45 and min(q) < -0.45
+
+        scenario.wait_for(moved_through_the_wave, 90, "back_mby (x2) to swing through ±0.5")
+        states = scenario.snapshot("atlas/joint_states")
+        x1_joints = ["back_lbz", "l_leg_lhy", "r_arm_uwy", "l_arm_ely"]
+        x2_joints = ["back_mby", "neck_ay", "l_leg_kny", "r_arm_elx"]
+        moving = 0
+        for m in states:
+            q = dict(zip(m["name"], m["position"]))
+            x2 = q["back_mby"]
+            # every x2 joint equals x2, every x1 joint equals -0.5*sin(2θ) with sin θ = 2*x2
+            assert all(abs(q[j] - x2) < 0.02 for j in x2_joints), q
+            x1 = q["back_lbz"]
+            assert all(abs(q[j] - x1) < 0.02 for j in x1_joints), q
+            expected_abs_x1 = abs(2 * x2) * math.sqrt(max(0.0, 1 - 4 * x2 * x2))
+            assert abs(abs(x1) - expected_abs_x1) < 0.03, (x1, x2)
+            moving += abs(x2) > 0.1
+        assert moving > 10
+        z = [m["pose"][m["name"].index("atlas")]["position"]["z"] for m in scenario.snapshot("sim/model_states")
+             if "atlas" in m["name"]]
+        assert z and all(abs(v - 1.0) < 0.01 for v in z), "without gravity the pelvis stays where it was spawned"
+        assert "ground_plane" not in {n for m in scenario.snapshot("sim/model_states") for n in m["name"]}
+    finally:
+        scenario.close()
+
+
+@pytest.mark.slow
+def test_arm_viz_publishes_moving_tf(tmp_path: Path, zenoh_port: int) -> None:
+    scenario = Scenario(tmp_path, zenoh_port, "arm_viz.yaml", "frequency:=1.0")
+    try:
+        scenario.connect("humanoid_simplified/tf", "humanoid_simplified/joint_states")
+
+        def elbow_moves() -> bool:
+            rotations = {tuple(round(v, 3) for v in t["transform"]["rotation"].values())
+                         for m in scenario.snapshot("humanoid_simplified/tf") for t in m["transforms"]
+                         if t["child_frame_id"] == "left_forearm"}
+            return len(rotations) > 5
+
+        scenario.wait_for(elbow_moves, 60, "the left forearm frame to move in tf")
+        frames = {t["child_frame_id"] for m in scenario.snapshot("humanoid_simplified/tf") for t in m["transforms"]}
+        assert {"left_upper_arm", "left_forearm", "left_hand", "right_upper_arm", "right_forearm",
+                "right_hand"} <= frames
+    finally:
+        scenario.close()
