@@ -7,6 +7,7 @@ touched from one thread. Hardware commands arrive inline on Zenoh's thread into 
 
 from __future__ import annotations
 
+import gc
 import json
 import math
 import time
@@ -205,6 +206,7 @@ class SimulatorNode(Node):
     # ------------------------------------------------------------------------------------- world control
     def _srv_pause(self, _request: Any) -> Any:
         self.paused = True
+        self._publish_outputs(force=True)   # outputs are otherwise published at the start of a period
         return Empty.Response()
 
     def _srv_unpause(self, _request: Any) -> Any:
@@ -367,6 +369,8 @@ class SimulatorNode(Node):
         lockstep = self.sim.mode != "realtime"
         for link in self.robots.values():
             link.publish_state(step, t)
+        # clock / model_states / humanoid_state of this same instant, while the controllers compute
+        self._publish_outputs()
         waited = False
         for link in self.robots.values():
             if lockstep and link.inbox.connected:
@@ -391,9 +395,13 @@ class SimulatorNode(Node):
         else:
             self._lateness.append(self.pacer.wait_until_due(t, self._idle))
         self.sim.step(self._period_steps())
-        self._publish_outputs()
 
     def spin(self) -> None:
+        # Everything long-lived exists now: keep the cyclic GC from pausing the physics loop for
+        # milliseconds scanning it (realtime lateness), and collect young objects less often.
+        gc.collect()
+        gc.freeze()
+        gc.set_threshold(50_000, 20, 100)
         try:
             while self.ok:
                 self._drain()

@@ -1,0 +1,176 @@
+"""Simulator throughput and pacing.
+
+(a) in-process DART stepping of the humanoid with the joint servo and ground contacts (the ceiling);
+(b) the simulator process in lockstep with a minimal hardware client process at a 1 kHz control rate;
+(c) realtime mode for 30 s: achieved real-time factor and p99 lateness of control periods.
+
+    python bench/sim.py [--lockstep-seconds 10] [--realtime-seconds 30]
+
+Prints a table, then one JSON line (last).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import socket
+import statistics
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+HUMANOID_ENTITY = "entities:=[{name: humanoid, file: humanoid, z: 0.915}]"
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def inprocess_steps_per_s(steps: int = 5000) -> float:
+    from nodes.sim.config import parse_gains
+    from nodes.sim.entity import EntitySpec, Pose
+    from nodes.sim.simulation import Simulation
+    from nodes.sim.world import PhysicsWorld
+
+    world = PhysicsWorld(1000.0)
+    world.add_ground()
+    sim = Simulation(world, parse_gains({"*": {"p": 2000.0, "d": 20.0}}))
+    sim.spawn(EntitySpec("humanoid", (ROOT / "robots" / "humanoid.urdf").read_text(),
+                         pose=Pose.from_xyz_rpy(0, 0, 0.915)))
+    # keep the world awake and in contact: a small knee motion, as a controller would command
+    hw = sim.hardware["humanoid"]
+    sim.step(500)
+    start = time.perf_counter()
+    for k in range(steps):
+        hw.apply_command(["left_knee", "right_knee"], ["position", "position"], [0.1 * (k % 2000) / 2000] * 2)
+        sim.step(1)
+    elapsed = time.perf_counter() - start
+    sim.clear()
+    return steps / elapsed
+
+
+class SimRun:
+    """A router in this process, the simulator process and the minimal hardware client process."""
+
+    def __init__(self, *params: str) -> None:
+        from nodes.core import Node
+        from nodes.core.session import open_router
+
+        self.port = free_port()
+        self.router = open_router(self.port)
+        env = dict(os.environ, ZENOH_CONNECT=f"tcp/127.0.0.1:{self.port}", PYTHONPATH=str(ROOT))
+        env.pop("ZENOH_CONFIG", None)
+        argv = [sys.executable, "-m", "nodes.sim", "--params-file", str(ROOT / "config" / "sim.yaml")]
+        for param in (HUMANOID_ENTITY, *params):
+            argv += ["--param", param]
+        self.sim = subprocess.Popen(argv, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
+        self.client = subprocess.Popen([sys.executable, "-m", "nodes.sim.hardware_client"], cwd=ROOT, env=env,
+                                       stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
+        self.node = Node("bench_sim", connect=[f"tcp/127.0.0.1:{self.port}"], log_level="error")
+        self.diagnostics: list[dict] = []
+        self._lock = threading.Lock()
+        from nodes.sim.interfaces import String
+
+        self.node.create_subscription(String, "/sim/diagnostics", self._on_diag, inline=True)
+
+    def _on_diag(self, msg) -> None:
+        with self._lock:
+            self.diagnostics.append(json.loads(msg.data))
+
+    def props(self):
+        from nodes.sim.interfaces import GetPhysicsProperties
+
+        return self.node.create_client(GetPhysicsProperties, "/sim/get_physics_properties").call(timeout=5.0)
+
+    def wait_commanded(self, timeout: float = 60.0) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with self._lock:
+                if self.diagnostics and self.diagnostics[-1]["robots"].get("humanoid") == "commanded":
+                    return
+            time.sleep(0.1)
+        raise RuntimeError("the hardware client never took over the humanoid")
+
+    def window(self, seconds: float) -> tuple[float, float, float, list[dict]]:
+        """(sim time advanced, steps, wall seconds, diagnostics) over ``seconds`` of wall time."""
+        before = self.props()
+        with self._lock:
+            self.diagnostics.clear()
+        start = time.perf_counter()
+        time.sleep(seconds)
+        after = self.props()
+        wall = time.perf_counter() - start
+        with self._lock:
+            diagnostics = list(self.diagnostics)
+        return after.sim_time - before.sim_time, after.step - before.step, wall, diagnostics
+
+    def close(self) -> None:
+        self.node.destroy()
+        for proc in (self.client, self.sim):
+            proc.terminate()
+            try:
+                proc.wait(10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+        self.router.close()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--lockstep-seconds", type=float, default=10.0)
+    parser.add_argument("--realtime-seconds", type=float, default=30.0)
+    args = parser.parse_args(argv)
+
+    inprocess = inprocess_steps_per_s()
+
+    run = SimRun("mode:=lockstep")
+    try:
+        run.wait_commanded()
+        _, lockstep_steps, lockstep_wall, _ = run.window(args.lockstep_seconds)
+    finally:
+        run.close()
+    lockstep = lockstep_steps / lockstep_wall
+
+    run = SimRun("mode:=realtime")
+    try:
+        run.wait_commanded()
+        sim_advanced, _, realtime_wall, diagnostics = run.window(args.realtime_seconds)
+    finally:
+        run.close()
+    rtf = sim_advanced / realtime_wall
+    p99_windows = [d["p99_late_ms"] for d in diagnostics if d["mode"] == "realtime"]
+    p99 = max(p99_windows) if p99_windows else float("nan")
+    p99_median = statistics.median(p99_windows) if p99_windows else float("nan")
+    worst = max((d["max_late_ms"] for d in diagnostics), default=float("nan"))
+
+    rows = [
+        ("(a) in-process DART humanoid, servo + contacts", f"{inprocess:,.0f} steps/s", "the ceiling"),
+        ("(b) lockstep, sim + hardware client processes, 1 kHz", f"{lockstep:,.0f} steps/s",
+         f"{lockstep / inprocess:.2f} of (a); {lockstep / 1000:.2f}x real time (goal >= 3000)"),
+        (f"(c) realtime {args.realtime_seconds:g} s: real-time factor", f"{rtf:.4f}", "goal 1.00 +- 1 %"),
+        ("(c) realtime: p99 period lateness (worst 1-s window)", f"{p99:.3f} ms",
+         f"median window {p99_median:.3f} ms, max single {worst:.2f} ms (goal p99 < 1 ms)"),
+    ]
+    width = max(len(r[0]) for r in rows)
+    print(f"{'measurement':<{width}}  {'result':>16}  note")
+    for name, value, note in rows:
+        print(f"{name:<{width}}  {value:>16}  {note}")
+    print(json.dumps({
+        "inprocess_steps_per_s": round(inprocess, 1), "lockstep_steps_per_s": round(lockstep, 1),
+        "lockstep_ratio": round(lockstep / inprocess, 4), "realtime_factor": round(rtf, 5),
+        "realtime_p99_late_ms": round(p99, 4),
+    }))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
