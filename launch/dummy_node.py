@@ -2,7 +2,7 @@
 graph liveliness token a real node declares, prints its parameters, and exits when told to.
 
 ``python -m launch.dummy_node --name N [--ns NS] [--params-file F] [--exit-after S] [--exit-code C]
-[--ignore-sigint] [--start-delay S] [--child]``
+[--ignore-sigint] [--start-delay S] [--child] [--detached-child]``
 """
 
 from __future__ import annotations
@@ -28,6 +28,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--ignore-sigint", action="store_true", help="a stubborn node: needs SIGTERM/SIGKILL")
     parser.add_argument("--start-delay", type=float, default=0.0, help="seconds before the liveliness token")
     parser.add_argument("--child", action="store_true", help="also start a sleeping child process")
+    parser.add_argument("--detached-child", action="store_true",
+                        help="also start a sleeping process in its own session (escapes the node's group)")
     args = parser.parse_args(argv)
 
     stop = threading.Event()
@@ -44,6 +46,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.child:
         child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(600)"])
         print(f"child pid {child.pid}", flush=True)
+    if args.detached_child:
+        detached = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(600)"], start_new_session=True)
+        print(f"detached child pid {detached.pid}", flush=True)
     time.sleep(args.start_delay)
 
     from nodes.core import graph

@@ -62,6 +62,10 @@ class Reaper:
             cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
         )
 
+    @property
+    def pid(self) -> int:
+        return self._proc.pid
+
     def _send(self, line: str) -> None:
         try:
             self._proc.stdin.write(line.encode() + b"\n")

@@ -28,6 +28,41 @@ POLL_S = 0.02
 _COLOURS = (32, 36, 33, 35, 34, 91, 92, 93, 94, 95, 96)
 
 
+def become_subreaper() -> bool:
+    """Linux: processes our nodes orphan (e.g. a server started in its own session) become our children
+    instead of init's, so the launcher can still find and end them."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        return libc.prctl(36, 1, 0, 0, 0) == 0  # PR_SET_CHILD_SUBREAPER
+    except (OSError, AttributeError):
+        return False
+
+
+def end_leftovers(keep: set[int], grace_s: float = 2.0) -> list[str]:
+    """SIGTERM, then SIGKILL, every descendant not in ``keep``; reap them. Returns what was ended."""
+    import psutil
+
+    me = psutil.Process()
+    leftovers = [c for c in me.children(recursive=True) if c.pid not in keep]
+    described = []
+    for proc in leftovers:
+        try:
+            described.append(f"{proc.pid} ({' '.join(proc.cmdline()[:2]) or proc.name()})")
+            proc.terminate()
+        except psutil.Error:
+            pass
+    _, alive = psutil.wait_procs(leftovers, timeout=grace_s)
+    for proc in alive:
+        try:
+            proc.kill()
+        except psutil.Error:
+            pass
+    psutil.wait_procs(alive, timeout=grace_s)  # also reaps the ones that were our (adopted) children
+    return described
+
+
 class Readiness(Protocol):
     def is_alive(self, full_name: str) -> bool: ...
 
@@ -264,6 +299,7 @@ class Supervisor:
     def run(self) -> int:
         """Supervise until every process ended (or a stop was requested and carried out)."""
         self.say(f"log directory: {self.log_dir}")
+        become_subreaper()
         while True:
             now = time.monotonic()
             if self._stop_reason is not None and self._shutdown_started is None:
@@ -280,6 +316,10 @@ class Supervisor:
         for managed in self.nodes:
             if managed.reader is not None:
                 managed.reader.join(timeout=2.0)
+        keep = {self.reaper.pid} if self.reaper else set()
+        leftovers = end_leftovers(keep)
+        if leftovers:
+            self.say(f"ended processes the nodes left behind: {', '.join(leftovers)}", "WARN")
         for message in self.plan.on_shutdown:
             self.say(message)
         return self.exit_status

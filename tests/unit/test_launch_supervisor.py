@@ -73,7 +73,7 @@ def test_respawn_after_kill_9_and_sigint_ends_everything(tmp_path: Path, zenoh_p
     launch = Launch(tmp_path, HEADER + """
   - node: {name: worker, module: launch.dummy_node, namespace: demo, respawn: true, respawn_delay: 0.3,
            params: {rate: 5.0}, args: [--child]}
-  - node: {name: steady, module: launch.dummy_node}
+  - node: {name: steady, module: launch.dummy_node, args: [--detached-child]}
 """, zenoh_port)
     try:
         launch.wait_output("[worker] ready demo/worker")
@@ -87,11 +87,14 @@ def test_respawn_after_kill_9_and_sigint_ends_everything(tmp_path: Path, zenoh_p
         wait_until(lambda: launch.output().count("[worker] ready demo/worker") == 2, 30, 0.05, "respawned ready")
         # Parameters reach the node through the generated params file.
         assert "[worker] params {worker: {ros__parameters: {rate: 5.0}}}" in launch.output()
-        children = [int(p) for p in re.findall(r"\[worker\] child pid (\d+)", launch.output())]
+        children = [int(p) for p in re.findall(r"\[(?:worker|steady)\] (?:detached )?child pid (\d+)",
+                                               launch.output())]
+        assert len(children) == 3, launch.output()
         everyone = [*launch.pids("worker"), *launch.pids("steady"), *children]
         assert launch.stop() == 0
         wait_until(lambda: all(gone(p) for p in everyone), 10, 0.05, "every node and child process to end")
         assert "[steady] bye steady" in launch.output()  # SIGINT reached it: it closed cleanly
+        assert "ended processes the nodes left behind" in launch.output()  # the detached child
         assert (launch.log_dir / "worker.log").read_text().count("ready demo/worker") == 2
     finally:
         launch.stop()
