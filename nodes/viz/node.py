@@ -1,0 +1,397 @@
+"""The visualiser node: subscribes to the robots' Zenoh keys and writes them to Rerun.
+
+It needs nothing but the keys (DESIGN §4): ``<ns>/robot_description`` (topic + latched queryable),
+``<ns>/tf``, ``<ns>/tf_static``, ``<ns>/joint_states``, ``<ns>/<jtc>/controller_state``,
+``<ns>/<jtc>/joint_trajectory``, ``<ns>/humanoid_state``, ``sim/model_states`` and ``sim/clock``.
+Robots come from the ``robots`` parameter, from the models in ``sim/model_states`` and from the node
+graph (anyone publishing ``<ns>/robot_description`` or ``<ns>/joint_states``). It only subscribes, so it
+cannot slow the control loop; every stream has its own rate limit and excess messages are dropped.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import queue
+import threading
+from dataclasses import dataclass, field
+from typing import Any
+
+import rerun as rr
+
+import msgs
+from nodes.core import Node, Subscription
+from nodes.core import graph as core_graph
+from nodes.core.latched import fetch_latched
+
+from .blueprint import build_blueprint
+from .ratelimit import RateLimiter
+from .scene import RobotScene, log_ground
+from .sink import Output, OutputPlan
+from .urdf_model import UrdfError, parse_urdf
+
+String = msgs.get_type("std_msgs/msg/String")
+JointState = msgs.get_type("sensor_msgs/msg/JointState")
+TFMessage = msgs.get_type("tf2_msgs/msg/TFMessage")
+ModelStates = msgs.get_type("gazebo_msgs/msg/ModelStates")
+Clock = msgs.get_type("rosgraph_msgs/msg/Clock")
+ControllerState = msgs.get_type("control_msgs/msg/JointTrajectoryControllerState")
+JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
+HumanoidState = msgs.get_type("humanoid_msgs/msg/HumanoidState")
+
+DISCOVERY_PERIOD = 2.0
+
+
+def stamp_seconds(stamp: Any) -> float:
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+@dataclass
+class RobotView:
+    """One robot namespace: its subscriptions, its Rerun scene (once the URDF is known) and its limits."""
+
+    namespace: str
+    subscriptions: list[Subscription] = field(default_factory=list)
+    controllers: dict[str, list[Subscription]] = field(default_factory=dict)
+    scene: RobotScene | None = None
+    description: str = ""
+    present: bool = True
+    in_sim: bool = False  # seen in sim/model_states: its disappearance there means it was deleted
+    has_balance: bool = False
+    tf_seen: bool = False
+    pending_static: list = field(default_factory=list)  # tf_static rows that came before the scene
+    limits: dict[str, RateLimiter] = field(default_factory=dict)
+    last_positions: dict[str, float] = field(default_factory=dict)
+
+
+class Visualiser(Node):
+    """RViz and rqt_plot on Rerun: robot model, link frames, joint plots and markers."""
+
+    default_name = "visualiser"
+
+    def __init__(self, cli_args: argparse.Namespace | None = None, **kwargs: Any) -> None:
+        super().__init__("visualiser", **kwargs)
+        p = self.declare_parameter
+        self.robot_list = [r.strip("/") for r in p("robots", [""], description="robot namespaces to show") if r]
+        if cli_args is not None and getattr(cli_args, "robots", ""):
+            self.robot_list += [r.strip().strip("/") for r in cli_args.robots.split(",") if r.strip()]
+        self.discover = p("discover", True, description="also show robots found in sim/model_states and the graph")
+        self.controller_names = [c for c in p(
+            "controllers", ["joint_trajectory_controller"],
+            description="trajectory controllers to plot (more are discovered from the graph)") if c]
+        self.end_effectors = [e for e in p("end_effectors", [""], description="links whose paths are drawn "
+                                           "(default: the URDF's leaf links)") if e]
+        self.world_frames = [w for w in p("world_frames", ["world", "map", "odom"],
+                                          description="tf frames drawn as the scene root") if w]
+        self.rates = {
+            "joint_states": p("joint_states_rate", 100.0, description="Hz", min_value=0.0),
+            "tf": p("tf_rate", 30.0, description="Hz", min_value=0.0),
+            "model_states": p("model_states_rate", 30.0, description="Hz", min_value=0.0),
+            "controller_state": p("controller_state_rate", 50.0, description="Hz", min_value=0.0),
+            "humanoid_state": p("humanoid_state_rate", 30.0, description="Hz", min_value=0.0),
+            "markers": p("marker_rate", 10.0, description="Hz", min_value=0.0),
+        }
+        self.tf_fallback_after = p("tf_fallback_after", 1.0, min_value=0.0,
+                                   description="s of joint_states without tf before frames come from our FK")
+
+        self.sim_now = 0.0
+        self.robots: dict[str, RobotView] = {}
+        self.inbox: queue.SimpleQueue = queue.SimpleQueue()  # work from the discovery thread
+        self.layout_key: tuple = ()
+
+        self.recording = rr.RecordingStream("zenroid_viz")
+        args = cli_args or argparse.Namespace(save=None, serve=False, spawn=False, headless=None,
+                                              web_port=9090, grpc_port=9876)
+        plan = OutputPlan.resolve(args.save, args.serve, args.spawn, args.headless, args.web_port, args.grpc_port)
+        self.output = Output(self.recording, plan, build_blueprint())
+        for note in plan.notes:
+            self.logger.info(note)
+        if plan.save:
+            self.logger.info(f"saving the recording to {plan.save}")
+        if self.output.viewer_url:
+            self.logger.info(f"web viewer: open {self.output.viewer_url}")
+            print(f"Rerun web viewer: {self.output.viewer_url}", flush=True)
+        log_ground(self.recording)
+
+        self.create_subscription(Clock, "/sim/clock", self.on_clock, inline=True)
+        self.create_subscription(ModelStates, "/sim/model_states", self.on_model_states)
+        for namespace in self.robot_list:
+            self.add_robot(namespace)
+        self.create_timer(0.1, self.drain_inbox, sim_time=False)
+        self.discovery_stop = threading.Event()
+        self.discovery = threading.Thread(target=self.discovery_loop, name="viz-discovery", daemon=True)
+        self.discovery.start()
+
+    # -- robots --------------------------------------------------------------------------------------
+    def add_robot(self, namespace: str) -> RobotView:
+        if namespace in self.robots:
+            return self.robots[namespace]
+        robot = RobotView(namespace)
+        robot.limits = {stream: RateLimiter(hz) for stream, hz in self.rates.items()}
+        self.robots[namespace] = robot
+        sub = self.create_subscription
+        robot.subscriptions += [
+            sub(String, f"/{namespace}/robot_description", lambda m, r=robot: self.on_description(r, m.data)),
+            sub(TFMessage, f"/{namespace}/tf", lambda m, r=robot: self.on_tf(r, m, static=False)),
+            sub(TFMessage, f"/{namespace}/tf_static", lambda m, r=robot: self.on_tf(r, m, static=True)),
+            sub(JointState, f"/{namespace}/joint_states", lambda m, r=robot: self.on_joint_states(r, m)),
+            sub(HumanoidState, f"/{namespace}/humanoid_state", lambda m, r=robot: self.on_humanoid_state(r, m)),
+        ]
+        for controller in self.controller_names:
+            self.add_controller(robot, controller)
+        self.logger.info(f"showing robot '{namespace}'")
+        return robot
+
+    def add_controller(self, robot: RobotView, controller: str) -> None:
+        if controller in robot.controllers:
+            return
+        base = f"/{robot.namespace}/{controller}"
+        robot.controllers[controller] = [
+            self.create_subscription(ControllerState, f"{base}/controller_state",
+                                     lambda m, r=robot, c=controller: self.on_controller_state(r, c, m)),
+            self.create_subscription(JointTrajectory, f"{base}/joint_trajectory",
+                                     lambda m, r=robot, c=controller: self.on_trajectory(r, c, m)),
+        ]
+
+    def on_description(self, robot: RobotView, xml_text: str) -> None:
+        if xml_text == robot.description and robot.scene is not None:
+            return
+        try:
+            model = parse_urdf(xml_text)
+            scene = RobotScene(self.recording, robot.namespace, model, self.end_effectors, self.world_frames)
+        except (UrdfError, ValueError) as exc:
+            self.logger.error(f"robot '{robot.namespace}': unusable robot_description: {exc}")
+            return
+        robot.description = xml_text
+        robot.scene = scene
+        count = scene.log_model(self.sim_now)
+        if scene.skipped_meshes:
+            self.logger.warn(f"robot '{robot.namespace}': meshes not found, not drawn: {scene.skipped_meshes[:3]}")
+        if robot.last_positions:
+            scene.positions.update(robot.last_positions)
+        if robot.pending_static:
+            scene.log_transforms(self.sim_now, robot.pending_static)
+            robot.pending_static = []
+        self.logger.info(f"robot '{robot.namespace}': model '{model.name}' with {len(model.links)} links, "
+                         f"{count} visuals")
+
+    def set_present(self, robot: RobotView, present: bool) -> None:
+        if robot.present == present:
+            return
+        robot.present = present
+        if not present:
+            self.logger.info(f"robot '{robot.namespace}' was deleted")
+            if robot.scene is not None:
+                robot.scene.clear(self.sim_now)
+            robot.description = ""  # a respawn may bring another URDF: fetch it again
+            robot.scene = None
+            robot.tf_seen = False
+        else:
+            self.logger.info(f"robot '{robot.namespace}' is back")
+            self.inbox.put(("fetch", robot.namespace))
+
+    # -- callbacks -----------------------------------------------------------------------------------
+    def on_clock(self, msg: Any) -> None:
+        self.sim_now = stamp_seconds(msg.clock)
+
+    def stamp_or_now(self, stamp: Any) -> float:
+        seconds = stamp_seconds(stamp)
+        return seconds if seconds > 0 else self.sim_now
+
+    def on_model_states(self, msg: Any) -> None:
+        if len(msg.pose) != len(msg.name):
+            self.logger.warn_throttle(5.0, f"sim/model_states: {len(msg.name)} names but {len(msg.pose)} poses: "
+                                      "ignored", key="model_states_len")
+            return
+        names = set(msg.name)
+        if self.discover:
+            for name in names - set(self.robots):
+                if name and name != "ground_plane":
+                    self.add_robot(name)
+                    self.inbox.put(("fetch", name))
+        for namespace, robot in self.robots.items():
+            if namespace in names:
+                robot.in_sim = True
+                self.set_present(robot, True)
+            elif robot.in_sim:  # only a robot the simulator had can be deleted by it
+                self.set_present(robot, False)
+        for name, pose in zip(msg.name, msg.pose, strict=True):
+            robot = self.robots.get(name)
+            if robot is None or robot.scene is None or not robot.limits["model_states"].ready():
+                continue
+            position = (pose.position.x, pose.position.y, pose.position.z)
+            orientation = (pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
+            robot.scene.log_base_pose(self.sim_now, position, orientation)
+
+    def on_tf(self, robot: RobotView, msg: Any, static: bool) -> None:
+        if not msg.transforms:
+            return
+        if not static:
+            robot.tf_seen = True
+            if not robot.limits["tf"].ready():
+                return
+        rows = []
+        for t in msg.transforms:
+            tr, q = t.transform.translation, t.transform.rotation
+            if not t.child_frame_id:
+                self.logger.warn_throttle(5.0, f"{robot.namespace}/tf: transform without child_frame_id ignored",
+                                          key=f"tf_child:{robot.namespace}")
+                continue
+            rows.append((t.header.frame_id, t.child_frame_id, (tr.x, tr.y, tr.z), (q.x, q.y, q.z, q.w)))
+        when = self.stamp_or_now(msg.transforms[0].header.stamp)
+        if robot.scene is None:
+            if static:
+                robot.pending_static = rows
+            return
+        robot.scene.log_transforms(when, rows)
+
+    def on_joint_states(self, robot: RobotView, msg: Any) -> None:
+        n = len(msg.name)
+        for field_name in ("position", "velocity", "effort"):
+            values = getattr(msg, field_name)
+            if values and len(values) != n:
+                self.logger.warn_throttle(5.0, f"{robot.namespace}/joint_states: {field_name} has {len(values)} "
+                                          f"values for {n} names: message ignored", key=f"js:{robot.namespace}")
+                return
+        if len(set(msg.name)) != n:
+            self.logger.warn_throttle(5.0, f"{robot.namespace}/joint_states: duplicate joint names: ignored",
+                                      key=f"js:{robot.namespace}")
+            return
+        when = self.stamp_or_now(msg.header.stamp)
+        positions = dict(zip(msg.name, msg.position, strict=False))
+        robot.last_positions.update(positions)
+        scene = robot.scene
+        if scene is None:
+            return
+        scene.positions.update(positions)
+        if robot.limits["joint_states"].ready():
+            scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort)
+        if not robot.tf_seen and when >= self.tf_fallback_after and robot.limits["tf"].ready():
+            scene.log_fk_transforms(when, scene.positions)
+        if robot.limits["markers"].ready():
+            scene.log_paths(when)
+
+    def on_controller_state(self, robot: RobotView, controller: str, msg: Any) -> None:
+        scene = robot.scene
+        if scene is None or not robot.limits["controller_state"].ready():
+            return
+        # Humble fills reference/feedback, older controllers desired/actual: take whichever is set.
+        commanded = msg.reference.positions or msg.desired.positions
+        actual = msg.feedback.positions or msg.actual.positions
+        n = len(msg.joint_names)
+        if len(commanded) != n or len(actual) != n:
+            self.logger.warn_throttle(5.0, f"{robot.namespace}/{controller}/controller_state: {n} joints but "
+                                      f"{len(commanded)} commanded / {len(actual)} actual positions: ignored",
+                                      key=f"cs:{robot.namespace}/{controller}")
+            return
+        scene.log_controller_state(self.stamp_or_now(msg.header.stamp), controller, msg.joint_names, commanded,
+                                   actual)
+
+    def on_trajectory(self, robot: RobotView, controller: str, msg: Any) -> None:
+        """The target pose of a trajectory sent on the topic: its last point."""
+        if robot.scene is None or not msg.points:
+            return
+        last = msg.points[-1].positions
+        if len(last) != len(msg.joint_names):
+            self.logger.warn(f"{robot.namespace}/{controller}/joint_trajectory: last point has {len(last)} "
+                             f"positions for {len(msg.joint_names)} joints: no target drawn")
+            return
+        unknown = [j for j in msg.joint_names if j not in robot.scene.model.joints]
+        if unknown:
+            self.logger.warn(f"{robot.namespace}/{controller}/joint_trajectory: unknown joints {unknown[:3]}")
+        robot.scene.log_target(self.stamp_or_now(msg.header.stamp), controller,
+                               {j: v for j, v in zip(msg.joint_names, last, strict=True) if j not in unknown})
+
+    def on_humanoid_state(self, robot: RobotView, msg: Any) -> None:
+        robot.has_balance = True
+        if robot.scene is None or not robot.limits["humanoid_state"].ready():
+            return
+        com = (msg.center_of_mass.x, msg.center_of_mass.y, msg.center_of_mass.z)
+        polygon = [(p.x, p.y, p.z) for p in msg.support_polygon]
+        if not all(math.isfinite(v) for v in com + (msg.zmp_x, msg.zmp_y)):
+            return
+        robot.scene.log_balance(self.stamp_or_now(msg.header.stamp), com, (msg.zmp_x, msg.zmp_y),
+                                msg.is_balanced, polygon)
+
+    # -- discovery (a thread: graph queries block) -----------------------------------------------------
+    def discovery_loop(self) -> None:
+        while not self.discovery_stop.wait(0.2):
+            try:
+                self.discover_once()
+            except Exception as exc:  # noqa: BLE001 - discovery is best effort; the node keeps running
+                self.logger.warn_throttle(30.0, f"discovery failed: {exc}", key="discovery")
+            if self.discovery_stop.wait(DISCOVERY_PERIOD):
+                return
+
+    def discover_once(self) -> None:
+        if self.discover:
+            for entry in core_graph.snapshot(self.session, timeout=1.0):
+                if entry.kind != "pub":
+                    continue
+                parts = entry.name.split("/")
+                if len(parts) == 2 and parts[1] in ("robot_description", "joint_states"):
+                    self.inbox.put(("robot", parts[0]))
+                elif len(parts) == 3 and parts[2] == "controller_state":
+                    self.inbox.put(("controller", parts[0], parts[1]))
+        for namespace, robot in list(self.robots.items()):
+            if robot.scene is None and robot.present:
+                self.fetch(namespace)
+
+    def fetch(self, namespace: str) -> None:
+        """Ask the latched queryables for what was published before we subscribed."""
+        try:
+            description = fetch_latched(self.session, String, f"{namespace}/robot_description", timeout=1.0)
+            static = fetch_latched(self.session, TFMessage, f"{namespace}/tf_static", timeout=0.5)
+        except msgs.DecodeError as exc:
+            self.logger.warn_throttle(10.0, f"robot '{namespace}': bad latched reply: {exc}", key=f"fetch:{namespace}")
+            return
+        if description is not None:
+            self.inbox.put(("description", namespace, description.data))
+        if static is not None:
+            self.inbox.put(("tf_static", namespace, static))
+
+    def drain_inbox(self) -> None:
+        while True:
+            try:
+                item = self.inbox.get_nowait()
+            except queue.Empty:
+                break
+            kind, namespace = item[0], item[1]
+            if kind == "robot":
+                self.add_robot(namespace)
+            elif kind == "controller":
+                self.add_controller(self.add_robot(namespace), item[2])
+            elif kind == "fetch":
+                threading.Thread(target=self.fetch, args=(namespace,), daemon=True).start()
+            elif namespace in self.robots:
+                robot = self.robots[namespace]
+                if kind == "description" and robot.scene is None and robot.present:
+                    self.on_description(robot, item[2])
+                elif kind == "tf_static":
+                    self.on_tf(robot, item[2], static=True)
+        self.update_layout()
+
+    def update_layout(self) -> None:
+        """Re-send the blueprint when the set of robots, controllers or balance plots changes."""
+        layout = {ns: (sorted(r.controllers), r.has_balance) for ns, r in sorted(self.robots.items()) if r.present}
+        key = tuple((ns, tuple(c), b) for ns, (c, b) in layout.items())
+        if key != self.layout_key:
+            self.layout_key = key
+            self.recording.send_blueprint(build_blueprint(layout))
+
+    def on_process_exit(self) -> None:
+        self.discovery_stop.set()
+        self.output.close()
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    out = parser.add_argument_group("visualiser output")
+    out.add_argument("--save", metavar="FILE.rrd", help="also write the recording to this file")
+    out.add_argument("--serve", action="store_true", help="serve the web viewer (default without a display)")
+    out.add_argument("--spawn", action="store_true", help="open the native viewer (default with a display)")
+    out.add_argument("--headless", dest="headless", action="store_const", const=True, default=None,
+                     help="never open a window even if a display is present")
+    out.add_argument("--web-port", type=int, default=9090, help="web viewer HTTP port (0: any free port)")
+    out.add_argument("--grpc-port", type=int, default=9876, help="Rerun gRPC port (0: any free port)")
+    out.add_argument("--robots", default="", help="comma-separated robot namespaces (same as robots:=[...])")
+
