@@ -56,7 +56,8 @@ def main(argv: list[str] | None = None) -> int:
 
     full_name = f"{args.ns.strip('/')}/{args.name}" if args.ns.strip("/") else args.name
     session = open_peer()
-    token = session.liveliness().declare_token(graph.node_key(str(session.zid()), full_name))
+    # the graph names nodes by their fully qualified name, "/ns/name", as nodes.core.Node does
+    token = session.liveliness().declare_token(graph.node_key(str(session.zid()), "/" + full_name))
     print(f"ready {full_name}", flush=True)
     try:
         stop.wait(args.exit_after)

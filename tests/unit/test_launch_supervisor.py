@@ -102,7 +102,8 @@ def test_respawn_after_kill_9_and_sigint_ends_everything(tmp_path: Path, zenoh_p
 
 def test_required_node_failure_ends_launch_with_nonzero_status(tmp_path: Path, zenoh_port: int) -> None:
     launch = Launch(tmp_path, HEADER + """
-  - node: {name: brittle, module: launch.dummy_node, required: true, args: [--exit-after, "1", --exit-code, "4"]}
+  - node: {name: brittle, module: launch.dummy_node, required: true, respawn: true, respawn_delay: 0.1,
+           respawn_max: 1, args: [--exit-after, "1", --exit-code, "4"]}
   - node: {name: bystander, module: launch.dummy_node}
   - on_exit: {node: brittle, log: "brittle has gone"}
   - on_shutdown: {log: "launch over"}
@@ -111,6 +112,8 @@ def test_required_node_failure_ends_launch_with_nonzero_status(tmp_path: Path, z
         assert launch.proc.wait(timeout=40) == 1
         out = launch.output()
         assert "'brittle'" in out and "exited with status 4" in out
+        assert len(launch.pids("brittle")) == 2  # respawned once, then the restart limit
+        assert "reached its restart limit (1)" in out
         assert "required node 'brittle' exited (status 4)" in out
         assert "brittle has gone" in out and out.rstrip().endswith("launch over")
         assert all(gone(p) for p in launch.pids("bystander"))
@@ -181,3 +184,23 @@ def test_port_in_use_is_a_clear_error(tmp_path: Path, zenoh_port: int, router: s
         assert "started 'a'" not in launch.output()
     finally:
         launch.stop()
+
+
+def test_external_router_from_environment(tmp_path: Path, zenoh_port: int, router: str, session) -> None:
+    """With ZENOH_CONNECT set the launcher hosts nothing: its nodes join the router already there."""
+    from nodes.core import graph
+
+    file = tmp_path / "test.yaml"
+    file.write_text("launch:\n  - node: {name: guest, module: launch.dummy_node, namespace: ext}\n")
+    env = dict(os.environ, ZENOH_CONNECT=router)
+    env.pop("ZENOH_CONFIG", None)
+    out_path = tmp_path / "launch.out"
+    with open(out_path, "wb") as out:
+        proc = subprocess.Popen([sys.executable, "-m", "launch", str(file), "--log-dir", str(tmp_path / "logs")],
+                                cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+    try:
+        wait_until(lambda: "/ext/guest" in graph.node_names(session, 0.5), 30, 0.1, "the node on our router")
+        assert "zenoh: external router" in out_path.read_text()
+    finally:
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=20) == 0
