@@ -104,7 +104,7 @@ def test_required_node_failure_ends_launch_with_nonzero_status(tmp_path: Path, z
     launch = Launch(tmp_path, HEADER + """
   - node: {name: brittle, module: launch.dummy_node, required: true, respawn: true, respawn_delay: 0.1,
            respawn_max: 1, args: [--exit-after, "1", --exit-code, "4"]}
-  - node: {name: bystander, module: launch.dummy_node}
+  - node: {name: bystander, module: launch.dummy_node, output: log}
   - on_exit: {node: brittle, log: "brittle has gone"}
   - on_shutdown: {log: "launch over"}
 """, zenoh_port)
@@ -117,6 +117,8 @@ def test_required_node_failure_ends_launch_with_nonzero_status(tmp_path: Path, z
         assert "required node 'brittle' exited (status 4)" in out
         assert "brittle has gone" in out and out.rstrip().endswith("launch over")
         assert all(gone(p) for p in launch.pids("bystander"))
+        # output: log keeps a node off the screen but not out of its log file
+        assert "[bystander]" not in out and "ready bystander" in (launch.log_dir / "bystander.log").read_text()
     finally:
         launch.stop()
 
