@@ -153,7 +153,8 @@ def execute(plan: LaunchPlan, log_dir: Path) -> int:
             where = f"embedded router on {endpoint}"
         print(f"[launch] [INFO] zenoh: {where}", flush=True)
         readiness = NodeReadiness(session)
-        supervisor = Supervisor(plan, log_dir, child_environment(endpoint), readiness, reaper=reaper)
+        supervisor = Supervisor(plan, log_dir, child_environment(endpoint), readiness, reaper=reaper,
+                                own_process_tree=True)
         previous = {sig: signal.signal(sig, supervisor.handle_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
         try:
             return supervisor.run()

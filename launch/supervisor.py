@@ -86,7 +86,7 @@ class Managed:
 class Supervisor:
     def __init__(self, plan: LaunchPlan, log_dir: Path, child_env: dict[str, str],
                  readiness: Readiness | None, out: IO[str] | None = None, colour: bool | None = None,
-                 python: str = sys.executable, reaper: Reaper | None = None) -> None:
+                 python: str = sys.executable, reaper: Reaper | None = None, own_process_tree: bool = False) -> None:
         self.plan = plan
         self.log_dir = log_dir
         self.child_env = child_env
@@ -95,6 +95,9 @@ class Supervisor:
         self.colour = self.out.isatty() if colour is None else colour
         self.python = python
         self.reaper = reaper
+        # Only a launcher process owns all its descendants; embedded in another program it must not adopt
+        # or end processes that are not its nodes'.
+        self.own_process_tree = own_process_tree
         self.nodes = [Managed(spec, _COLOURS[i % len(_COLOURS)]) for i, spec in enumerate(plan.nodes)]
         self.by_name = {m.spec.name: m for m in self.nodes}
         self.exit_status = 0
@@ -299,7 +302,8 @@ class Supervisor:
     def run(self) -> int:
         """Supervise until every process ended (or a stop was requested and carried out)."""
         self.say(f"log directory: {self.log_dir}")
-        become_subreaper()
+        if self.own_process_tree:
+            become_subreaper()
         while True:
             now = time.monotonic()
             if self._stop_reason is not None and self._shutdown_started is None:
@@ -316,10 +320,10 @@ class Supervisor:
         for managed in self.nodes:
             if managed.reader is not None:
                 managed.reader.join(timeout=2.0)
-        keep = {self.reaper.pid} if self.reaper else set()
-        leftovers = end_leftovers(keep)
-        if leftovers:
-            self.say(f"ended processes the nodes left behind: {', '.join(leftovers)}", "WARN")
+        if self.own_process_tree:
+            leftovers = end_leftovers({self.reaper.pid} if self.reaper else set())
+            if leftovers:
+                self.say(f"ended processes the nodes left behind: {', '.join(leftovers)}", "WARN")
         for message in self.plan.on_shutdown:
             self.say(message)
         return self.exit_status

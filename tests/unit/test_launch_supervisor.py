@@ -206,3 +206,30 @@ def test_external_router_from_environment(tmp_path: Path, zenoh_port: int, route
     finally:
         proc.send_signal(signal.SIGINT)
         assert proc.wait(timeout=20) == 0
+
+
+def test_supervisor_prefixes_colours_and_logs_output(tmp_path: Path) -> None:
+    """In-process: programs (exec, no shell) run to the end; output is prefixed, coloured, and logged."""
+    import io
+
+    from launch.resolve import resolve
+    from launch.supervisor import Supervisor
+
+    file = tmp_path / "test.yaml"
+    file.write_text(textwrap.dedent("""
+        launch:
+          - node: {name: talker, exec: python, args: [-c, "print('hello'); print('world')"]}
+          - node: {name: quiet, exec: python, args: [-c, "print('secret')"], output: log}
+          - node: {name: second, exec: python, args: [-c, "print('after')"], wait_for: [talker]}
+          - on_shutdown: {log: "done"}
+        """))
+    plan = resolve(file, {})
+    screen = io.StringIO()
+    supervisor = Supervisor(plan, tmp_path, dict(os.environ), readiness=None, out=screen, colour=True)
+    assert supervisor.run() == 0
+    text = screen.getvalue()
+    assert "\x1b[32m[talker] \x1b[0mhello\n" in text and "[talker] \x1b[0mworld" in text
+    assert "secret" not in text and (tmp_path / "quiet.log").read_text() == "secret\n"
+    assert text.index("'talker'") < text.index("started 'second'")  # waited for talker to finish with 0
+    assert "[second] \x1b[0mafter" in text
+    assert "all processes have ended" in text and text.rstrip().endswith("done")
