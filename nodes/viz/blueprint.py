@@ -30,7 +30,7 @@ def build_blueprint(robots: Mapping[str, tuple[Sequence[str], bool]] | None = No
         name="scene", origin="world",
         line_grid=rrb.LineGrid3D(visible=False),  # we log our own ground with a 0.5 m grid
         # A three-quarter view from the front left of a standing humanoid, like RViz's default orbit.
-        eye_controls=rrb.EyeControls3D(position=[2.6, 1.9, 1.6], look_target=[0.0, 0.0, 0.6],
+        eye_controls=rrb.EyeControls3D(position=[1.9, 1.4, 1.3], look_target=[0.0, 0.0, 0.55],
                                        eye_up=[0.0, 0.0, 1.0]),
     )
     side: rrb.Container | rrb.View

@@ -36,6 +36,11 @@ def bend(t: float, period: float) -> float:
     return 0.4 * (1.0 - math.cos(2.0 * math.pi * t / period))
 
 
+def pelvis_height(knee: float) -> float:
+    """Feet flat on the ground: thigh and shin (0.35 m each) both tilt by knee/2."""
+    return PELVIS_HEIGHT - 0.7 * (1.0 - math.cos(knee / 2))
+
+
 def pose_for(knee: float) -> dict[str, float]:
     return {"left_knee": knee, "right_knee": knee, "left_hip_pitch": -knee / 2, "right_hip_pitch": -knee / 2,
             "left_ankle_pitch": -knee / 2, "right_ankle_pitch": -knee / 2}
@@ -80,7 +85,7 @@ class Feeder(Node):
         if self.step % max(1, int(self.rate / 50)) == 0:  # model_states at ~50 Hz like the simulator
             self.models_pub.publish(msgs.from_dict(ModelStates, {
                 "name": alive,
-                "pose": [{"position": {"x": 0.0, "y": 0.6 * i, "z": PELVIS_HEIGHT - 0.12 * knee},
+                "pose": [{"position": {"x": 0.0, "y": 0.6 * i, "z": pelvis_height(knee)},
                           "orientation": {"w": 1.0}} for i in range(len(alive))],
                 "twist": [{} for _ in alive]}))
         for ns in alive:

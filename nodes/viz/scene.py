@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
-from .kinematics import ForwardKinematics, matrix_to_quat, quat_to_matrix, rpy_to_matrix
+from .kinematics import ForwardKinematics, matrix_to_quat, pose_transform, rpy_to_matrix
 from .urdf_model import RobotModel, Visual
 
 SIM_TIMELINE = "sim_time"
@@ -118,6 +118,7 @@ class RobotScene:
         self.relations: dict[str, tuple[str, list]] = {}  # child frame -> (parent frame, frame components)
         self.base_pose = np.eye(4)
         self.base_from_tf = False  # once tf names the root's parent, model_states no longer places it
+        self.base_known = False  # no path points until the robot's place in the world is known
         self.positions: dict[str, float] = {}
         self.joint_series: tuple[str, ...] = ()
         self.controller_series: set[tuple[str, str]] = set()
@@ -140,7 +141,8 @@ class RobotScene:
                 self.recording.log(f"{self.world}/links/{link}/visual_{index}", archetype, frame)
                 count += 1
         # Until a pose arrives, the robot stands at the origin rather than floating in no frame at all.
-        self.log_base_pose(sim_time, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
+        if not self.base_from_tf:
+            self._log_relation(WORLD_FRAME, self.root_frame, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
         return count
 
     def clear(self, sim_time: float) -> None:
@@ -165,7 +167,8 @@ class RobotScene:
             if child_frame == WORLD_FRAME or child_frame == parent_frame:
                 continue
             if child_frame == self.root_frame and parent_frame == WORLD_FRAME:
-                self.base_from_tf = True
+                self.base_from_tf = self.base_known = True
+                self.base_pose = pose_transform(xyz, quat)
             self._log_relation(parent_frame, child_frame, xyz, quat)
 
     def _log_relation(self, parent_frame: str, child_frame: str, xyz: Sequence[float],
@@ -192,11 +195,10 @@ class RobotScene:
 
     def log_base_pose(self, sim_time: float, position: Sequence[float], orientation_xyzw: Sequence[float]) -> None:
         """The root link in the world (from sim/model_states), unless tf already places it."""
-        self.base_pose = np.eye(4)
-        self.base_pose[:3, :3] = quat_to_matrix(orientation_xyzw)
-        self.base_pose[:3, 3] = position
-        if self.base_from_tf:
+        if self.base_from_tf:  # tf places the root (a state publisher relays model_states): it wins
             return
+        self.base_pose = pose_transform(position, orientation_xyzw)
+        self.base_known = True
         self.set_time(sim_time)
         self._log_relation(WORLD_FRAME, self.root_frame, position, orientation_xyzw)
 
@@ -248,6 +250,8 @@ class RobotScene:
 
     def log_paths(self, sim_time: float) -> None:
         """End-effector (from forward kinematics on the latest joint positions) and CoM paths as line strips."""
+        if not self.base_known:
+            return
         poses = self.fk.link_poses(self.positions, self.base_pose)
         for link, path in self.ee_paths.items():
             path.append(poses[link][:3, 3].tolist())

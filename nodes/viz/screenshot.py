@@ -1,0 +1,133 @@
+"""Screenshot of the served web viewer in headless Chromium (regenerates ``docs/viz.png``).
+
+``python -m nodes.viz.screenshot [--out docs/viz.png] [--settle 6] [--render 15]`` runs a router, the state
+publisher, the viz feeder and ``python -m nodes.viz --serve`` on free loopback ports, lets the robot move,
+then loads the viewer page in headless Chromium and saves the picture. Chromium's ``--screenshot`` fires
+on the page's load event, before the WebAssembly viewer has drawn anything; so the page we load wraps the
+viewer in an iframe next to an image that our own little server answers only after ``--render`` seconds.
+Exit status 3 when no Chromium is installed (Debian: ``apt-get install chromium``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import http.server
+import os
+import shutil
+import subprocess
+import sys
+import threading
+import time
+from html import escape
+from pathlib import Path
+
+from nodes.core.session import loopback_endpoint, open_router
+from nodes.viz.sink import free_port
+
+ROOT = Path(__file__).resolve().parents[2]
+BROWSERS = ("chromium", "chromium-browser", "google-chrome")
+
+
+def find_browser() -> str | None:
+    for name in BROWSERS:
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def delayed_page_server(viewer_url: str, render_seconds: float) -> http.server.ThreadingHTTPServer:
+    class Handler(http.server.BaseHTTPRequestHandler):
+        def log_message(self, *args) -> None:  # quiet
+            pass
+
+        def do_GET(self) -> None:  # noqa: N802 - http.server's naming
+            if self.path.startswith("/hold"):
+                time.sleep(render_seconds)  # holds the load event while the viewer renders
+                self.send_response(204)
+                self.end_headers()
+                return
+            body = (f'<html><body style="margin:0;background:#111"><iframe src="{escape(viewer_url)}" '
+                    'style="border:0;width:100vw;height:100vh"></iframe>'
+                    '<img src="/hold" style="display:none"></body></html>').encode()
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html")
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", free_port()), Handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server
+
+
+def take(out: Path, settle: float, render: float, size: str = "1400,800") -> int:
+    browser = find_browser()
+    if browser is None:
+        print("no Chromium found (Debian: apt-get install chromium)", file=sys.stderr)
+        return 3
+    zenoh_port, web_port, grpc_port = free_port(), free_port(), free_port()
+    router = open_router(zenoh_port)
+    env = dict(os.environ, ZENOH_CONNECT=loopback_endpoint(zenoh_port), PYTHONPATH=str(ROOT))
+    env.pop("ZENOH_CONFIG", None)
+    procs: list[subprocess.Popen] = []
+
+    def start(*argv: str) -> subprocess.Popen:
+        proc = subprocess.Popen([sys.executable, "-m", *argv], cwd=ROOT, env=env, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True)
+        procs.append(proc)
+        return proc
+
+    try:
+        start("nodes.state_publisher", "--ns", "humanoid",
+              "--param", f"robot_description_file:={ROOT / 'robots' / 'humanoid.urdf'}")
+        viz = start("nodes.viz", "--serve", "--web-port", str(web_port), "--grpc-port", str(grpc_port))
+        viewer_url = ""
+        deadline = time.monotonic() + 60
+        while not viewer_url and time.monotonic() < deadline and viz.poll() is None:
+            line = viz.stdout.readline()
+            if line.startswith("Rerun web viewer: "):
+                viewer_url = line.split(": ", 1)[1].strip()
+        if not viewer_url:
+            print("the visualiser did not report its web viewer URL", file=sys.stderr)
+            return 1
+        threading.Thread(target=lambda: viz.stdout.read(), daemon=True).start()  # keep its pipe drained
+        start("nodes.viz.feeder", "--param", "robots:=[humanoid]")
+        time.sleep(settle)
+        page = delayed_page_server(viewer_url, render)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        result = subprocess.run(
+            [browser, "--headless=new", "--no-sandbox", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
+             "--hide-scrollbars", f"--window-size={size}", f"--screenshot={out}",
+             f"http://127.0.0.1:{page.server_address[1]}/"],
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=render + 90, check=False)
+        page.shutdown()
+        if result.returncode != 0 or not out.is_file():
+            print(f"chromium failed (exit {result.returncode})", file=sys.stderr)
+            return 1
+        print(f"saved {out} ({out.stat().st_size} bytes)")
+        return 0
+    finally:
+        for proc in reversed(procs):
+            if proc.poll() is None:
+                proc.send_signal(2)  # SIGINT: nodes close their sessions, the visualiser its server
+        for proc in procs:
+            try:
+                proc.wait(15)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+        router.close()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m nodes.viz.screenshot", description=__doc__.split("\n")[0])
+    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "viz.png")
+    parser.add_argument("--settle", type=float, default=6.0, help="s of motion before the screenshot")
+    parser.add_argument("--render", type=float, default=15.0, help="s the viewer gets to load and draw")
+    args = parser.parse_args(argv)
+    return take(args.out, args.settle, args.render)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

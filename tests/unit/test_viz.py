@@ -1,0 +1,240 @@
+"""Unit tests of the visualiser's pure parts: URDF model, kinematics, rate limits, the Rerun scene, outputs."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import rerun as rr
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from nodes.viz.blueprint import build_blueprint
+from nodes.viz.kinematics import (
+    ForwardKinematics,
+    matrix_to_quat,
+    quat_to_matrix,
+    rpy_to_matrix,
+)
+from nodes.viz.ratelimit import RateLimiter
+from nodes.viz.readback import load
+from nodes.viz.scene import WORLD_FRAME, RobotScene, frame_name, log_ground
+from nodes.viz.sink import OutputPlan
+from nodes.viz.urdf_model import UrdfError, parse_urdf
+
+ROOT = Path(__file__).resolve().parents[2]
+HUMANOID = (ROOT / "robots" / "humanoid.urdf").read_text()
+
+LEG = """<robot name="leg">
+  <material name="red"><color rgba="1 0 0 1"/></material>
+  <link name="hip"><visual><geometry><box size="0.2 0.2 0.1"/></geometry><material name="red"/></visual></link>
+  <link name="thigh">
+    <visual><origin xyz="0 0 -0.2" rpy="0 0 0"/><geometry><cylinder radius="0.05" length="0.4"/></geometry>
+      <material name="inline"><color rgba="0 0 1 0.5"/></material></visual>
+  </link>
+  <link name="foot"><visual><geometry><sphere radius="0.05"/></geometry></visual></link>
+  <joint name="hip_pitch" type="revolute"><parent link="hip"/><child link="thigh"/>
+    <axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="ankle" type="fixed"><parent link="thigh"/><child link="foot"/><origin xyz="0 0 -0.4"/></joint>
+</robot>"""
+
+
+# -- URDF model -----------------------------------------------------------------------------------------
+def test_urdf_visuals_colours_and_tree() -> None:
+    model = parse_urdf(LEG)
+    assert model.root_link == "hip"
+    assert [v.kind for link in ("hip", "thigh", "foot") for v in model.links[link]] == ["box", "cylinder", "sphere"]
+    assert model.links["hip"][0].rgba == (1.0, 0.0, 0.0, 1.0)  # named top-level material
+    assert model.links["thigh"][0].rgba == (0.0, 0.0, 1.0, 0.5)  # inline colour
+    assert model.links["foot"][0].rgba == (0.7, 0.7, 0.7, 1.0)  # default grey
+    assert [j.name for j in model.moving_joints] == ["hip_pitch"]
+    assert model.leaf_links() == ["foot"]
+
+
+def test_humanoid_has_a_visual_on_every_link() -> None:
+    model = parse_urdf(HUMANOID)
+    assert len(model.links) == 23 and model.visual_links() == list(model.links)
+    assert model.root_link == "pelvis" and len(model.moving_joints) == 22
+
+
+@pytest.mark.parametrize("xml, reason", [
+    ("", "robot_description: empty"),
+    ("<robot", "not XML"),
+    ("<model/>", "root element is <model>"),
+    ('<!DOCTYPE r [<!ENTITY a "aaaa">]><robot name="r"/>', "DTD/entity"),
+    ('<robot name="r"></robot>', "no <link>"),
+    ('<robot name="r"><link name="a"><visual><geometry><box size="1 2"/></geometry></visual></link></robot>',
+     "link[a]/visual[0]/geometry/box@size: expected 3 numbers, got 2"),
+    ('<robot name="r"><link name="a"><visual><geometry><sphere radius="nan"/></geometry></visual></link></robot>',
+     "link[a]/visual[0]/geometry/sphere@radius: 'nan' is not finite"),
+    ('<robot name="r"><link name="a"><visual><geometry><cone/></geometry></visual></link></robot>',
+     "unknown geometry 'cone'"),
+    ('<robot name="r"><link name="a"/><joint name="j" type="revolute"><parent link="a"/><child link="b"/>'
+     '</joint></robot>', "joint[j]/child: unknown link 'b'"),
+    ('<robot name="r"><link name="a"/><link name="b"/></robot>', "expected one root link, found 2"),
+    ('<robot name="r"><link name="a"/><link name="b"/><joint name="j" type="revolute"><parent link="a"/>'
+     '<child link="b"/><axis xyz="0 0 0"/></joint></robot>', "joint[j]/axis@xyz: zero axis"),
+])
+def test_bad_urdf_names_the_element_and_reason(xml: str, reason: str) -> None:
+    with pytest.raises(UrdfError, match=None) as info:
+        parse_urdf(xml)
+    assert reason in str(info.value)
+
+
+# -- kinematics -----------------------------------------------------------------------------------------
+angles = st.floats(min_value=-math.pi, max_value=math.pi, allow_nan=False)
+
+
+@settings(max_examples=200, deadline=None)
+@given(angles, angles, angles)
+def test_quaternion_round_trip(roll: float, pitch: float, yaw: float) -> None:
+    rotation = rpy_to_matrix(roll, pitch, yaw)
+    assert np.allclose(rotation @ rotation.T, np.eye(3), atol=1e-12)
+    assert np.allclose(quat_to_matrix(matrix_to_quat(rotation)), rotation, atol=1e-9)
+
+
+def test_rpy_is_fixed_axis_xyz() -> None:
+    # yaw 90 deg maps x to y; roll then pitch then yaw
+    assert np.allclose(rpy_to_matrix(0, 0, math.pi / 2) @ [1, 0, 0], [0, 1, 0])
+    assert np.allclose(rpy_to_matrix(math.pi / 2, 0, math.pi / 2) @ [0, 1, 0], [0, 0, 1])
+
+
+def test_forward_kinematics_of_a_pitched_leg() -> None:
+    fk = ForwardKinematics(parse_urdf(LEG))
+    poses = fk.link_poses({"hip_pitch": math.pi / 2})
+    # Pitching +90 deg about y swings the foot (0.4 m down the thigh) forward to -x... about +y: z -> x
+    assert np.allclose(poses["foot"][:3, 3], [-0.4, 0.0, 0.0], atol=1e-12)
+    tf = fk.joint_transforms({"hip_pitch": 0.3})
+    assert tf["thigh"][0] == "hip" and tf["foot"][0] == "thigh"
+
+
+def test_our_fk_matches_the_projects_fk_on_the_humanoid() -> None:
+    from nodes.kinematics import KinematicTree
+    from nodes.urdf import parse_urdf as project_parse
+
+    ours = ForwardKinematics(parse_urdf(HUMANOID))
+    theirs = KinematicTree(project_parse(HUMANOID))
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        values = {name: float(v) for name, v in zip(theirs.dof_names, rng.uniform(-1, 1, len(theirs.dof_names)),
+                                                    strict=True)}
+        q = theirs.configuration(values)
+        for link in ("left_foot", "right_forearm", "head"):
+            assert np.allclose(ours.link_poses(values)[link], theirs.link_transform(q, link), atol=1e-9), link
+
+
+# -- rate limits ----------------------------------------------------------------------------------------
+def test_rate_limiter_keeps_the_average_rate_and_drops_the_rest() -> None:
+    now = [0.0]
+    limiter = RateLimiter(10.0, clock=lambda: now[0])
+    passed = 0
+    for _ in range(1000):  # 1 kHz input for 1 s
+        passed += limiter.ready()
+        now[0] += 0.001
+    assert passed == 10
+    assert RateLimiter(0.0).ready() and RateLimiter(0.0).ready()  # 0 = unlimited
+
+
+def test_rate_limiter_resyncs_after_a_gap() -> None:
+    now = [0.0]
+    limiter = RateLimiter(10.0, clock=lambda: now[0])
+    assert limiter.ready()
+    now[0] = 5.0
+    assert limiter.ready()
+    now[0] = 5.01
+    assert not limiter.ready(), "no burst of catch-up samples after a pause"
+
+
+# -- scene (real rerun, saved to a file, read back) -----------------------------------------------------
+def test_frame_names() -> None:
+    assert frame_name("humanoid", "left_shin") == "humanoid/left_shin"
+    assert frame_name("humanoid", "/humanoid/left_shin") == "humanoid/left_shin"
+    assert frame_name("humanoid", "world") == WORLD_FRAME
+    assert frame_name("humanoid", "odom") == WORLD_FRAME
+
+
+def record(tmp_path: Path, body) -> dict:
+    recording = rr.RecordingStream("test_viz")
+    path = tmp_path / "scene.rrd"
+    recording.save(str(path))
+    body(recording)
+    recording.flush()
+    recording.disconnect()
+    return load(path)
+
+
+def test_scene_logs_model_frames_plots_and_clear(tmp_path: Path) -> None:
+    def body(recording: rr.RecordingStream) -> None:
+        log_ground(recording)
+        scene = RobotScene(recording, "leg", parse_urdf(LEG))
+        assert scene.log_model(0.5) == 3
+        scene.log_transforms(1.0, [("hip", "thigh", (0, 0, 0), (0, 0.1, 0, 0.995)),
+                                   ("world", "hip", (1, 2, 3), (0, 0, 0, 1))])
+        scene.log_base_pose(1.0, (9, 9, 9), (0, 0, 0, 1))  # ignored: tf already places the root
+        scene.log_joint_states(1.0, ["hip_pitch"], [0.2], [0.1], [])
+        scene.log_joint_states(1.1, ["hip_pitch"], [0.3], [0.1], [])
+        scene.log_paths(1.1)
+        scene.log_paths(1.2)
+        scene.log_controller_state(1.2, "jtc", ["hip_pitch"], [0.4], [0.35])
+        scene.log_target(1.2, "jtc", {"hip_pitch": 1.0})
+        scene.clear(2.0)
+
+    data = record(tmp_path, body)
+    assert data["world/leg/links/thigh/visual_0"].rows[0]["CoordinateFrame:frame"] == ["leg/thigh"]
+    assert data["world/leg/links/thigh/visual_0"].rows[0]["Cylinders3D:colors"] == [0x0000FF80]
+    thigh = data["world/leg/frames/thigh"].rows[-1]
+    assert thigh["Transform3D:parent_frame"] == ["leg/hip"] and thigh["sim_time"] == 1.0
+    hip_rows = data["world/leg/frames/hip"].column("Transform3D:translation")
+    assert [t for t, _ in hip_rows] == [0.5, 1.0] and hip_rows[-1][1] == [[1.0, 2.0, 3.0]]
+    positions = data["plots/leg/joint_states/position"]
+    assert positions.static["SeriesLines:names"] == ["hip_pitch"]
+    assert [v for _, v in positions.column("Scalars:scalars")] == [[0.2], [0.3]]
+    assert "plots/leg/joint_states/effort" not in data or not data["plots/leg/joint_states/effort"].rows
+    assert data["plots/leg/jtc/hip_pitch"].column("Scalars:scalars") == [(1.2, [0.4, 0.35])]
+    # The foot path starts at the world pose of the hip (1, 2, 3) + the pitched leg.
+    strips = data["world/leg/markers/ee_paths"].column("LineStrips3D:strips")[-1][1]
+    assert len(strips) == 1 and len(strips[0]) == 2
+    assert np.allclose(strips[0][-1], [1 - 0.4 * math.sin(0.3), 2, 3 - 0.4 * math.cos(0.3)], atol=1e-5)
+    target = data["world/leg/markers/target/end_effectors"].column("Points3D:positions")[-1][1]
+    assert np.allclose(target[0], [1 - 0.4 * math.sin(1.0), 2, 3 - 0.4 * math.cos(1.0)], atol=1e-5)
+    assert data["world/leg"].column("Clear:is_recursive") == [(2.0, [True])]
+
+
+def test_scene_rejects_unknown_end_effectors() -> None:
+    with pytest.raises(ValueError, match="end_effectors: unknown links \\['hand'\\]"):
+        RobotScene(rr.RecordingStream("unused"), "leg", parse_urdf(LEG), end_effectors=["hand"])
+
+
+def test_balance_markers_sit_on_the_ground(tmp_path: Path) -> None:
+    def body(recording: rr.RecordingStream) -> None:
+        scene = RobotScene(recording, "leg", parse_urdf(LEG))
+        scene.log_balance(1.0, (0.01, 0.0, 0.8), (0.02, 0.0), False,
+                          [(0.1, 0.1, 0.0), (0.1, -0.1, 0.0), (-0.1, -0.1, 0.0)])
+
+    data = record(tmp_path, body)
+    ring = data["world/leg/markers/support_polygon"].column("LineStrips3D:strips")[0][1][0]
+    assert len(ring) == 4 and ring[0] == ring[-1], "closed polygon"
+    assert data["plots/leg/balance/is_balanced"].column("Scalars:scalars") == [(1.0, [0.0])]
+
+
+# -- outputs and layout ---------------------------------------------------------------------------------
+def test_output_plan_is_headless_without_a_display(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    plan = OutputPlan.resolve(None, False, False, None, 9090, 9876)
+    assert plan.serve and not plan.spawn
+    plan = OutputPlan.resolve(None, False, True, None, 9090, 9876)
+    assert plan.serve and not plan.spawn and "no display" in plan.notes[0]
+    plan = OutputPlan.resolve("x.rrd", False, False, None, 9090, 9876)
+    assert plan.save == Path("x.rrd") and not plan.serve and not plan.spawn
+    monkeypatch.setenv("DISPLAY", ":0")
+    assert OutputPlan.resolve(None, False, False, None, 9090, 9876).spawn
+    assert OutputPlan.resolve(None, False, False, True, 9090, 9876).serve  # --headless wins
+
+
+def test_blueprint_has_a_tab_per_robot() -> None:
+    assert build_blueprint() is not None
+    assert build_blueprint({"humanoid": (["joint_trajectory_controller"], True)}) is not None
+    assert build_blueprint({"a": ([], False), "b": (["jtc"], True)}) is not None
