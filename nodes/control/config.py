@@ -91,8 +91,9 @@ def parse_config(data: Any, source: str = "<yaml>", manager_name: str = "control
 
 
 def _add_type(config: ManagerConfig, source: str, name: str, type_name: Any) -> None:
-    if not isinstance(type_name, str) or "/" not in type_name:
-        raise ConfigError(f"{source}: controller_manager.{name}.type must be 'package/Class', got {type_name!r}")
+    if not isinstance(type_name, str) or not ("/" in type_name or ":" in type_name):
+        raise ConfigError(f"{source}: controller_manager.{name}.type must be 'package/Class' (or "
+                          f"'python.module:Class'), got {type_name!r}")
     config.controllers.setdefault(name, ControllerConfig(name)).type = type_name
 
 

@@ -70,7 +70,7 @@ class ControllerManager:
             params = dict(params)
             type_name = params.pop("type", None)
             if type_name is not None:
-                if not isinstance(type_name, str) or "/" not in type_name:
+                if not isinstance(type_name, str) or not ("/" in type_name or ":" in type_name):
                     raise ManagerError(f"controller '{name}': type must be 'package/Class', got {type_name!r}")
                 cfg.type = type_name
             cfg.params.update(params)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from nodes.control.controller import Controller
 from nodes.control.interfaces import HardwareInterfaces, JointInfo
 
 
@@ -182,3 +183,33 @@ class FirstOrderPlant:
             else:
                 self.vel[j] += value / self.inertia * dt
                 self.pos[j] += self.vel[j] * dt
+
+
+class CrashingController(Controller):
+    """A controller whose ``update`` raises after ``crash_after`` s of sim time (type
+    ``nodes.control.testing:CrashingController``): shows the manager deactivating it while others run."""
+
+    type_name = "nodes.control.testing:CrashingController"
+
+    def on_init(self) -> None:
+        self.declare_parameter("joints", [], type=list, element_type=str)
+        self.declare_parameter("crash_after", 0.5, min_value=0.0)
+        self.declare_parameter("interface", "velocity", choices=("position", "velocity", "effort"))
+
+    def on_configure(self) -> None:
+        self.joints = list(self.get_parameter("joints"))
+        self.crash_after = self.get_parameter("crash_after")
+        self.started: float | None = None
+
+    def command_interface_configuration(self) -> list[str]:
+        return [f"{j}/{self.get_parameter('interface')}" for j in self.joints]
+
+    def on_activate(self) -> None:
+        self.started = None
+
+    def update(self, time: float, period: float) -> None:
+        if self.started is None:
+            self.started = time
+        if time - self.started > self.crash_after:
+            raise RuntimeError(f"deliberate crash after {self.crash_after} s")
+        # Claims its interfaces but writes nothing (NaN): the hardware keeps the other controllers' commands.

@@ -42,22 +42,27 @@ class Lab:
     """Simulator + controller manager for simple_robot, and a client node of the test itself."""
 
     def __init__(self, processes, router: str, activate=("joint_state_broadcaster", "joint_trajectory_controller"),
-                 sim_params: tuple[str, ...] = ()) -> None:
+                 sim_params: tuple[str, ...] = (), manager_args: tuple[str, ...] = ()) -> None:
         self.processes = processes
         self.sim = processes.start(
             "-m", "nodes.sim", "--params-file", "config/sim.yaml",
             "--param", f"entities:=[{{name: {NS}, file: simple_robot, fixed: true}}]", *sim_params, name="sim")
         self.manager = processes.start(
             "-m", "nodes.control", "--ns", NS, "--params-file", "config/controller_lab_controllers.yaml",
-            "--param", f"activate:=[{', '.join(activate)}]", name="controller_manager")
+            "--param", f"activate:=[{', '.join(activate)}]", *manager_args, name="controller_manager")
         self.node = Node("lab_test_client", connect=[router])
         self.lock = threading.Lock()
         self.states: list[tuple[float, float, float]] = []  # (sim t, position, velocity)
-        self.node.create_subscription(JointState, f"/{NS}/joint_states", self._on_state, inline=True)
-        self.action = self.node.create_action_client(FJT, f"/{JTC}/follow_joint_trajectory")
-        wait_until(lambda: self.states, timeout=60, message="joint_states from the broadcaster")
-        wait_until(lambda: "controller manager ready" in processes.output(self.manager), timeout=30,
-                   message="controller manager ready")
+        try:
+            self.node.create_subscription(JointState, f"/{NS}/joint_states", self._on_state, inline=True)
+            self.action = self.node.create_action_client(FJT, f"/{JTC}/follow_joint_trajectory")
+            wait_until(lambda: "controller manager ready" in processes.output(self.manager)
+                       or self.manager.poll() is not None, timeout=60, message="controller manager ready")
+            assert self.manager.poll() is None, processes.output(self.manager)
+            wait_until(lambda: self.states, timeout=60, message="joint_states from the broadcaster")
+        except BaseException:
+            self.node.destroy()
+            raise
 
     def _on_state(self, msg) -> None:
         with self.lock:
@@ -268,5 +273,34 @@ def test_spawner_waits_for_the_manager_and_hardware_loss_is_reported(processes, 
         handle = lab.action.send_goal(goal([(1.0, -0.5)]))
         assert handle.get_result(timeout=60)[0] == SUCCEEDED
         assert abs(lab.position + 0.5) < 0.01
+    finally:
+        lab.close()
+
+
+def test_crashing_controller_is_deactivated_while_the_others_run(processes, router, tmp_path):
+    extra = tmp_path / "crasher.yaml"
+    extra.write_text("""
+controller_manager:
+  ros__parameters:
+    crasher:
+      type: nodes.control.testing:CrashingController
+crasher:
+  ros__parameters:
+    joints: [joint1]
+    crash_after: 0.5
+""")
+    lab = Lab(processes, router, activate=("joint_state_broadcaster", "joint_trajectory_controller", "crasher"),
+              manager_args=("--params-file", str(extra)))
+    try:
+        wait_until(lambda: "controller 'crasher' deactivated: update raised RuntimeError" in lab.log(), timeout=60,
+                   message="crash report")
+        handle = lab.action.send_goal(goal([(1.0, 0.7)]))
+        assert handle.get_result(timeout=60)[0] == SUCCEEDED
+        assert abs(lab.position - 0.7) < 0.01
+        listing = _cli(lab, "list_controllers")
+        states = {line.split()[0]: line.split()[-1] for line in listing.stdout.splitlines() if not line.startswith("\t")}
+        assert states == {"joint_state_broadcaster": "active", "joint_trajectory_controller": "active",
+                          "crasher": "inactive"}
+        assert "joint1/velocity [available] [unclaimed]" in _cli(lab, "list_hardware_interfaces").stdout
     finally:
         lab.close()
