@@ -442,3 +442,40 @@ def test_lifecycle_errors_are_clear():
     assert rig.contexts["joint_trajectory_controller"].destroyed >= 1
     commands, _ = rig.manager.list_interfaces()
     assert {c["name"]: c["is_claimed"] for c in commands} == {"joint1/position": False, "joint1/velocity": False}
+
+
+def test_jtc_position_and_velocity_interfaces_and_velocity_only_with_gains():
+    both = """
+controller_manager: {ros__parameters: {update_rate: 100, jtc: {type: joint_trajectory_controller/JointTrajectoryController}}}
+jtc: {ros__parameters: {joints: [joint1], command_interfaces: [position, velocity]}}
+"""
+    rig = Rig(both, ["joint1"], ("position", "velocity"))
+    rig.spawn("jtc")
+    rig.publish("jtc/joint_trajectory", msgs.from_dict(JointTrajectory, trajectory(["joint1"], [(2.0, [1.0])])))
+    rig.step(1.0)
+    names, kinds, values = rig.sent[-1]
+    command = dict(zip(kinds, values, strict=True))
+    assert command["velocity"] == pytest.approx(0.5)  # linear segment: 1 rad over 2 s
+    assert 0.4 < command["position"] < 0.6
+
+    velocity_only = both.replace("[position, velocity]", "[velocity]") .replace(
+        "command_interfaces: [velocity]}", "command_interfaces: [velocity], gains: {joint1: {p: 5.0}}}")
+    rig = Rig(velocity_only, ["joint1"], ("position", "velocity"))
+    rig.spawn("jtc")
+    rig.publish("jtc/joint_trajectory", msgs.from_dict(JointTrajectory, trajectory(["joint1"], [(1.0, [0.8])])))
+    rig.step(3.0)
+    assert rig.sent[-1][1] == ["velocity"]
+    assert rig.plant.pos["joint1"] == pytest.approx(0.8, abs=0.01)
+
+
+def test_restart_after_hardware_reset_holds_the_new_pose_and_aborts_goals():
+    rig = lab_rig()
+    _, _, handle = rig.send_goal("joint_trajectory_controller", {"trajectory": trajectory(["joint1"], [(5.0, [1.5])])})
+    rig.step(1.0)
+    rig.plant.pos["joint1"] = -0.4  # a new simulation, somewhere else
+    rig.plant.publish_state()
+    rig.manager.restart_active("hardware reset")
+    rig.step(0.1)
+    assert handle.status == ABORTED
+    assert rig.sent[-1][2][0] == pytest.approx(-0.4, abs=0.01)
+    assert rig.manager.controllers["joint_trajectory_controller"].state == "active"

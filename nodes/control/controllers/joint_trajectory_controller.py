@@ -324,8 +324,9 @@ class JointTrajectoryController(Controller):
 
     def _write_commands(self, actual_pos: np.ndarray) -> None:
         desired = self._desired_pos
-        for loan, value in zip(self._pos_cmd, desired, strict=True):
-            loan.set_value(value)
+        if self._pos_cmd:
+            for loan, value in zip(self._pos_cmd, desired, strict=True):
+                loan.set_value(value)
         if self._vel_cmd:
             velocity = self._desired_vel
             if not self._pos_cmd:  # velocity-only joints: close the position loop with gains.<joint>.p
