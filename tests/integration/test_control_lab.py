@@ -100,6 +100,9 @@ def lab(processes, router):
 
 
 def test_follow_joint_trajectory_to_1_57_in_3_s_succeeds(lab):
+    controller_states = []
+    lab.node.create_subscription(msgs.get_type("control_msgs/msg/JointTrajectoryControllerState"),
+                                 f"/{JTC}/controller_state", controller_states.append, inline=True)
     feedback = []
     handle = lab.action.send_goal(goal([(3.0, 1.57)]), feedback_callback=feedback.append)
     assert handle.accepted
@@ -107,6 +110,11 @@ def test_follow_joint_trajectory_to_1_57_in_3_s_succeeds(lab):
     assert status == SUCCEEDED and result.error_code == 0, result
     assert abs(lab.position - 1.57) < 0.01
     assert feedback and list(feedback[-1].joint_names) == ["joint1"]
+    wait_until(lambda: controller_states, timeout=10, message="controller_state")
+    last = controller_states[-1]
+    assert list(last.joint_names) == ["joint1"]
+    assert last.reference.positions[0] == pytest.approx(1.57)
+    assert last.error.positions[0] == pytest.approx(1.57 - last.feedback.positions[0])
 
 
 def test_sine_trajectory_is_tracked_and_square_runs_to_completion(lab):
@@ -185,6 +193,12 @@ def test_invalid_trajectories_are_rejected_and_the_command_is_kept(lab):
     lab.node.session.put(f"{JTC}/joint_trajectory", msgpack.packb(nan_traj))
     wait_until(lambda: "positions" in lab.log() and "dropped a message" in lab.log(), timeout=20,
                message="NaN trajectory dropped")
+    # Malformed hardware frames are dropped with a warning; the loop goes on.
+    lab.node.session.put(f"{NS}/hardware/state", b"\xc1 not msgpack")
+    lab.node.session.put(f"{NS}/hardware/state", msgpack.packb({"step": "seven", "stamp": {"sec": 0, "nanosec": 0},
+                                                                "name": ["joint1"], "position": [0.0]}))
+    wait_until(lambda: "dropped a malformed hardware/state frame" in lab.log(), timeout=20,
+               message="malformed frame report")
     lab.wait_sim(1.0)
     assert abs(lab.position - 0.8) < 0.01
     assert lab.manager.poll() is None
