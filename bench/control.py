@@ -3,6 +3,8 @@
 1. Update cost: the manager's cycle (every active controller's ``update`` + collecting the hardware
    command) with joint_state_broadcaster + joint_trajectory_controller on the humanoid's 22 joints, the JTC
    following a trajectory and the broadcaster publishing on a real Zenoh session. Budget at 1 kHz: 1000 µs.
+   Reported as thread CPU time (the work itself; on a shared 2-core machine wall-clock percentiles mostly
+   measure preemption by other processes), with the wall-clock figures alongside.
 2. Command latency (realtime mode, three processes): a JointTrajectory published by this process to the
    first ``hardware/command`` from the controller manager process that carries it.
 
@@ -79,6 +81,7 @@ def bench_update(endpoint: str, cycles: int) -> dict[str, float]:
     zeros = [0.0] * len(joints)
     t, dt = 0.0, 0.001
     samples: list[float] = []
+    cpu_samples: list[float] = []
     try:
         for i in range(cycles):
             if i % 2000 == 0:  # a fresh 2 s trajectory with 4 points on every joint
@@ -88,14 +91,19 @@ def bench_update(endpoint: str, cycles: int) -> dict[str, float]:
             hw.read_state(joints, positions, zeros, zeros)
             host.control_time = t
             started = time.perf_counter()
+            cpu_started = time.thread_time_ns()
             manager.update(t, dt)
             manager.command()
+            cpu_samples.append((time.thread_time_ns() - cpu_started) / 1e3)
             samples.append((time.perf_counter() - started) * 1e6)
+            time.sleep(0.0002)  # leave the Zenoh threads their share, as a real 1 kHz loop would
             t += dt
     finally:
         node.destroy()
     warm = samples[len(samples) // 10:]
-    return {"p50": pct(warm, 50), "p99": pct(warm, 99), "max": max(warm), "n": len(warm)}
+    cpu = cpu_samples[len(cpu_samples) // 10:]
+    return {"p50": pct(cpu, 50), "p99": pct(cpu, 99), "wall_p50": pct(warm, 50), "wall_p99": pct(warm, 99),
+            "n": len(warm)}
 
 
 def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
@@ -177,7 +185,9 @@ def main() -> int:
     finally:
         router.close()
     rows = [
-        ("manager update (JSB + JTC, 22 joints), in-process", update["p50"], update["p99"], "1000 budget, goal p99 < 200"),
+        ("manager update (JSB + JTC, 22 joints), thread CPU time", update["p50"], update["p99"],
+         "1000 budget, goal p99 < 200"),
+        ("manager update, wall clock (includes preemption)", update["wall_p50"], update["wall_p99"], ""),
         ("manager cycle in the process (decode+update+publish)", latency["cycle_p50"], latency["cycle_p99"], ""),
         (f"JointTrajectory -> hardware/command ({latency['n']}/{latency['sent']})", latency["p50"], latency["p99"],
          "goal p50 < 1000, p99 < 3000"),
@@ -186,6 +196,7 @@ def main() -> int:
     for label, p50, p99, note in rows:
         print(f"{label:<58} {p50:>9.1f} {p99:>9.1f}  {note}")
     print(json.dumps({"update_p99_us": round(update["p99"], 1), "update_p50_us": round(update["p50"], 1),
+                      "update_wall_p99_us": round(update["wall_p99"], 1),
                       "cycle_p99_us": round(latency["cycle_p99"], 1),
                       "command_latency_p50_us": round(latency["p50"], 1),
                       "command_latency_p99_us": round(latency["p99"], 1)}))
