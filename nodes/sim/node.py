@@ -71,7 +71,7 @@ class SimulatorNode(Node):
         ground_friction = p("ground_friction", 1.0, description="Coulomb friction", min_value=0.0)
         detector = p("collision_detector", "fcl", description="fcl | dart | bullet | ode",
                      choices=COLLISION_DETECTORS)
-        self.clock_rate = p("clock_rate", 1000.0, description="sim/clock messages per simulated second",
+        self.clock_rate = p("clock_rate", 100.0, description="sim/clock messages per simulated second",
                             min_value=1.0, max_value=100000.0)
         self.state_rate = p("state_rate", 100.0, description="model_states/humanoid_state per simulated second",
                             min_value=0.1, max_value=10000.0)

@@ -154,3 +154,27 @@ def test_sim_cli_pause_step_gravity_reset(processes, node, zenoh_port):
     assert run_cli(processes, "sim", "reset", "--time", *port).returncode == 0
     assert props().sim_time < 0.5
     assert proc.poll() is None
+
+
+def test_realtime_mode_holds_latest_command_then_position(processes, node, session):
+    # the startup entity comes from a latched robot_description, as a launch file would spawn it
+    queryable = session.declare_queryable(
+        "arm/robot_description",
+        lambda query: query.reply("arm/robot_description", msgpack.packb({"data": ARM})))
+    proc = start_sim(processes, "mode:=realtime", "command_timeout:=0.3",
+                     "entities:=[{name: arm, topic: /arm/robot_description, fixed: true, z: 0.5}]")
+    props = wait_ready(node, processes, proc)
+    assert props.mode == "realtime"
+    wait_until(lambda: "spawned 'arm'" in processes.output(proc), 30, message="arm spawned from the topic")
+
+    arm = connect_controller(node, "arm", policy=lambda state: {"shoulder": 0.5, "elbow": -0.7})
+    wait_until(lambda: arm.last_state is not None and abs(arm.last_state["position"][0] - 0.5) < 0.01
+               and abs(arm.last_state["position"][1] + 0.7) < 0.01, 30, message="arm at the commanded pose")
+    arm.enabled = False                    # commands stop: the last one is held, then position is held
+    wait_until(lambda: "no hardware/command for 0.3 s; holding position" in processes.output(proc), 15,
+               message="realtime command_timeout fallback")
+    time.sleep(0.5)
+    position = arm.last_state["position"]
+    assert position[0] == pytest.approx(0.5, abs=0.02) and position[1] == pytest.approx(-0.7, abs=0.02)
+    assert proc.poll() is None
+    queryable.undeclare()
