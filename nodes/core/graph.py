@@ -54,14 +54,26 @@ def parse_key(key: str) -> GraphEntry | None:
 
 
 def snapshot(session: zenoh.Session, timeout: float = 1.0) -> list[GraphEntry]:
-    """Every live graph entry (nodes and endpoints) visible from ``session``."""
-    entries = []
-    for reply in session.liveliness().get(f"{ROOT}/**", timeout=timeout):
-        if reply.ok is not None:
-            entry = parse_key(str(reply.ok.key_expr))
-            if entry:
-                entries.append(entry)
-    return entries
+    """Every live graph entry (nodes and endpoints) visible from ``session``.
+
+    A session opened a moment ago may not see all of the router's tokens yet (routes take a few ms to
+    form), so the query is repeated until two answers in a row agree (or ``timeout`` passes).
+    """
+    import time
+
+    deadline = time.monotonic() + timeout
+    previous: set[GraphEntry] | None = None
+    while True:
+        entries: set[GraphEntry] = set()
+        for reply in session.liveliness().get(f"{ROOT}/**", timeout=max(0.05, deadline - time.monotonic())):
+            if reply.ok is not None:
+                entry = parse_key(str(reply.ok.key_expr))
+                if entry:
+                    entries.add(entry)
+        if (entries and entries == previous) or time.monotonic() >= deadline:
+            return sorted(entries, key=lambda e: (e.kind, e.node, e.name))
+        previous = entries
+        time.sleep(0.03)
 
 
 def node_names(session: zenoh.Session, timeout: float = 1.0) -> list[str]:

@@ -190,3 +190,13 @@ def test_cli_topic_pub_echo_and_list(echo, router) -> None:
     assert "/echo/out/sensor_msgs/msg/JointState [sensor_msgs/msg/JointState]" in listed.stdout
     bad = cli(router, "topic", "pub", "/x", "sensor_msgs/msg/JointState", "{name: [a], position: [1, 2]}")
     assert bad.returncode == 2 and "position: has 2 entries but name has 1" in bad.stderr
+
+
+def test_graph_and_doctor_verbs(echo, router) -> None:
+    out = cli(router, "graph").stdout
+    assert "/echo/in/sensor_msgs/msg/JointState" in out and "subscribers: /echo" in out
+    dot = cli(router, "graph", "--dot").stdout
+    assert dot.startswith("digraph") and '"/echo" -> "/echo/out/sensor_msgs/msg/JointState"' in dot
+    doctor = cli(router, "doctor")
+    assert doctor.returncode == 0, doctor.stdout
+    assert "router reachable" in doctor.stdout and "/echo" in doctor.stdout
