@@ -228,3 +228,23 @@ def test_convex_hull_and_point_in_polygon():
     assert inside_polygon((1.0, 0.5), square)            # on an edge
     assert not inside_polygon((1.1, 0.5), square)
     assert not inside_polygon((0.5, 0.5), [(0, 0), (1, 0)])   # a line has no inside
+
+
+@pytest.mark.parametrize("detector", ["fcl", "dart", "bullet", "ode"])
+def test_every_collision_detector_holds_the_humanoid_on_the_ground(detector):
+    world = PhysicsWorld(1000.0, (0.0, 0.0, -9.81), detector)
+    world.add_ground()
+    sim = Simulation(world, parse_gains({"*": {"p": 2000.0, "d": 20.0}}))
+    try:
+        sim.spawn(EntitySpec("humanoid", HUMANOID, pose=Pose.from_xyz_rpy(0, 0, 0.915)))
+        sim.step(500)
+        assert sim.entities["humanoid"].world_pose().position[2] == pytest.approx(0.91, abs=0.01)
+        assert sim.balance("humanoid").is_balanced
+        assert world.collision_detector == detector
+    finally:
+        sim.clear()
+
+
+def test_unknown_collision_detector_is_rejected():
+    with pytest.raises(ValueError, match="collision_detector 'physx'"):
+        PhysicsWorld(1000.0, collision_detector="physx")
