@@ -257,8 +257,8 @@ class ControllerManagerNode(Node):
         silent = time.monotonic() - self._last_state_wall
         if not self._lost and silent > self.hardware_timeout:
             self._lost = True
-            self.logger.error(f"lost the hardware: no hardware/state for {silent:.1f} s; controllers keep their "
-                              "state and resume when it returns")
+            self.logger.error(f"lost the hardware: no hardware/state for {silent:.1f} s (simulator paused or "
+                              "gone?); controllers keep their state and resume when it returns")
 
     # --- services (executor thread) ---------------------------------------------------------------------
     def _srv_list(self, _request: Any) -> Any:
