@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from nodes.control.trajectory import TrajectoryError, validate_trajectory
 
@@ -107,3 +109,42 @@ def test_stamped_trajectory_in_the_future_waits_at_its_start_state():
     t.set_start_state(np.array([0.3, 0.3]), np.zeros(2))
     s = t.sample(15.0)
     assert s.before_start and np.allclose(s.positions, [0.3, 0.3])
+
+
+finite = st.floats(-3.0, 3.0, allow_nan=False)
+
+
+def _random_trajectory(data, with_velocity: bool, with_acceleration: bool):
+    n = data.draw(st.integers(1, 6))
+    gaps = data.draw(st.lists(st.floats(0.05, 2.0), min_size=n, max_size=n))
+    times = np.cumsum(gaps)
+    points = []
+    for t in times:
+        p = {"positions": [data.draw(finite), data.draw(finite)],
+             "time_from_start": {"sec": int(t), "nanosec": int(round((t % 1) * 1e9)) % 1_000_000_000}}
+        if with_velocity:
+            p["velocities"] = [data.draw(finite), data.draw(finite)]
+        if with_acceleration:
+            p["accelerations"] = [data.draw(finite), data.draw(finite)]
+        points.append(p)
+    return traj(points)
+
+
+@pytest.mark.parametrize("with_velocity, with_acceleration", [(False, False), (True, False), (True, True)])
+def test_interpolation_passes_through_every_point_and_is_continuous(with_velocity, with_acceleration):
+    @settings(max_examples=60, deadline=None)
+    @given(st.data())
+    def check(data):
+        t = validate_trajectory(_random_trajectory(data, with_velocity, with_acceleration), JOINTS, now=0.0)
+        start = np.array([data.draw(finite), data.draw(finite)])
+        t.set_start_state(start, np.zeros(2))
+        assert np.allclose(t.sample(0.0).positions, start)  # no jump at the start
+        eps = 1e-7
+        for k, knot in enumerate(t.times):
+            assert np.allclose(t.sample(float(knot)).positions, t.positions[k], atol=1e-6)
+            left, right = t.sample(float(knot) - eps), t.sample(float(knot) + eps)
+            assert np.allclose(left.positions, right.positions, atol=1e-4)  # continuous position
+            if with_velocity and k < len(t.times) - 1:
+                assert np.allclose(left.velocities, right.velocities, atol=1e-2)  # and velocity
+
+    check()
