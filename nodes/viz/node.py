@@ -87,7 +87,7 @@ class Visualiser(Node):
             "joint_states": p("joint_states_rate", 100.0, description="Hz", min_value=0.0),
             "tf": p("tf_rate", 30.0, description="Hz", min_value=0.0),
             "model_states": p("model_states_rate", 30.0, description="Hz", min_value=0.0),
-            "controller_state": p("controller_state_rate", 50.0, description="Hz", min_value=0.0),
+            "controller_state": p("controller_state_rate", 25.0, description="Hz", min_value=0.0),
             "humanoid_state": p("humanoid_state_rate", 30.0, description="Hz", min_value=0.0),
             "markers": p("marker_rate", 10.0, description="Hz", min_value=0.0),
         }
@@ -95,6 +95,9 @@ class Visualiser(Node):
                                    description="s of joint_states without tf before frames come from our FK")
 
         self.sim_now = 0.0
+        # Subscriptions run inline on Zenoh's threads (no executor queue to lag behind) and check their rate
+        # limit before decoding, so dropped samples cost almost nothing; this lock serialises the handlers.
+        self.lock = threading.Lock()
         self.robots: dict[str, RobotView] = {}
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()  # work from the discovery thread
         self.layout_key: tuple = ()
@@ -113,8 +116,10 @@ class Visualiser(Node):
             print(f"Rerun web viewer: {self.output.viewer_url}", flush=True)
         log_ground(self.recording)
 
-        self.create_subscription(Clock, "/sim/clock", self.on_clock, inline=True)
-        self.create_subscription(ModelStates, "/sim/model_states", self.on_model_states)
+        self.clock_limit = RateLimiter(10.0)  # sim/clock runs at the physics rate: 10 Hz is plenty for us
+        self.model_states_limit = RateLimiter(self.rates["model_states"])
+        self.subscribe(Clock, "/sim/clock", self.on_clock, self.clock_limit)
+        self.subscribe(ModelStates, "/sim/model_states", self.on_model_states, self.model_states_limit)
         for namespace in self.robot_list:
             self.add_robot(namespace)
         self.create_timer(0.1, self.drain_inbox, sim_time=False)
@@ -122,20 +127,43 @@ class Visualiser(Node):
         self.discovery = threading.Thread(target=self.discovery_loop, name="viz-discovery", daemon=True)
         self.discovery.start()
 
+    def subscribe(self, msg_type: Any, key: str, handler, limiter: RateLimiter | None = None,
+                  on_arrival=None) -> Subscription:
+        """A raw inline subscription: rate check first, then decode (errors name the field), then handle."""
+
+        def on_payload(payload: bytes) -> None:
+            with self.lock:
+                if on_arrival is not None:
+                    on_arrival()
+                if limiter is not None and not limiter.ready():
+                    return
+                try:
+                    msg = msgs.decode(msg_type, payload)
+                except msgs.DecodeError as exc:
+                    self.logger.warn_throttle(5.0, f"dropped a message on '{key.lstrip('/')}': {exc}", key=f"dec:{key}")
+                    return
+                handler(msg)
+
+        return self.create_subscription(msg_type, key, on_payload, inline=True, raw=True)
+
     # -- robots --------------------------------------------------------------------------------------
     def add_robot(self, namespace: str) -> RobotView:
         if namespace in self.robots:
             return self.robots[namespace]
         robot = RobotView(namespace)
         robot.limits = {stream: RateLimiter(hz) for stream, hz in self.rates.items()}
+        robot.limits["fk"] = RateLimiter(self.rates["tf"])
         self.robots[namespace] = robot
-        sub = self.create_subscription
+        sub, limits, ns = self.subscribe, robot.limits, namespace
         robot.subscriptions += [
-            sub(String, f"/{namespace}/robot_description", lambda m, r=robot: self.on_description(r, m.data)),
-            sub(TFMessage, f"/{namespace}/tf", lambda m, r=robot: self.on_tf(r, m, static=False)),
-            sub(TFMessage, f"/{namespace}/tf_static", lambda m, r=robot: self.on_tf(r, m, static=True)),
-            sub(JointState, f"/{namespace}/joint_states", lambda m, r=robot: self.on_joint_states(r, m)),
-            sub(HumanoidState, f"/{namespace}/humanoid_state", lambda m, r=robot: self.on_humanoid_state(r, m)),
+            sub(String, f"/{ns}/robot_description", lambda m, r=robot: self.on_description(r, m.data)),
+            sub(TFMessage, f"/{ns}/tf", lambda m, r=robot: self.on_tf(r, m, static=False), limits["tf"],
+                on_arrival=lambda r=robot: setattr(r, "tf_seen", True)),
+            sub(TFMessage, f"/{ns}/tf_static", lambda m, r=robot: self.on_tf(r, m, static=True)),
+            sub(JointState, f"/{ns}/joint_states", lambda m, r=robot: self.on_joint_states(r, m),
+                limits["joint_states"]),
+            sub(HumanoidState, f"/{ns}/humanoid_state", lambda m, r=robot: self.on_humanoid_state(r, m),
+                limits["humanoid_state"], on_arrival=lambda r=robot: setattr(r, "has_balance", True)),
         ]
         for controller in self.controller_names:
             self.add_controller(robot, controller)
@@ -147,10 +175,11 @@ class Visualiser(Node):
             return
         base = f"/{robot.namespace}/{controller}"
         robot.controllers[controller] = [
-            self.create_subscription(ControllerState, f"{base}/controller_state",
-                                     lambda m, r=robot, c=controller: self.on_controller_state(r, c, m)),
-            self.create_subscription(JointTrajectory, f"{base}/joint_trajectory",
-                                     lambda m, r=robot, c=controller: self.on_trajectory(r, c, m)),
+            self.subscribe(ControllerState, f"{base}/controller_state",
+                           lambda m, r=robot, c=controller: self.on_controller_state(r, c, m),
+                           RateLimiter(self.rates["controller_state"])),
+            self.subscribe(JointTrajectory, f"{base}/joint_trajectory",
+                           lambda m, r=robot, c=controller: self.on_trajectory(r, c, m)),
         ]
 
     def on_description(self, robot: RobotView, xml_text: str) -> None:
@@ -196,7 +225,10 @@ class Visualiser(Node):
 
     def stamp_or_now(self, stamp: Any) -> float:
         seconds = stamp_seconds(stamp)
-        return seconds if seconds > 0 else self.sim_now
+        if seconds <= 0:
+            return self.sim_now
+        self.sim_now = seconds  # stamps keep sim time current between the (rate-limited) clock samples
+        return seconds
 
     def on_model_states(self, msg: Any) -> None:
         if len(msg.pose) != len(msg.name):
@@ -217,7 +249,7 @@ class Visualiser(Node):
                 self.set_present(robot, False)
         for name, pose in zip(msg.name, msg.pose, strict=True):
             robot = self.robots.get(name)
-            if robot is None or robot.scene is None or not robot.limits["model_states"].ready():
+            if robot is None or robot.scene is None:
                 continue
             position = (pose.position.x, pose.position.y, pose.position.z)
             orientation = (pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)
@@ -226,10 +258,6 @@ class Visualiser(Node):
     def on_tf(self, robot: RobotView, msg: Any, static: bool) -> None:
         if not msg.transforms:
             return
-        if not static:
-            robot.tf_seen = True
-            if not robot.limits["tf"].ready():
-                return
         rows = []
         for t in msg.transforms:
             tr, q = t.transform.translation, t.transform.rotation
@@ -264,16 +292,15 @@ class Visualiser(Node):
         if scene is None:
             return
         scene.positions.update(positions)
-        if robot.limits["joint_states"].ready():
-            scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort)
-        if not robot.tf_seen and when >= self.tf_fallback_after and robot.limits["tf"].ready():
+        scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort)
+        if not robot.tf_seen and when >= self.tf_fallback_after and robot.limits["fk"].ready():
             scene.log_fk_transforms(when, scene.positions)
         if robot.limits["markers"].ready():
             scene.log_paths(when)
 
     def on_controller_state(self, robot: RobotView, controller: str, msg: Any) -> None:
         scene = robot.scene
-        if scene is None or not robot.limits["controller_state"].ready():
+        if scene is None:
             return
         # Humble fills reference/feedback, older controllers desired/actual: take whichever is set.
         commanded = msg.reference.positions or msg.desired.positions
@@ -303,8 +330,7 @@ class Visualiser(Node):
                                {j: v for j, v in zip(msg.joint_names, last, strict=True) if j not in unknown})
 
     def on_humanoid_state(self, robot: RobotView, msg: Any) -> None:
-        robot.has_balance = True
-        if robot.scene is None or not robot.limits["humanoid_state"].ready():
+        if robot.scene is None:
             return
         com = (msg.center_of_mass.x, msg.center_of_mass.y, msg.center_of_mass.z)
         polygon = [(p.x, p.y, p.z) for p in msg.support_polygon]
@@ -351,6 +377,10 @@ class Visualiser(Node):
             self.inbox.put(("tf_static", namespace, static))
 
     def drain_inbox(self) -> None:
+        with self.lock:
+            self._drain_inbox()
+
+    def _drain_inbox(self) -> None:
         while True:
             try:
                 item = self.inbox.get_nowait()

@@ -17,6 +17,7 @@ import pyarrow as pa
 from rerun.chunk import RrdReader
 
 SIM = "sim_time"
+WALL_TIMELINES = ("log_time", "wall_time")  # epoch timestamps, kept as seconds
 
 
 @dataclass
@@ -49,12 +50,11 @@ def load(path: str | Path) -> dict[str, EntityData]:
                 if values:
                     entity.static[name] = values[-1]
             continue
-        times = _as_seconds(batch.column(SIM)) if SIM in batch.schema.names else [None] * batch.num_rows
+        timelines = {t: _as_seconds(batch.column(t)) for t in (SIM, *WALL_TIMELINES) if t in batch.schema.names}
         columns = {name: batch.column(name).to_pylist() for name in names}
         for i in range(batch.num_rows):
             row: dict[str, Any] = {name: values[i] for name, values in columns.items()}
-            if times[i] is not None:
-                row[SIM] = times[i]
+            row.update({t: values[i] for t, values in timelines.items() if values[i] is not None})
             entity.rows.append(row)
     for entity in entities.values():
         entity.rows.sort(key=lambda r: r.get(SIM, -1.0))

@@ -1,0 +1,145 @@
+"""Visualiser cost: CPU share of ``python -m nodes.viz`` and the lag from a joint_states stamp to its logging.
+
+    python bench/viz.py [--source humanoid|feeder] [--seconds 10] [--zenoh-port N]
+
+``humanoid`` (default): the main job (``launch/humanoid.yaml``, realtime, 1 kHz controller manager,
+joint_states at 100 Hz, the joint commander) plus the visualiser saving an .rrd. The lag of a sample is its
+Rerun ``log_time`` minus its sim-time stamp mapped to the wall clock; the mapping (sim clock offset and any
+drift of realtime mode) is the smallest such difference within +-0.5 s, so the figure is the lag above the
+transport floor (~0.2 ms, FACTS). ``feeder``: ``nodes.viz.feeder`` stamps joint_states with the wall clock
+at 100 Hz, so the lag is exact. Prints a table, then one JSON line: ``cpu_percent`` (of one core, averaged
+over the window), ``lag_p99_ms``, ``lag_p50_ms``, ``joint_states_hz``. Goals: < 25 %, p99 < 50 ms.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import psutil
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from nodes.viz.readback import load  # noqa: E402
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_for(path: Path, text: str, timeout: float) -> None:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if path.exists() and text in path.read_text(errors="replace"):
+            return
+        time.sleep(0.1)
+    raise SystemExit(f"timed out waiting for '{text}' in {path}")
+
+
+def stop(proc: subprocess.Popen, timeout: float = 20.0) -> None:
+    if proc.poll() is None:
+        os.killpg(proc.pid, signal.SIGINT)
+    try:
+        proc.wait(timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+
+
+def lags_ms(rows: list[dict], exact: bool) -> np.ndarray:
+    log = np.array([r["log_time"] for r in rows])
+    stamp = np.array([r["sim_time"] for r in rows])
+    diff = log - stamp
+    if exact:
+        return diff * 1e3
+    floor = np.array([diff[(stamp >= s - 0.5) & (stamp <= s + 0.5)].min() for s in stamp])
+    return (diff - floor) * 1e3
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--source", choices=("humanoid", "feeder"), default="humanoid")
+    parser.add_argument("--seconds", type=float, default=10.0, help="measurement window")
+    parser.add_argument("--zenoh-port", type=int, default=0)
+    args = parser.parse_args()
+    port = args.zenoh_port or free_port()
+    work = Path(tempfile.mkdtemp(prefix="bench_viz_"))
+    env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
+    for name in ("ZENOH_CONFIG", "ZENOH_CONNECT"):  # else the launcher skips its embedded router
+        env.pop(name, None)
+
+    def start(name: str, *argv: str) -> tuple[subprocess.Popen, Path]:
+        log = work / f"{name}.log"
+        proc = subprocess.Popen([sys.executable, *argv], cwd=ROOT, env=env, stdout=open(log, "wb"),
+                                stderr=subprocess.STDOUT, start_new_session=True)
+        return proc, log
+
+    procs: list[subprocess.Popen] = []
+    try:
+        if args.source == "humanoid":
+            launch, launch_log = start("launch", "-m", "launch", "humanoid.yaml", "gui:=false", "mode:=realtime",
+                                       f"zenoh_port:={port}")
+            procs.append(launch)
+            wait_for(launch_log, "started 'joint_commander'", 90)
+        else:
+            router, _ = start("router", "-c", "import time\nfrom nodes.core.session import open_router\n"
+                              f"s = open_router({port})\ntime.sleep(3600)")
+            procs.append(router)
+            time.sleep(1.0)
+            sp, _ = start("state_publisher", "-m", "nodes.state_publisher", "--ns", "humanoid", "--zenoh-port",
+                          str(port), "--param", f"robot_description_file:={ROOT / 'robots' / 'humanoid.urdf'}")
+            feeder, _ = start("feeder", "-m", "nodes.viz.feeder", "--param", "stamp:=wall", "--zenoh-port", str(port))
+            procs += [sp, feeder]
+        rrd = work / "bench.rrd"
+        viz, viz_log = start("viz", "-m", "nodes.viz", "--save", str(rrd), "--robots", "humanoid",
+                             "--zenoh-port", str(port))
+        procs.append(viz)
+        wait_for(viz_log, "23 visuals", 60)
+        time.sleep(3.0)  # settle: discovery, first blueprint, caches
+        process = psutil.Process(viz.pid)
+        cpu_before, wall_before = process.cpu_times(), time.monotonic()
+        time.sleep(args.seconds)
+        cpu_after, wall_after = process.cpu_times(), time.monotonic()
+        window = (time.time() - args.seconds, time.time())
+        stop(viz)
+        cpu = ((cpu_after.user + cpu_after.system) - (cpu_before.user + cpu_before.system))
+        cpu_percent = 100.0 * cpu / (wall_after - wall_before)
+        rows = [r for r in load(rrd)["plots/humanoid/joint_states/position"].rows
+                if "log_time" in r and window[0] <= r["log_time"] <= window[1]]
+        if len(rows) < 10:
+            raise SystemExit(f"only {len(rows)} joint_states rows logged in the window; logs in {work}")
+        lag = lags_ms(rows, exact=args.source == "feeder")
+        rate = len(rows) / args.seconds
+    finally:
+        for proc in reversed(procs):
+            stop(proc)
+
+    result = {"source": args.source, "seconds": args.seconds, "cpu_percent": round(cpu_percent, 1),
+              "lag_p50_ms": round(float(np.percentile(lag, 50)), 2),
+              "lag_p99_ms": round(float(np.percentile(lag, 99)), 2),
+              "lag_max_ms": round(float(lag.max()), 2), "joint_states_hz": round(rate, 1),
+              "goal_cpu_percent": 25, "goal_lag_p99_ms": 50}
+    print(f"{'metric':<22}{'value':>10}{'goal':>10}")
+    print(f"{'viz CPU (% of 1 core)':<22}{result['cpu_percent']:>10}{'< 25':>10}")
+    print(f"{'lag p50 (ms)':<22}{result['lag_p50_ms']:>10}{'':>10}")
+    print(f"{'lag p99 (ms)':<22}{result['lag_p99_ms']:>10}{'< 50':>10}")
+    print(f"{'lag max (ms)':<22}{result['lag_max_ms']:>10}{'':>10}")
+    print(f"{'joint_states logged/s':<22}{result['joint_states_hz']:>10}{'~100':>10}")
+    print(json.dumps(result))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
