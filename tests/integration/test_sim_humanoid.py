@@ -5,6 +5,7 @@ without gravity and ground, determinism, and the fallback when the controller di
 from __future__ import annotations
 
 import math
+import signal
 import threading
 import time
 
@@ -121,6 +122,15 @@ def test_lockstep_is_deterministic_and_controller_loss_falls_back_to_hold(proces
     assert first == second, "two lockstep runs with the same commands differ"
     knee = client.last_state["name"].index("left_knee")
     assert first[steps][knee] > 0.3          # the scenario did move the robot
+
+    # a fresh simulator process replays it bit-identically too
+    proc.send_signal(signal.SIGINT)
+    assert proc.wait(30) == 0
+    proc = start_sim(processes, HUMANOID_ENTITY, name="sim2")
+    wait_ready(node, processes, proc)
+    client.reset_recording()
+    wait_until(lambda: client.states > 50, 30, message="lockstep states from the second simulator")
+    assert run_once() == first, "a second simulator process gave a different trajectory"
 
     # the controller manager goes away: the simulator must not hang, it holds position and says so
     client.enabled = False
