@@ -252,10 +252,9 @@ class Node:
                     timer.next_due = t + timer.period
         self._sim_now = t
         self._have_clock = True
-        self._enqueue(self._run_sim_timers)
+        self._enqueue(lambda: self._run_sim_timers(t))  # each clock message checks timers at its own time
 
-    def _run_sim_timers(self) -> None:
-        now = self._sim_now
+    def _run_sim_timers(self, now: float) -> None:
         with self._timer_lock:
             self._sim_timers = [t for t in self._sim_timers if not t.cancelled]
             due = [t for t in self._sim_timers if t.next_due <= now + 1e-12]

@@ -200,3 +200,30 @@ def test_graph_and_doctor_verbs(echo, router) -> None:
     doctor = cli(router, "doctor")
     assert doctor.returncode == 0, doctor.stdout
     assert "router reachable" in doctor.stdout and "/echo" in doctor.stdout
+
+
+def test_timers_follow_sim_clock(router, client) -> None:
+    Clock = msgs.get_type("rosgraph_msgs/msg/Clock")
+    node = Node("sim_timer", connect=[router], params={"use_sim_time": True})
+    try:
+        ticks: list[float] = []
+        node.create_timer(0.1, lambda: ticks.append(node.now()))
+        clock = client.create_publisher(Clock, "/sim/clock")
+        time.sleep(0.3)
+
+        def advance_to(t: float) -> None:
+            clock.publish(Clock(clock=msgs.time_from_sec(t)))
+            wait_until(lambda: [node.spin_once(0.005)] and abs(node.now() - t) < 1e-9, timeout=5,
+                       message=f"clock at {t}")
+            while node.spin_once(0.0):
+                pass
+
+        for step in range(1, 51):  # 0.5 s of sim time, each step delivered before the next
+            advance_to(step * 0.01)
+        assert [round(t, 2) for t in ticks] == [0.1, 0.2, 0.3, 0.4, 0.5]
+        # a reset (time jumps back) restarts the timers instead of stalling them
+        for step in range(0, 16):
+            advance_to(step * 0.01)
+        assert [round(t, 2) for t in ticks[5:]] == [0.1]
+    finally:
+        node.destroy()
