@@ -61,6 +61,8 @@ class ControllerManager:
         self.claims: dict[str, str] = {}  # command interface -> controller name
         self._active: list[ControllerEntry] = []
         self._claimed_slots: list[tuple[str, str, Any]] = []
+        self._claimed_names: list[str] = []
+        self._claimed_kinds: list[str] = []
 
     # --- lifecycle --------------------------------------------------------------------------------
     def set_controller_params(self, name: str, params: dict[str, Any]) -> None:
@@ -266,6 +268,8 @@ class ControllerManager:
             joint, kind = split_interface(iface)
             slots.append((joint, kind, self.hardware._command[iface]))
         self._claimed_slots = slots
+        self._claimed_names = [joint for joint, _, _ in slots]
+        self._claimed_kinds = [kind for _, kind, _ in slots]
 
     def _get(self, name: str) -> ControllerEntry:
         entry = self.controllers.get(name)
@@ -295,16 +299,12 @@ class ControllerManager:
 
     def command(self) -> tuple[list[str], list[str], list[float]]:
         """Finite values of claimed command interfaces, for ``hardware/command``."""
-        names: list[str] = []
-        kinds: list[str] = []
-        values: list[float] = []
-        for joint, kind, slot in self._claimed_slots:
-            value = slot.value
-            if value == value:  # NaN: the controller has not commanded this interface yet
-                names.append(joint)
-                kinds.append(kind)
-                values.append(value)
-        return names, kinds, values
+        values = [slot.value for _, _, slot in self._claimed_slots]
+        if all(v == v for v in values):  # the usual case: every claimed interface commanded
+            return self._claimed_names, self._claimed_kinds, values
+        keep = [i for i, v in enumerate(values) if v == v]  # NaN: not commanded yet, leave it out
+        return ([self._claimed_names[i] for i in keep], [self._claimed_kinds[i] for i in keep],
+                [values[i] for i in keep])
 
     # --- introspection ------------------------------------------------------------------------------
     def list_controllers(self) -> list[dict[str, Any]]:

@@ -8,6 +8,7 @@ import math
 import msgpack
 
 from nodes.control.controller import Controller, ControllerError
+from nodes.control.interfaces import read_values
 from nodes.control.messages import msg_type
 
 
@@ -60,7 +61,7 @@ class JointStateBroadcaster(Controller):
         if self._period and time - self._last_publish < self._period - 1e-9:
             return
         self._last_publish = time
-        values = {k: [loan.get_value() for loan in loans] for k, loans in self._loans.items()}
+        values = {k: read_values(loans) for k, loans in self._loans.items()}
         if any(v != v for v in values.get("position", ())):  # NaN: no state has arrived yet
             return
         sec = int(time // 1)

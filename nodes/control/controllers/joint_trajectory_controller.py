@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from nodes.control.controller import Controller, ControllerError
+from nodes.control.interfaces import read_values, write_values
 from nodes.control.messages import build, sec_to_time
 from nodes.control.trajectory import Trajectory, TrajectoryError, duration_to_sec, validate_trajectory
 
@@ -231,8 +232,8 @@ class JointTrajectoryController(Controller):
 
     # --- real-time loop -----------------------------------------------------------------------------
     def update(self, time: float, period: float) -> None:
-        actual_pos = np.fromiter((s.get_value() for s in self._pos_state), float, len(self.joints))
-        actual_vel = np.fromiter((s.get_value() for s in self._vel_state), float, len(self.joints))
+        actual_pos = np.array(read_values(self._pos_state))
+        actual_vel = np.array(read_values(self._vel_state))
         if self._desired_pos is None:
             if not np.all(np.isfinite(actual_pos)):
                 return  # no state yet: command nothing
@@ -325,14 +326,12 @@ class JointTrajectoryController(Controller):
     def _write_commands(self, actual_pos: np.ndarray) -> None:
         desired = self._desired_pos
         if self._pos_cmd:
-            for loan, value in zip(self._pos_cmd, desired, strict=True):
-                loan.set_value(value)
+            write_values(self._pos_cmd, desired.tolist())
         if self._vel_cmd:
             velocity = self._desired_vel
             if not self._pos_cmd:  # velocity-only joints: close the position loop with gains.<joint>.p
                 velocity = velocity + self.velocity_gains * (desired - actual_pos)
-            for loan, value in zip(self._vel_cmd, velocity, strict=True):
-                loan.set_value(value)
+            write_values(self._vel_cmd, velocity.tolist())
 
     # --- goal bookkeeping ---------------------------------------------------------------------------
     def _finish_goal(self, how: str, code: int, text: str) -> None:
