@@ -108,7 +108,8 @@ class Entity:
         uri = dart.common.Uri(spec.base_uri or "file:///")
         skeleton = loader.parseSkeletonString(spec.xml, uri, dart.common.LocalResourceRetriever(), flags)
         if skeleton is None:
-            raise SpawnError(f"DART could not load the URDF of {spec.name!r} (see the simulator log)")
+            raise SpawnError(f"DART could not load the URDF of {spec.name!r} (a mesh file that cannot be read? "
+                             "see the simulator log)")
         return skeleton
 
     def _place(self, pose: Pose) -> None:

@@ -92,6 +92,42 @@ def _param_value(element: etree._Element) -> float:
     return value
 
 
+# Numeric attributes DART reads: (element, attribute) -> how many numbers. Checked up front because DART
+# reports them without a line (or, for NaN geometry, misbehaves later).
+NUMERIC_ATTRIBUTES = {
+    ("origin", "xyz"): 3, ("origin", "rpy"): 3, ("axis", "xyz"): 3, ("mass", "value"): 1,
+    **{("inertia", k): 1 for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")},
+    ("box", "size"): 3, ("cylinder", "radius"): 1, ("cylinder", "length"): 1, ("sphere", "radius"): 1,
+    ("mesh", "scale"): 3,
+}
+NON_NEGATIVE = {("mass", "value"), ("box", "size"), ("cylinder", "radius"), ("cylinder", "length"),
+                ("sphere", "radius")}
+
+
+def _check_numbers(root: etree._Element) -> None:
+    for element in root.iter():
+        if not isinstance(element.tag, str):
+            continue
+        for attr, raw in element.attrib.items():
+            count = NUMERIC_ATTRIBUTES.get((element.tag, attr))
+            if count is None:
+                continue
+            parts = raw.split()
+            try:
+                values = [float(p) for p in parts]
+            except ValueError:
+                values = []
+            if len(values) != count:
+                raise UrdfError(f"{_where(element)}: <{element.tag}> {attr}={raw!r} must be {count} number(s)")
+            if not all(math.isfinite(v) for v in values):
+                raise UrdfError(f"{_where(element)}: <{element.tag}> {attr}={raw!r} is not finite")
+            if (element.tag, attr) in NON_NEGATIVE and any(v < 0 for v in values):
+                raise UrdfError(f"{_where(element)}: <{element.tag}> {attr}={raw!r} must not be negative")
+        if element.tag == "mesh" and (element.get("filename") or "").startswith("package://"):
+            raise UrdfError(f"{_where(element)}: mesh {element.get('filename')!r}: package:// needs ROS; "
+                            "use a path relative to the URDF file")
+
+
 def parse_urdf(xml: str) -> RobotInfo:
     """Parse and check a URDF string; raises ``UrdfError`` naming the offending line."""
     if not isinstance(xml, str) or not xml.strip():
@@ -107,6 +143,7 @@ def parse_urdf(xml: str) -> RobotInfo:
     if not name:
         raise UrdfError(f"{_where(root)}: <robot> has no name")
 
+    _check_numbers(root)
     links: list[str] = []
     for link in root.findall("link"):
         link_name = link.get("name")

@@ -56,6 +56,11 @@ def test_without_ros2_control_every_movable_joint_gets_position_control():
     (lambda x: x.replace('<command_interface name="position"/>', '<command_interface name="torque"/>'), "torque"),
     (lambda x: x.replace('<joint name="elbow">', '<joint name="wrist">'), "'wrist'"),
     (lambda x: x.replace('<param name="min">-0.8</param>', '<param name="min">nan</param>'), "NaN"),
+    (lambda x: x.replace('<origin xyz="0 0 0.3"/>', '<origin xyz="0 0 nan"/>'), "not finite"),
+    (lambda x: x.replace('<origin xyz="0 0 0.3"/>', '<origin xyz="0 0"/>'), "3 number(s)"),
+    (lambda x: x.replace('<mass value="0.5"/>', '<mass value="-1"/>'), "negative"),
+    (lambda x: x.replace('<box size="0.2 0.2 0.1"/></geometry></collision>',
+                         '<mesh filename="package://arm/x.stl"/></geometry></collision>'), "package://"),
     (lambda x: "", "empty"),
 ])
 def test_bad_urdf_errors_name_line_and_reason(mutate, expected):
