@@ -193,6 +193,14 @@ def test_jtc_holds_position_on_activation_and_goal_reaches_target():
     assert handle.feedback and list(handle.feedback[-1].joint_names) == ["joint1"]
     # feedback at action_monitor_rate (20 Hz) over ~3 s of sim time
     assert 40 <= len(handle.feedback) <= 80
+    assert handle.feedback[-1].error.positions[0] == pytest.approx(
+        handle.feedback[-1].desired.positions[0] - handle.feedback[-1].actual.positions[0])
+    # controller_state at state_publish_rate (50 Hz over 3.55 s), decodable as its type
+    states = rig.contexts["joint_trajectory_controller"].publishers["joint_trajectory_controller/controller_state"]
+    assert 170 <= len(states.messages) <= 180
+    last = states.messages[-1]
+    assert list(last.joint_names) == ["joint1"] and last.reference.positions[0] == pytest.approx(1.57)
+    assert last.feedback.positions[0] == pytest.approx(rig.plant.pos["joint1"], abs=0.01)
 
 
 def test_jtc_first_command_after_a_new_trajectory_continues_the_previous_one():

@@ -9,11 +9,12 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import msgpack
 import numpy as np
 
 from nodes.control.controller import Controller, ControllerError
 from nodes.control.interfaces import read_values, write_values
-from nodes.control.messages import build, sec_to_time
+from nodes.control.messages import sec_to_time
 from nodes.control.trajectory import Trajectory, TrajectoryError, duration_to_sec, validate_trajectory
 
 # control_msgs/FollowJointTrajectory.Result error codes
@@ -250,7 +251,7 @@ class JointTrajectoryController(Controller):
                 self._follow(active, time, actual_pos, actual_vel)
 
         self._write_commands(actual_pos)
-        if time - self._last_state_pub >= self.state_period:
+        if time - self._last_state_pub >= self.state_period - 1e-6:  # float ticks: 0.01 * 2 < 0.02
             self._last_state_pub = time
             self._publish_state(time, actual_pos, actual_vel)
 
@@ -294,7 +295,7 @@ class JointTrajectoryController(Controller):
             return
         tol = active.tolerances
         pos_err = sample.positions - actual_pos[idx]
-        if time - active.last_feedback >= self.feedback_period:
+        if time - active.last_feedback >= self.feedback_period - 1e-6:
             active.last_feedback = time
             self._publish_feedback(goal, time, sample, actual_pos[idx], actual_vel[idx])
         if not sample.past_end:
@@ -364,18 +365,16 @@ class JointTrajectoryController(Controller):
             self.logger.warn(f"{self.name}: feedback not sent: {exc}")
 
     def _publish_state(self, time: float, actual_pos: np.ndarray, actual_vel: np.ndarray) -> None:
-        desired = _point(self._desired_pos, self._desired_vel)
-        actual = _point(actual_pos, actual_vel)
-        error = _point(self._desired_pos - actual_pos, self._desired_vel - actual_vel)
-        msg = build("control_msgs/msg/JointTrajectoryControllerState", {
-            "header": {"stamp": sec_to_time(time), "frame_id": ""},
-            "joint_names": list(self.joints),
-            "reference": desired, "desired": desired,
-            "feedback": actual, "actual": actual,
-            "error": error,
-            "output": _point(self._desired_pos, self._desired_vel),
-        })
-        self._state_pub.publish(msg)
+        # 50 Hz on the control thread: pack the control_msgs/JointTrajectoryControllerState map directly
+        # (building it through the validating dict path costs ~0.4 ms for 22 joints).
+        desired = _point_map(self._desired_pos, self._desired_vel)
+        actual = _point_map(actual_pos, actual_vel)
+        error = _point_map(self._desired_pos - actual_pos, self._desired_vel - actual_vel)
+        self._state_pub.publish_raw(msgpack.packb({
+            "header": {"stamp": sec_to_time(time), "frame_id": ""}, "joint_names": self.joints,
+            "reference": desired, "feedback": actual, "error": error, "output": desired,
+            "desired": desired, "actual": actual, "multi_dof_joint_names": [],
+        }, use_bin_type=True))
 
     # --- introspection for tests and the CLI --------------------------------------------------------
     @property
@@ -390,10 +389,6 @@ class JointTrajectoryController(Controller):
 def _violations(error: np.ndarray, tolerance: np.ndarray) -> list[int]:
     """Indices where a tolerance is set (> 0) and |error| exceeds it."""
     return [i for i in np.nonzero((tolerance > 0.0) & (np.abs(error) > tolerance))[0].tolist()]
-
-
-def _point(positions, velocities) -> dict:
-    return {"positions": [float(v) for v in positions], "velocities": [float(v) for v in velocities]}
 
 
 def _get(obj, name: str):
@@ -411,14 +406,22 @@ def _result(code: int, text: str):
     return cls(error_code=code, error_string=text)
 
 
-def build_feedback(time: float, names, desired_pos, desired_vel, actual_pos, actual_vel):
-    cls = _type(FJT).Feedback
-    import msgs
+def _point_map(positions, velocities) -> dict:
+    return {"positions": np.asarray(positions, dtype=float).tolist(),
+            "velocities": np.asarray(velocities, dtype=float).tolist(),
+            "accelerations": [], "effort": [], "time_from_start": {"sec": 0, "nanosec": 0}}
 
-    return msgs.from_dict(cls, {
-        "header": {"stamp": sec_to_time(time), "frame_id": ""},
-        "joint_names": list(names),
-        "desired": _point(desired_pos, desired_vel),
-        "actual": _point(actual_pos, actual_vel),
-        "error": _point(np.asarray(desired_pos) - actual_pos, np.asarray(desired_vel) - actual_vel),
-    })
+
+def build_feedback(time: float, names, desired_pos, desired_vel, actual_pos, actual_vel):
+    """FollowJointTrajectory feedback built from the classes directly (no dict validation on this path)."""
+    point = _type("trajectory_msgs/msg/JointTrajectoryPoint")
+    stamp = sec_to_time(time)
+    header = _type("std_msgs/msg/Header")(stamp=_type("builtin_interfaces/msg/Time")(**stamp), frame_id="")
+    desired_pos, desired_vel = np.asarray(desired_pos, dtype=float), np.asarray(desired_vel, dtype=float)
+    actual_pos, actual_vel = np.asarray(actual_pos, dtype=float), np.asarray(actual_vel, dtype=float)
+    return _type(FJT).Feedback(
+        header=header, joint_names=list(names),
+        desired=point(positions=desired_pos.tolist(), velocities=desired_vel.tolist()),
+        actual=point(positions=actual_pos.tolist(), velocities=actual_vel.tolist()),
+        error=point(positions=(desired_pos - actual_pos).tolist(), velocities=(desired_vel - actual_vel).tolist()),
+    )
