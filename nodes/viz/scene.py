@@ -116,6 +116,7 @@ class RobotScene:
         self.plots = f"plots/{namespace}"
         self.root_frame = frame_name(namespace, model.root_link, self.world_frames)
         self.relations: dict[str, tuple[str, list]] = {}  # child frame -> (parent frame, frame components)
+        self.last_pose: dict[str, tuple[float, ...]] = {}  # child frame -> last logged xyz + quaternion
         self.base_pose = np.eye(4)
         self.base_from_tf = False  # once tf names the root's parent, model_states no longer places it
         self.base_known = False  # no path points until the robot's place in the world is known
@@ -179,6 +180,14 @@ class RobotScene:
                                                      child_frame=child_frame).as_component_batches())
             cached = (parent_frame, frames)
             self.relations[child_frame] = cached
+            self.last_pose.pop(child_frame, None)
+        # Most joints of a moving robot are still at any instant: an unchanged frame is not logged again
+        # (the viewer holds the latest value), which removes most of the per-frame log calls.
+        pose = (*xyz, *quat)
+        last = self.last_pose.get(child_frame)
+        if last is not None and all(abs(a - b) < 1e-7 for a, b in zip(pose, last, strict=True)):
+            return
+        self.last_pose[child_frame] = pose
         entity = f"{self.world}/frames/{rr.escape_entity_path_part(child_frame.removeprefix(self.namespace + '/'))}"
         self.recording.log(entity, [
             *cached[1],
