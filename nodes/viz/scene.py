@@ -35,6 +35,7 @@ SOLID = rr.components.FillMode.Solid
 PATH_LENGTH = 600  # points kept per marker path (a minute at 10 Hz)
 TRANSLATION = rr.Transform3D.descriptor_translation()
 QUATERNION = rr.Transform3D.descriptor_quaternion()
+POSE_EPSILON = 1e-4  # m and quaternion units (~0.2 mrad): changes below this are invisible, not re-logged
 
 
 def frame_name(namespace: str, frame: str, world_frames: Sequence[str] = ("world", "map", "odom")) -> str:
@@ -185,7 +186,7 @@ class RobotScene:
         # (the viewer holds the latest value), which removes most of the per-frame log calls.
         pose = (*xyz, *quat)
         last = self.last_pose.get(child_frame)
-        if last is not None and all(abs(a - b) < 1e-7 for a, b in zip(pose, last, strict=True)):
+        if last is not None and all(abs(a - b) < POSE_EPSILON for a, b in zip(pose, last, strict=True)):
             return
         self.last_pose[child_frame] = pose
         entity = f"{self.world}/frames/{rr.escape_entity_path_part(child_frame.removeprefix(self.namespace + '/'))}"
