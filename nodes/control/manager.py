@@ -62,6 +62,8 @@ class ControllerManager:
         self._active: list[ControllerEntry] = []
         self._claimed_slots: list[tuple[str, str, Any]] = []
         self._claimed_names: list[str] = []
+        self._last_update: float | None = None  # sim time of the last update()
+        self._last_tick: float | None = None  # sim time of the last hardware state
         self._claimed_kinds: list[str] = []
 
     # --- lifecycle --------------------------------------------------------------------------------
@@ -278,6 +280,32 @@ class ControllerManager:
         return entry
 
     # --- real-time loop -----------------------------------------------------------------------------
+    def reset_clock(self) -> None:
+        self._last_update = None
+        self._last_tick = None
+
+    def tick(self, time: float) -> bool:
+        """Called for every hardware state (sim ``time``): runs ``update`` when a control period is due.
+
+        The simulator may step faster than this manager's ``update_rate`` (another robot's manager asked
+        for more); in between, the previous commands are sent again. An update is due once the time since
+        the last one, plus half a state interval, reaches the period, so a state rate that does not divide
+        the update rate evenly does not halve it. Returns whether ``update`` ran."""
+        with self.lock:
+            last, previous_tick = self._last_update, self._last_tick
+            self._last_tick = time
+            control_period = 1.0 / self.update_rate
+            if last is None or time < last:
+                period = control_period
+            else:
+                period = time - last
+                half_interval = 0.5 * (time - previous_tick) if previous_tick is not None else 0.0
+                if period + half_interval < control_period - 1e-9:
+                    return False
+            self._last_update = time
+            self.update(time, period)
+            return True
+
     def update(self, time: float, period: float) -> None:
         """One control cycle: every active controller's ``update``; a raising controller is deactivated."""
         with self.lock:

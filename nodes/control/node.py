@@ -231,20 +231,16 @@ class ControllerManagerNode(Node):
             if self._lost:
                 self._lost = False
                 self.logger.info("hardware is back: controllers resume")
-            if self._last_time is None:
-                period = 1.0 / self.update_rate
-            else:
-                period = t - self._last_time
-                if period < 0.0:
-                    # A new or reset simulation: restart the controllers so they hold the joints where they
-                    # are now, instead of driving them back to the old simulation's commands.
-                    self.logger.warn(f"sim time went back from {self._last_time:.3f} to {t:.3f} s (reset or a "
-                                     "new simulator)")
-                    manager.restart_active("hardware reset")
-                    period = 1.0 / self.update_rate
+            if self._last_time is not None and t < self._last_time:
+                # A new or reset simulation: restart the controllers so they hold the joints where they
+                # are now, instead of driving them back to the old simulation's commands.
+                self.logger.warn(f"sim time went back from {self._last_time:.3f} to {t:.3f} s (reset or a "
+                                 "new simulator)")
+                manager.restart_active("hardware reset")
+                manager.reset_clock()
             self._last_time = t
             self.control_time = t
-            manager.update(t, period)
+            manager.tick(t)
             cmd_names, cmd_kinds, cmd_values = manager.command()
             self._last_state_wall = time.monotonic()
         self._cmd_pub.publish_raw(msgpack.packb({

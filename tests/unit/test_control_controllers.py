@@ -487,3 +487,31 @@ def test_restart_after_hardware_reset_holds_the_new_pose_and_aborts_goals():
     assert handle.status == ABORTED
     assert rig.sent[-1][2][0] == pytest.approx(-0.4, abs=0.01)
     assert rig.manager.controllers["joint_trajectory_controller"].state == "active"
+
+
+@pytest.mark.parametrize("update_rate, state_interval, states, expected_updates", [
+    (100, 0.001, 100, 10),   # the simulator steps 1 kHz for another robot: update every 10th state
+    (100, 0.01, 10, 10),     # states at the update rate: every state
+    (300, 0.003, 30, 30),    # 3 ms states for a 3.33 ms period: still every state, not every other
+])
+def test_manager_runs_update_at_its_own_rate_on_sim_time(update_rate, state_interval, states, expected_updates):
+    periods: list[float] = []
+
+    class Counting(Controller):
+        type_name = "test/Counting"
+
+        def update(self, time, period):
+            periods.append(period)
+
+    CONTROLLER_TYPES[Counting.type_name] = Counting
+    try:
+        text = f"controller_manager: {{ros__parameters: {{update_rate: {update_rate}, c: {{type: test/Counting}}}}}}"
+        rig = Rig(text, ["a"], rate=update_rate)
+        rig.spawn("c")
+        ran = [rig.manager.tick(round(1.0 + i * state_interval, 9)) for i in range(states)]
+        assert sum(ran) == expected_updates
+        assert periods[1:] == pytest.approx([1.0 / update_rate] * (expected_updates - 1), abs=state_interval)
+        rig.manager.reset_clock()  # a reset simulation starts again at t = 0
+        assert rig.manager.tick(0.0)
+    finally:
+        del CONTROLLER_TYPES[Counting.type_name]
