@@ -88,7 +88,7 @@ class Visualiser(Node):
             "tf": p("tf_rate", 30.0, description="Hz", min_value=0.0),
             "model_states": p("model_states_rate", 30.0, description="Hz", min_value=0.0),
             "controller_state": p("controller_state_rate", 25.0, description="Hz", min_value=0.0),
-            "humanoid_state": p("humanoid_state_rate", 30.0, description="Hz", min_value=0.0),
+            "humanoid_state": p("humanoid_state_rate", 20.0, description="Hz", min_value=0.0),
             "markers": p("marker_rate", 10.0, description="Hz", min_value=0.0),
         }
         self.tf_fallback_after = p("tf_fallback_after", 1.0, min_value=0.0,
@@ -153,6 +153,7 @@ class Visualiser(Node):
         robot = RobotView(namespace)
         robot.limits = {stream: RateLimiter(hz) for stream, hz in self.rates.items()}
         robot.limits["fk"] = RateLimiter(self.rates["tf"])
+        robot.limits["balance_markers"] = RateLimiter(self.rates["markers"])
         self.robots[namespace] = robot
         sub, limits, ns = self.subscribe, robot.limits, namespace
         robot.subscriptions += [
@@ -337,7 +338,7 @@ class Visualiser(Node):
         if not all(math.isfinite(v) for v in com + (msg.zmp_x, msg.zmp_y)):
             return
         robot.scene.log_balance(self.stamp_or_now(msg.header.stamp), com, (msg.zmp_x, msg.zmp_y),
-                                msg.is_balanced, polygon)
+                                msg.is_balanced, polygon, markers=robot.limits["balance_markers"].ready())
 
     # -- discovery (a thread: graph queries block) -----------------------------------------------------
     def discovery_loop(self) -> None:

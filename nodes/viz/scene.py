@@ -241,21 +241,24 @@ class RobotScene:
             self.recording.log(entity, rr.Scalars([cmd, act]))
 
     def log_balance(self, sim_time: float, com: Sequence[float], zmp: Sequence[float], is_balanced: bool,
-                    support_polygon: Sequence[Sequence[float]]) -> None:
+                    support_polygon: Sequence[Sequence[float]], markers: bool = True) -> None:
+        """Plots every call; the 3-D markers (CoM, ZMP, support polygon) only when ``markers``."""
         self.set_time(sim_time)
         self.recording.log(f"{self.plots}/balance/com", rr.Scalars(np.asarray(com, float)))
         self.recording.log(f"{self.plots}/balance/zmp", rr.Scalars(np.asarray(zmp, float)))
         self.recording.log(f"{self.plots}/balance/is_balanced", rr.Scalars([1.0 if is_balanced else 0.0]))
+        if not markers:
+            return
         self.com_path.append(list(com))
-        markers = f"{self.world}/markers"
+        markers_path = f"{self.world}/markers"
         color = [60, 200, 90, 255] if is_balanced else [230, 60, 50, 255]
-        self.recording.log(f"{markers}/com", rr.Points3D([com, [com[0], com[1], 0.0]], radii=[0.03, 0.015],
+        self.recording.log(f"{markers_path}/com", rr.Points3D([com, [com[0], com[1], 0.0]], radii=[0.03, 0.015],
                                                           colors=[color, color]))
-        self.recording.log(f"{markers}/zmp", rr.Points3D([[zmp[0], zmp[1], 0.003]], radii=0.02,
+        self.recording.log(f"{markers_path}/zmp", rr.Points3D([[zmp[0], zmp[1], 0.003]], radii=0.02,
                                                           colors=[[250, 220, 40, 255]]))
         if len(support_polygon) >= 2:
             ring = [[p[0], p[1], max(p[2], 0.0) + 0.003] for p in support_polygon]
-            self.recording.log(f"{markers}/support_polygon", rr.LineStrips3D(
+            self.recording.log(f"{markers_path}/support_polygon", rr.LineStrips3D(
                 [ring + [ring[0]]], colors=[color], radii=0.006))
 
     def log_paths(self, sim_time: float) -> None:
@@ -267,12 +270,14 @@ class RobotScene:
             path.append(poses[link][:3, 3].tolist())
         self.set_time(sim_time)
         markers = f"{self.world}/markers"
-        strips = [list(path) for path in self.ee_paths.values() if len(path) >= 2]
+        # numpy arrays convert to Arrow far faster than lists of lists
+        strips = [np.asarray(path, dtype=np.float32) for path in self.ee_paths.values() if len(path) >= 2]
         if strips:
             self.recording.log(f"{markers}/ee_paths", rr.LineStrips3D(
                 strips, radii=0.004, colors=[[230, 60, 200, 255]]))
         if len(self.com_path) >= 2:
-            self.recording.log(f"{markers}/com_path", rr.LineStrips3D([list(self.com_path)], radii=0.004,
+            self.recording.log(f"{markers}/com_path", rr.LineStrips3D([np.asarray(self.com_path, np.float32)],
+                                                                       radii=0.004,
                                                                        colors=[[60, 200, 90, 255]]))
 
     def log_target(self, sim_time: float, controller: str, target: Mapping[str, float]) -> None:
