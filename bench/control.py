@@ -140,7 +140,8 @@ def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
 
     try:
         node.create_subscription(None, "/humanoid/hardware/command", on_command, inline=True, raw=True)
-        pub = node.create_publisher(JointTrajectory, "/humanoid/joint_trajectory_controller/joint_trajectory")
+        pub = node.create_publisher(JointTrajectory, "/humanoid/joint_trajectory_controller/joint_trajectory",
+                                    express=True)
         deadline = time.monotonic() + 120
         while commands[0] < 2000 and time.monotonic() < deadline:
             time.sleep(0.1)
