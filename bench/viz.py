@@ -3,11 +3,11 @@
     python bench/viz.py [--source humanoid|feeder] [--seconds 10] [--zenoh-port N]
 
 ``humanoid`` (default): the main job (``launch/humanoid.yaml``, realtime, 1 kHz controller manager,
-joint_states at 100 Hz, the joint commander) plus the visualiser saving an .rrd. The lag of a sample is its
-Rerun ``log_time`` minus its sim-time stamp mapped to the wall clock; the mapping (sim clock offset and any
-drift of realtime mode) is the smallest such difference within +-0.5 s, so the figure is the lag above the
-transport floor (~0.2 ms, FACTS). ``feeder``: ``nodes.viz.feeder`` stamps joint_states with the wall clock
-at 100 Hz, so the lag is exact. Prints a table, then one JSON line: ``cpu_percent`` (of one core, averaged
+joint_states at 100 Hz, the joint commander) plus the visualiser saving an .rrd. Its stamps are sim time
+(which slips behind the wall clock on a loaded machine), so a probe node in this process records when each
+stamp arrives; the lag of a sample is its Rerun ``log_time`` minus that arrival (the visualiser's own
+delay; the Zenoh hop adds ~0.2 ms, FACTS). ``feeder``: ``nodes.viz.feeder`` stamps joint_states with the
+wall clock at 100 Hz, so the lag from stamp to logging is exact. Prints a table, then one JSON line: ``cpu_percent`` (of one core, averaged
 over the window), ``lag_p99_ms``, ``lag_p50_ms``, ``joint_states_hz``. Goals: < 25 %, p99 < 50 ms.
 """
 
@@ -58,14 +58,28 @@ def stop(proc: subprocess.Popen, timeout: float = 20.0) -> None:
         proc.wait()
 
 
-def lags_ms(rows: list[dict], exact: bool) -> np.ndarray:
-    log = np.array([r["log_time"] for r in rows])
-    stamp = np.array([r["sim_time"] for r in rows])
-    diff = log - stamp
-    if exact:
-        return diff * 1e3
-    floor = np.array([diff[(stamp >= s - 0.5) & (stamp <= s + 0.5)].min() for s in stamp])
-    return (diff - floor) * 1e3
+def lags_ms(rows: list[dict], arrivals: dict[int, float] | None) -> np.ndarray:
+    """Stamp (feeder: wall clock) or probe arrival time -> Rerun log_time, in ms."""
+    if arrivals is None:
+        return np.array([r["log_time"] - r["sim_time"] for r in rows]) * 1e3
+    return np.array([r["log_time"] - arrivals[round(r["sim_time"] * 1e6)] for r in rows
+                     if round(r["sim_time"] * 1e6) in arrivals]) * 1e3
+
+
+def start_probe(port: int):
+    """A node in this process noting the wall time each joint_states stamp arrives (humanoid source)."""
+    import msgs
+    from nodes.core import Node
+
+    arrivals: dict[int, float] = {}
+    node = Node("bench_viz_probe", connect=[f"tcp/127.0.0.1:{port}"])
+
+    def on_state(msg) -> None:
+        arrivals[round((msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9) * 1e6)] = time.time()
+
+    node.create_subscription(msgs.get_type("sensor_msgs/msg/JointState"), "/humanoid/joint_states", on_state,
+                             inline=True)
+    return node, arrivals
 
 
 def main() -> int:
@@ -87,12 +101,14 @@ def main() -> int:
         return proc, log
 
     procs: list[subprocess.Popen] = []
+    probe, arrivals = None, None
     try:
         if args.source == "humanoid":
             launch, launch_log = start("launch", "-m", "launch", "humanoid.yaml", "gui:=false", "mode:=realtime",
                                        f"zenoh_port:={port}")
             procs.append(launch)
             wait_for(launch_log, "started 'joint_commander'", 90)
+            probe, arrivals = start_probe(port)
         else:
             router, _ = start("router", "-c", "import time\nfrom nodes.core.session import open_router\n"
                               f"s = open_router({port})\ntime.sleep(3600)")
@@ -120,9 +136,11 @@ def main() -> int:
                 if "log_time" in r and window[0] <= r["log_time"] <= window[1]]
         if len(rows) < 10:
             raise SystemExit(f"only {len(rows)} joint_states rows logged in the window; logs in {work}")
-        lag = lags_ms(rows, exact=args.source == "feeder")
+        lag = lags_ms(rows, arrivals)
         rate = len(rows) / args.seconds
     finally:
+        if probe is not None:
+            probe.destroy()
         for proc in reversed(procs):
             stop(proc)
 

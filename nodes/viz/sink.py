@@ -101,7 +101,8 @@ class Output:
         self.server = subprocess.Popen(
             [sys.executable, "-m", "rerun", "--serve-web", "--bind", "127.0.0.1", "--port", str(grpc_port),
              "--web-viewer-port", str(web_port), "--server-memory-limit", "512MiB"],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True,
+            # Same process group as the visualiser: a launcher that kills the group also stops the server.
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
         )
         if not wait_for_port(grpc_port, 20.0) or self.server.poll() is not None:
             self.close()
