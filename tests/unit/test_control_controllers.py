@@ -515,3 +515,21 @@ def test_manager_runs_update_at_its_own_rate_on_sim_time(update_rate, state_inte
         assert rig.manager.tick(0.0)
     finally:
         del CONTROLLER_TYPES[Counting.type_name]
+
+
+def test_jtc_effort_interface_closes_the_loop_with_its_gains():
+    text = """
+controller_manager: {ros__parameters: {update_rate: 1000, jtc: {type: joint_trajectory_controller/JointTrajectoryController}}}
+jtc: {ros__parameters: {joints: [a], command_interfaces: [effort], gains: {a: {p: 20.0, d: 2.0, i: 1.0, i_clamp: 0.5}}}}
+"""
+    rig = Rig(text, ["a"], ("effort",), rate=1000)
+    rig.spawn("jtc")
+    rig.publish("jtc/joint_trajectory", msgs.from_dict(JointTrajectory, trajectory(["a"], [(1.0, [0.6])])))
+    rig.step(3.0)
+    assert rig.sent[-1][1] == ["effort"]
+    assert rig.plant.pos["a"] == pytest.approx(0.6, abs=0.01)
+    no_gains = text.replace(", gains: {a: {p: 20.0, d: 2.0, i: 1.0, i_clamp: 0.5}}", "")
+    rig = Rig(no_gains, ["a"], ("effort",), rate=1000)
+    rig.manager.load("jtc")
+    with pytest.raises(ManagerError, match="need gains"):
+        rig.manager.configure("jtc")

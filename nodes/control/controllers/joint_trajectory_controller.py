@@ -13,6 +13,7 @@ import msgpack
 import numpy as np
 
 from nodes.control.controller import Controller, ControllerError
+from nodes.control.controllers.pid_controller import Pid
 from nodes.control.interfaces import read_values, write_values
 from nodes.control.messages import sec_to_time
 from nodes.control.trajectory import Trajectory, TrajectoryError, duration_to_sec, validate_trajectory
@@ -79,7 +80,8 @@ class JointTrajectoryController(Controller):
     def on_init(self) -> None:
         self.declare_parameter("joints", [], type=list, element_type=str, description="controlled joints")
         self.declare_parameter("command_interfaces", ["position"], element_type=str,
-                               choices=("position", "velocity"), description="interfaces commanded")
+                               choices=("position", "velocity", "effort"),
+                               description="position, velocity, position+velocity, or effort (PID from gains)")
         self.declare_parameter("state_interfaces", ["position", "velocity"], element_type=str,
                                choices=("position", "velocity", "acceleration"))
         self.declare_parameter("state_publish_rate", 50.0, min_value=0.0, description="controller_state Hz")
@@ -112,13 +114,26 @@ class JointTrajectoryController(Controller):
         path = np.zeros(n)
         goal = np.zeros(n)
         goal_vel = np.full(n, self.get_parameter("constraints.stopped_velocity_tolerance"))
-        self.velocity_gains = np.zeros(n)
+        self.pids: list[Pid] = []
+        self.ff_velocity_scale = np.zeros(n)
         for i, joint in enumerate(joints):
             path[i] = self.declare_parameter(f"constraints.{joint}.trajectory", 0.0, min_value=0.0)
             goal[i] = self.declare_parameter(f"constraints.{joint}.goal", 0.0, min_value=0.0)
-            self.velocity_gains[i] = self.declare_parameter(f"gains.{joint}.p", 0.0, min_value=0.0)
-            for extra in ("i", "d", "i_clamp", "ff_velocity_scale"):
-                self.declare_parameter(f"gains.{joint}.{extra}", 0.0)
+            g = f"gains.{joint}."
+            p = self.declare_parameter(g + "p", 0.0, min_value=0.0)
+            i_gain = self.declare_parameter(g + "i", 0.0, min_value=0.0)
+            d = self.declare_parameter(g + "d", 0.0, min_value=0.0)
+            i_clamp = self.declare_parameter(g + "i_clamp", 0.0, min_value=0.0)
+            self.ff_velocity_scale[i] = self.declare_parameter(g + "ff_velocity_scale", 0.0)
+            limit = i_clamp if i_clamp > 0 else math.inf
+            self.pids.append(Pid(p, i_gain, d, -limit, limit, -math.inf, math.inf, antiwindup=True))
+        if command == ["velocity"] or command == ["effort"]:
+            missing = [j for j, pid in zip(joints, self.pids, strict=True) if pid.p == pid.i == pid.d == 0.0
+                       and command == ["effort"]]
+            if missing:
+                raise ControllerError(f"effort commands need gains: gains.<joint>.p/i/d are all zero for {missing}")
+        elif "effort" in command:
+            raise ControllerError("'effort' cannot be combined with other command interfaces")
         unknown = self.params.undeclared()
         if unknown:
             self.logger.warn(f"{self.name}: ignoring unknown parameters {unknown}")
@@ -160,6 +175,9 @@ class JointTrajectoryController(Controller):
         self._vel_state = [state[f"{j}/velocity"] for j in self.joints]
         self._pos_cmd = [cmd[f"{j}/position"] for j in self.joints] if "position" in self.command_kinds else []
         self._vel_cmd = [cmd[f"{j}/velocity"] for j in self.joints] if "velocity" in self.command_kinds else []
+        self._eff_cmd = [cmd[f"{j}/effort"] for j in self.joints] if "effort" in self.command_kinds else []
+        for pid in self.pids:
+            pid.reset()
         # Hold where the joints are; resolved at the first update if no state has arrived yet.
         self._desired_pos = None
         self._inbox.clear()
@@ -250,7 +268,7 @@ class JointTrajectoryController(Controller):
             else:
                 self._follow(active, time, actual_pos, actual_vel)
 
-        self._write_commands(actual_pos)
+        self._write_commands(actual_pos, actual_vel, period)
         if time - self._last_state_pub >= self.state_period - 1e-6:  # float ticks: 0.01 * 2 < 0.02
             self._last_state_pub = time
             self._publish_state(time, actual_pos, actual_vel)
@@ -324,15 +342,21 @@ class JointTrajectoryController(Controller):
         self._desired_vel = np.zeros(len(self.joints))
         self._desired_acc = np.zeros(len(self.joints))
 
-    def _write_commands(self, actual_pos: np.ndarray) -> None:
+    def _write_commands(self, actual_pos: np.ndarray, actual_vel: np.ndarray, period: float) -> None:
         desired = self._desired_pos
         if self._pos_cmd:
             write_values(self._pos_cmd, desired.tolist())
-        if self._vel_cmd:
-            velocity = self._desired_vel
-            if not self._pos_cmd:  # velocity-only joints: close the position loop with gains.<joint>.p
-                velocity = velocity + self.velocity_gains * (desired - actual_pos)
-            write_values(self._vel_cmd, velocity.tolist())
+            if self._vel_cmd:
+                write_values(self._vel_cmd, self._desired_vel.tolist())
+            return
+        # Velocity-only or effort: close the position loop with the gains (as ros2_controllers does):
+        # command = ff_velocity_scale * desired velocity + PID(position error, velocity error).
+        position_error = (desired - actual_pos).tolist()
+        velocity_error = (self._desired_vel - actual_vel).tolist()
+        feedforward = (self.ff_velocity_scale * self._desired_vel).tolist()
+        output = [ff + pid.compute(e, de, period) for ff, pid, e, de
+                  in zip(feedforward, self.pids, position_error, velocity_error, strict=True)]
+        write_values(self._vel_cmd or self._eff_cmd, output)
 
     # --- goal bookkeeping ---------------------------------------------------------------------------
     def _finish_goal(self, how: str, code: int, text: str) -> None:
