@@ -18,7 +18,6 @@ Time: every call takes the sim time (``sim_time`` timeline, a duration) and stam
 from __future__ import annotations
 
 import time
-from collections import deque
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -32,7 +31,7 @@ SIM_TIMELINE = "sim_time"
 WALL_TIMELINE = "wall_time"
 WORLD_FRAME = "tf#/world"  # Rerun's implicit frame of the entity "world": the 3-D view's root
 SOLID = rr.components.FillMode.Solid
-PATH_LENGTH = 600  # points kept per marker path (a minute at 10 Hz)
+PATH_LENGTH = 300  # points kept per marker path (30 s at the 10 Hz marker rate)
 TRANSLATION = rr.Transform3D.descriptor_translation()
 QUATERNION = rr.Transform3D.descriptor_quaternion()
 POSE_EPSILON = 1e-4  # m and quaternion units (~0.2 mrad): changes below this are invisible, not re-logged
@@ -50,6 +49,28 @@ def frame_name(namespace: str, frame: str, world_frames: Sequence[str] = ("world
 
 def rgba8(rgba: Sequence[float]) -> list[int]:
     return [int(round(max(0.0, min(1.0, c)) * 255)) for c in rgba]
+
+
+class PathBuffer:
+    """The last ``capacity`` points of a path in a numpy ring (no per-log list-to-array conversion)."""
+
+    def __init__(self, capacity: int) -> None:
+        self.points = np.zeros((capacity, 3), dtype=np.float32)
+        self.count = 0  # points ever appended
+
+    def append(self, point: Sequence[float]) -> None:
+        self.points[self.count % len(self.points)] = point
+        self.count += 1
+
+    def __len__(self) -> int:
+        return min(self.count, len(self.points))
+
+    def array(self) -> np.ndarray:
+        """Oldest to newest."""
+        if self.count <= len(self.points):
+            return self.points[: self.count]
+        split = self.count % len(self.points)
+        return np.concatenate((self.points[split:], self.points[:split]))
 
 
 class SceneTime:
@@ -124,8 +145,8 @@ class RobotScene:
         self.positions: dict[str, float] = {}
         self.joint_series: tuple[str, ...] = ()
         self.controller_series: set[tuple[str, str]] = set()
-        self.com_path: deque[list[float]] = deque(maxlen=path_length)
-        self.ee_paths: dict[str, deque[list[float]]] = {link: deque(maxlen=path_length) for link in self.end_effectors}
+        self.com_path = PathBuffer(path_length)
+        self.ee_paths = {link: PathBuffer(path_length) for link in self.end_effectors}
         self.skipped_meshes: list[str] = []
 
     # -- model ---------------------------------------------------------------------------------------
@@ -249,7 +270,7 @@ class RobotScene:
         self.recording.log(f"{self.plots}/balance/is_balanced", rr.Scalars([1.0 if is_balanced else 0.0]))
         if not markers:
             return
-        self.com_path.append(list(com))
+        self.com_path.append(com)
         markers_path = f"{self.world}/markers"
         color = [60, 200, 90, 255] if is_balanced else [230, 60, 50, 255]
         self.recording.log(f"{markers_path}/com", rr.Points3D([com, [com[0], com[1], 0.0]], radii=[0.03, 0.015],
@@ -267,16 +288,15 @@ class RobotScene:
             return
         poses = self.fk.link_poses(self.positions, self.base_pose)
         for link, path in self.ee_paths.items():
-            path.append(poses[link][:3, 3].tolist())
+            path.append(poses[link][:3, 3])
         self.set_time(sim_time)
         markers = f"{self.world}/markers"
-        # numpy arrays convert to Arrow far faster than lists of lists
-        strips = [np.asarray(path, dtype=np.float32) for path in self.ee_paths.values() if len(path) >= 2]
+        strips = [path.array() for path in self.ee_paths.values() if len(path) >= 2]
         if strips:
             self.recording.log(f"{markers}/ee_paths", rr.LineStrips3D(
                 strips, radii=0.004, colors=[[230, 60, 200, 255]]))
         if len(self.com_path) >= 2:
-            self.recording.log(f"{markers}/com_path", rr.LineStrips3D([np.asarray(self.com_path, np.float32)],
+            self.recording.log(f"{markers}/com_path", rr.LineStrips3D([self.com_path.array()],
                                                                        radii=0.004,
                                                                        colors=[[60, 200, 90, 255]]))
 

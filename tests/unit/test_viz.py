@@ -238,3 +238,14 @@ def test_blueprint_has_a_tab_per_robot() -> None:
     assert build_blueprint() is not None
     assert build_blueprint({"humanoid": (["joint_trajectory_controller"], True)}) is not None
     assert build_blueprint({"a": ([], False), "b": (["jtc"], True)}) is not None
+
+
+def test_path_buffer_keeps_the_newest_points_in_order() -> None:
+    from nodes.viz.scene import PathBuffer
+
+    path = PathBuffer(3)
+    assert len(path) == 0 and path.array().shape == (0, 3)
+    for i in range(5):
+        path.append((i, 0, 0))
+    assert len(path) == 3
+    assert path.array()[:, 0].tolist() == [2.0, 3.0, 4.0]
