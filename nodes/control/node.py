@@ -12,6 +12,7 @@ import collections
 import gc
 import json
 import math
+import sys
 import threading
 import time
 from typing import Any
@@ -200,6 +201,9 @@ class ControllerManagerNode(Node):
         # scans so a collection during a control cycle stays short.
         gc.collect()
         gc.freeze()
+        # Zenoh delivers each subscription on its own Python thread; with the default 5 ms GIL switch
+        # interval a trajectory could wait behind a busy thread for several control periods.
+        sys.setswitchinterval(0.0005)
         self.logger.info("controller manager ready")
 
     def _make_context(self, name: str) -> NodeControllerContext:
