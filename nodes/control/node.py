@@ -125,7 +125,6 @@ class ControllerManagerNode(Node):
         self.hardware: HardwareInterfaces | None = None
         self._last_time: float | None = None
         self._last_state_wall = 0.0
-        self._started_wall = time.monotonic()
         self._lost = False
         self._cycles = 0
         self._cycle_us: collections.deque[float] = collections.deque(maxlen=20_000)
