@@ -14,7 +14,7 @@ import msgpack
 import pytest
 
 import msgs
-from nodes.core import Node
+from nodes.core import Node, ServiceError
 from tests.conftest import ROOT, wait_until
 
 pytestmark = pytest.mark.slow
@@ -256,6 +256,18 @@ def test_interface_conflict_is_refused_and_cli_reports_state(lab):
     assert bad.returncode == 2 and "inactive" in bad.stderr
     unload = _cli(lab, "unload_controller", "joint_trajectory_controller")
     assert unload.returncode == 1  # active controllers cannot be unloaded
+    done = _cli(lab, "switch_controllers", "--deactivate", "joint_trajectory_controller")  # best effort
+    assert done.returncode == 0, done.stderr
+    done = _cli(lab, "set_controller_state", "joint_group_position_controller", "active")
+    assert done.returncode == 0, done.stderr
+    assert _cli(lab, "unload_controller", "joint_trajectory_controller").returncode == 0
+    listing = _cli(lab, "list_controllers", "-v")
+    assert "joint_trajectory_controller" not in listing.stdout
+    assert "joint_group_position_controller  position_controllers/JointGroupPositionController  active" in listing.stdout
+    assert "\t\tjoint1/position" in listing.stdout
+    # The unloaded controller's endpoints are gone with it: its action no longer answers.
+    with pytest.raises(ServiceError):
+        lab.action.send_goal(goal([(1.0, 0.2)]), timeout=1.0)
 
 
 def test_spawner_waits_for_the_manager_and_hardware_loss_is_reported(processes, router):
