@@ -1,15 +1,17 @@
 """Visualiser cost: CPU share of ``python -m nodes.viz`` and the lag from a joint_states stamp to its logging.
 
-    python bench/viz.py [--source humanoid|feeder] [--seconds 10] [--zenoh-port N]
+    python bench/viz.py [--source humanoid|feeder] [--seconds 10] [--repeat 3] [--zenoh-port N]
 
 ``humanoid`` (default): the main job (``launch/humanoid.yaml``, realtime, 1 kHz controller manager,
 joint_states at 100 Hz, the joint commander) plus the visualiser saving an .rrd. Its stamps are sim time
 (which slips behind the wall clock on a loaded machine), so a probe node in this process records when each
 stamp arrives; the lag of a sample is its Rerun ``log_time`` minus that arrival (the visualiser's own
 delay; the Zenoh hop adds ~0.2 ms, FACTS). ``feeder``: ``nodes.viz.feeder`` stamps joint_states with the
-wall clock at 100 Hz, so the lag from stamp to logging is exact. Prints a table, then one JSON line: ``cpu_percent`` (of one core, averaged
-over the window), ``lag_p99_ms``, ``lag_p50_ms``, ``joint_states_hz`` (medians of ``--repeat`` runs, default 3; the machine
-is shared, so single runs vary). Goals: < 25 %, p99 < 50 ms.
+wall clock at 100 Hz, so the lag from stamp to logging is exact.
+
+Prints a table, then one JSON line: ``cpu_percent`` (of one core, over the window), ``lag_p50_ms``,
+``lag_p99_ms``, ``lag_max_ms``, ``joint_states_hz``: medians of ``--repeat`` runs (default 3; the machine is
+shared, so single runs vary). Goals: < 25 % of a core, p99 < 50 ms.
 """
 
 from __future__ import annotations
