@@ -60,6 +60,9 @@ class Lab:
                        or self.manager.poll() is not None, timeout=60, message="controller manager ready")
             assert self.manager.poll() is None, processes.output(self.manager)
             wait_until(lambda: self.states, timeout=60, message="joint_states from the broadcaster")
+            # Until it takes its first command the simulator free-runs and the manager works through a
+            # backlog of states; give lockstep half a simulated second to settle before testing tracking.
+            self.wait_sim(0.5)
         except BaseException:
             self.node.destroy()
             raise
