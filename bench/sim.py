@@ -34,7 +34,8 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def inprocess_steps_per_s(steps: int = 5000) -> float:
+def inprocess_steps_per_s(steps: int = 5000) -> tuple[float, float]:
+    """(steps per wall second, steps per CPU second): the second is what the machine's load cannot skew."""
     from nodes.sim.config import parse_gains
     from nodes.sim.entity import EntitySpec, Pose
     from nodes.sim.simulation import Simulation
@@ -48,13 +49,13 @@ def inprocess_steps_per_s(steps: int = 5000) -> float:
     # keep the world awake and in contact: a small knee motion, as a controller would command
     hw = sim.hardware["humanoid"]
     sim.step(500)
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     for k in range(steps):
         hw.apply_command(["left_knee", "right_knee"], ["position", "position"], [0.1 * (k % 2000) / 2000] * 2)
         sim.step(1)
-    elapsed = time.perf_counter() - start
+    elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu
     sim.clear()
-    return steps / elapsed
+    return steps / elapsed, steps / cpu
 
 
 class SimRun:
@@ -99,15 +100,29 @@ class SimRun:
             time.sleep(0.1)
         raise RuntimeError("the hardware client never took over the humanoid")
 
+    def cpu_seconds(self) -> tuple[float, float]:
+        """CPU time used so far by (simulator, hardware client)."""
+        import psutil
+
+        def used(proc: subprocess.Popen) -> float:
+            times = psutil.Process(proc.pid).cpu_times()
+            return times.user + times.system
+
+        return used(self.sim), used(self.client)
+
     def window(self, seconds: float) -> tuple[float, float, float, list[dict]]:
         """(sim time advanced, steps, wall seconds, diagnostics) over ``seconds`` of wall time."""
         before = self.props()
+        cpu_before = self.cpu_seconds()
         with self._lock:
             self.diagnostics.clear()
         start = time.perf_counter()
         time.sleep(seconds)
         after = self.props()
         wall = time.perf_counter() - start
+        cpu_after = self.cpu_seconds()
+        self.cpu_per_step_us = tuple((a - b) / max(1, after.step - before.step) * 1e6
+                                     for a, b in zip(cpu_after, cpu_before, strict=True))
         with self._lock:
             diagnostics = list(self.diagnostics)
         return after.sim_time - before.sim_time, after.step - before.step, wall, diagnostics
@@ -130,12 +145,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--realtime-seconds", type=float, default=30.0)
     args = parser.parse_args(argv)
 
-    inprocess = inprocess_steps_per_s()
+    load_before = os.getloadavg()[0]
+    inprocess, inprocess_cpu = inprocess_steps_per_s()
 
     run = SimRun("mode:=lockstep")
     try:
         run.wait_commanded()
         _, lockstep_steps, lockstep_wall, _ = run.window(args.lockstep_seconds)
+        sim_cpu_us, client_cpu_us = run.cpu_per_step_us
     finally:
         run.close()
     lockstep = lockstep_steps / lockstep_wall
@@ -153,13 +170,18 @@ def main(argv: list[str] | None = None) -> int:
     worst = max((d["max_late_ms"] for d in diagnostics), default=float("nan"))
 
     rows = [
-        ("(a) in-process DART humanoid, servo + contacts", f"{inprocess:,.0f} steps/s", "the ceiling"),
+        ("(a) in-process DART humanoid, servo + contacts", f"{inprocess:,.0f} steps/s",
+         f"the ceiling; {inprocess_cpu:,.0f} steps per CPU second"),
         ("(b) lockstep, sim + hardware client processes, 1 kHz", f"{lockstep:,.0f} steps/s",
          f"{lockstep / inprocess:.2f} of (a); {lockstep / 1000:.2f}x real time (goal >= 3000)"),
+        ("(b) lockstep: CPU per step, simulator / client", f"{sim_cpu_us:.0f} / {client_cpu_us:.0f} us",
+         "load-independent cost of one control period"),
         (f"(c) realtime {args.realtime_seconds:g} s: real-time factor", f"{rtf:.4f}", "goal 1.00 +- 1 %"),
         ("(c) realtime: p99 period lateness (worst 1-s window)", f"{p99:.3f} ms",
          f"median window {p99_median:.3f} ms, max single {worst:.2f} ms (goal p99 < 1 ms)"),
     ]
+    rows.append(("load average (1 min) before / after", f"{load_before:.1f} / {os.getloadavg()[0]:.1f}",
+                 f"{os.cpu_count()} cores shared with other jobs"))
     width = max(len(r[0]) for r in rows)
     print(f"{'measurement':<{width}}  {'result':>16}  note")
     for name, value, note in rows:
@@ -167,7 +189,9 @@ def main(argv: list[str] | None = None) -> int:
     print(json.dumps({
         "inprocess_steps_per_s": round(inprocess, 1), "lockstep_steps_per_s": round(lockstep, 1),
         "lockstep_ratio": round(lockstep / inprocess, 4), "realtime_factor": round(rtf, 5),
-        "realtime_p99_late_ms": round(p99, 4),
+        "realtime_p99_late_ms": round(p99, 4), "inprocess_steps_per_cpu_s": round(inprocess_cpu, 1),
+        "lockstep_sim_cpu_us_per_step": round(sim_cpu_us, 1), "realtime_p99_late_ms_median_window": round(p99_median, 4),
+        "load_average": round(load_before, 2),
     }))
     return 0
 

@@ -147,6 +147,11 @@ def test_sim_cli_pause_step_gravity_reset(processes, node, zenoh_port):
     assert run_cli(processes, "sim", "step", "-3", *port).returncode == 2
     assert run_cli(processes, "sim", "ground", "off", *port).returncode == 0 and not props().has_ground
 
+    result = run_cli(processes, "spawn", "-entity", "arm2", "-file", "tests/data/sim_arm.urdf", "-fixed",
+                     "-x", "1", "-unpause", *port)
+    assert result.returncode == 0 and "physics unpaused" in result.stdout, result.stdout + result.stderr
+    assert not props().pause
+    assert run_cli(processes, "sim", "pause", *port).returncode == 0 and props().pause
     assert run_cli(processes, "sim", "unpause", *port).returncode == 0
     wait_until(lambda: props().step > paused_at.step + 100, 20, message="physics running again")
     result = run_cli(processes, "sim", "step", "5", *port)
