@@ -14,19 +14,13 @@ import yaml
 from launch.description import parse_file
 from launch.resolve import LaunchPlan, find_launch_file, resolve
 from launch.yaml_source import LaunchError, Source
+from nodes.tools.cli import UsageError
 
 PROJECT_ROOT = Path(__file__).resolve().parents[1]
 
 
-class LaunchUsageError(Exception):
-    """Bad input to the launcher (exit status 2); ``nodes.tools.cli`` maps it like its UsageError."""
-
-
-def _usage_error(message: str) -> Exception:
-    try:
-        from nodes.tools.cli import UsageError
-    except ImportError:
-        return LaunchUsageError(message)
+def _usage_error(message: str) -> UsageError:
+    """Bad input to the launcher: one line, exit status 2 (as every ``zenroid`` verb)."""
     return UsageError(message)
 
 
@@ -204,8 +198,6 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return run(args)
-    except Exception as exc:
-        if type(exc).__name__ in ("UsageError", "LaunchUsageError"):
-            print(f"launch: error: {exc}", file=sys.stderr)
-            return 2
-        raise
+    except UsageError as exc:
+        print(f"launch: error: {exc}", file=sys.stderr)
+        return 2
