@@ -61,7 +61,7 @@ def delayed_page_server(viewer_url: str, render_seconds: float) -> http.server.T
     return server
 
 
-def take(out: Path, settle: float, render: float, size: str = "1400,800") -> int:
+def take(out: Path, settle: float, render: float, size: str = "1400,800", source: str = "feeder") -> int:
     browser = find_browser()
     if browser is None:
         print("no Chromium found (Debian: apt-get install chromium)", file=sys.stderr)
@@ -79,8 +79,16 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800") -> int
         return proc
 
     try:
-        start("nodes.state_publisher", "--ns", "humanoid",
-              "--param", f"robot_description_file:={ROOT / 'robots' / 'humanoid.urdf'}")
+        if source == "humanoid":  # the real main job: DART, controller manager, joint commander
+            router.close()  # the launcher hosts its own router on the port
+            env.pop("ZENOH_CONNECT")
+            launch = start("launch", "humanoid.yaml", "gui:=false", "mode:=realtime", f"zenoh_port:={zenoh_port}")
+            threading.Thread(target=lambda: launch.stdout.read(), daemon=True).start()
+            env["ZENOH_CONNECT"] = loopback_endpoint(zenoh_port)
+            time.sleep(8.0)
+        else:
+            start("nodes.state_publisher", "--ns", "humanoid",
+                  "--param", f"robot_description_file:={ROOT / 'robots' / 'humanoid.urdf'}")
         viz = start("nodes.viz", "--serve", "--web-port", str(web_port), "--grpc-port", str(grpc_port))
         viewer_url = ""
         deadline = time.monotonic() + 60
@@ -92,8 +100,13 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800") -> int
             print("the visualiser did not report its web viewer URL", file=sys.stderr)
             return 1
         threading.Thread(target=lambda: viz.stdout.read(), daemon=True).start()  # keep its pipe drained
-        start("nodes.viz.feeder", "--param", "robots:=[humanoid]")
-        time.sleep(settle)
+        if source == "feeder":
+            feeder = start("nodes.viz.feeder", "--param", "robots:=[humanoid]")
+            time.sleep(settle)
+            # Freeze the motion so the viewer (slow on a software rasteriser) can catch up to a still pose.
+            feeder.send_signal(2)
+        else:
+            time.sleep(settle)
         page = delayed_page_server(viewer_url, render)
         out.parent.mkdir(parents=True, exist_ok=True)
         result = subprocess.run(
@@ -117,16 +130,21 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800") -> int
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait()
-        router.close()
+        try:
+            router.close()
+        except Exception:  # noqa: BLE001 - already closed for the launcher's own router
+            pass
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m nodes.viz.screenshot", description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "viz.png")
-    parser.add_argument("--settle", type=float, default=6.0, help="s of motion before the screenshot")
-    parser.add_argument("--render", type=float, default=15.0, help="s the viewer gets to load and draw")
+    parser.add_argument("--settle", type=float, default=5.0, help="s of motion before the screenshot")
+    parser.add_argument("--render", type=float, default=30.0, help="s the viewer gets to load and draw")
+    parser.add_argument("--source", choices=("feeder", "humanoid"), default="feeder",
+                        help="feeder: state publisher + viz feeder; humanoid: launch/humanoid.yaml (DART)")
     args = parser.parse_args(argv)
-    return take(args.out, args.settle, args.render)
+    return take(args.out, args.settle, args.render, source=args.source)
 
 
 if __name__ == "__main__":
