@@ -66,7 +66,8 @@ def test_stand_knee_bend_cycle_keeps_the_humanoid_standing_with_smooth_commands(
             wait_until(lambda: sim_time() >= t, timeout=180, interval=0.05, message=f"sim time {t:.1f} s")
 
         wait_until(lambda: states and heights, timeout=90, message="joint_states and model_states")
-        assert "controller manager ready" in processes.output(manager)
+        wait_until(lambda: "controller manager ready" in processes.output(manager), timeout=30,
+                   message="controller manager ready")
         t0 = sim_time()
         run_until(t0 + 1.0)  # settle on the feet
         with lock:
