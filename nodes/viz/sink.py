@@ -7,7 +7,9 @@ interface; our recording streams into that server over gRPC on loopback.
 
 from __future__ import annotations
 
+import ctypes
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -24,6 +26,39 @@ def has_display() -> bool:
     if sys.platform.startswith("linux"):
         return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
     return True
+
+
+def _load_prctl():
+    """libc's prctl, looked up here and not in the forked child (no imports between fork and exec)."""
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        return ctypes.CDLL("libc.so.6", use_errno=True).prctl
+    except OSError:
+        return None
+
+
+_PRCTL = _load_prctl()
+PR_SET_PDEATHSIG = 1
+
+
+def _die_with_parent() -> None:
+    if _PRCTL is not None:
+        _PRCTL(PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
+def rerun_cli() -> list[str]:
+    """The Rerun CLI binary itself: ``python -m rerun`` is a wrapper that runs it as a *child*, so
+    terminating the wrapper would orphan the server."""
+    try:
+        import rerun_cli as package
+
+        binary = Path(package.__file__).parent / ("rerun.exe" if sys.platform.startswith("win") else "rerun")
+        if binary.is_file():
+            return [str(binary)]
+    except ImportError:
+        pass
+    return [sys.executable, "-m", "rerun"]
 
 
 def free_port() -> int:
@@ -99,10 +134,11 @@ class Output:
         grpc_port = self.plan.grpc_port or free_port()
         web_port = self.plan.web_port or free_port()
         self.server = subprocess.Popen(
-            [sys.executable, "-m", "rerun", "--serve-web", "--bind", "127.0.0.1", "--port", str(grpc_port),
+            [*rerun_cli(), "--serve-web", "--bind", "127.0.0.1", "--port", str(grpc_port),
              "--web-viewer-port", str(web_port), "--server-memory-limit", "512MiB"],
-            # Same process group as the visualiser: a launcher that kills the group also stops the server.
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            # Same process group as the visualiser: a launcher that kills the group also stops the server;
+            # on Linux the server also gets SIGTERM if the visualiser dies without cleaning up (kill -9).
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=_die_with_parent,
         )
         if not wait_for_port(grpc_port, 20.0) or self.server.poll() is not None:
             self.close()

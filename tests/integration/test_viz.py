@@ -160,3 +160,42 @@ def test_bad_input_is_reported_and_the_visualiser_keeps_running(processes, route
     assert viz.poll() is None, "the visualiser died on bad input"
     log = processes.output(viz)
     assert "joint[j]@type: unknown type 'hinge'" in log
+
+
+def test_headless_default_serves_the_web_viewer_on_loopback_only(processes) -> None:
+    import re
+    import urllib.request
+
+    import psutil
+
+    viz = processes.start("-m", "nodes.viz", "--web-port", "0", "--grpc-port", "0", name="viz",
+                          env={"DISPLAY": "", "WAYLAND_DISPLAY": ""})
+    line = wait_until(lambda: re.search(r"Rerun web viewer: (http://127\.0\.0\.1:(\d+)/\?url=\S+)",
+                                        processes.output(viz)), 30, message="the web viewer URL")
+    assert "no display: serving the web viewer" in processes.output(viz)
+    with urllib.request.urlopen(f"http://127.0.0.1:{line.group(2)}/", timeout=10) as page:
+        assert page.status == 200 and b"<html" in page.read(4096).lower()
+    listening = [c.laddr for proc in [psutil.Process(viz.pid), *psutil.Process(viz.pid).children(recursive=True)]
+                 for c in proc.net_connections(kind="inet") if c.status == psutil.CONN_LISTEN]
+    assert listening, "nothing listening"
+    assert all(addr.ip == "127.0.0.1" for addr in listening), f"listening beyond loopback: {listening}"
+    viz.send_signal(2)
+    viz.wait(20)
+    assert viz.returncode == 0
+    assert not [p for p in psutil.process_iter(["cmdline"]) if "--serve-web" in (p.info["cmdline"] or [])
+                and str(line.group(2)) in " ".join(p.info["cmdline"] or [])], "the web server outlived the node"
+
+
+def test_web_server_dies_with_a_killed_visualiser(processes) -> None:
+    import re
+
+    import psutil
+
+    viz = processes.start("-m", "nodes.viz", "--serve", "--web-port", "0", "--grpc-port", "0", name="viz")
+    wait_until(lambda: re.search(r"Rerun web viewer: ", processes.output(viz)), 30, message="the web viewer URL")
+    server = psutil.Process(viz.pid).children()
+    assert len(server) == 1 and "--serve-web" in server[0].cmdline()
+    viz.kill()  # SIGKILL: no cleanup code runs
+    viz.wait(10)
+    psutil.wait_procs(server, timeout=10)
+    assert not server[0].is_running(), "the web server outlived a killed visualiser"
