@@ -65,6 +65,8 @@ class Publisher:
         self.publish_raw(msgs.encode(msg))
 
     def publish_raw(self, payload: bytes) -> None:
+        if self.node._closed:
+            return  # a callback still running while the node shuts down: nothing to send to
         with self._lock:
             self._seq += 1
             seq = self._seq

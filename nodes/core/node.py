@@ -363,9 +363,9 @@ class Node:
         """Undeclare everything and close the session (if this node opened it)."""
         if self._closed:
             return
+        self._closed = True  # first: publishers called from in-flight callbacks become no-ops
         self.request_shutdown()
         self.logger.set_sink(None)
-        self._closed = True
         for entity in reversed(self._entities):
             try:
                 entity.destroy()
