@@ -222,6 +222,9 @@ class ControllerManagerNode(Node):
                 raise ValueError("step must be an integer and position[] one value per name[]")
             if len(velocities) not in (0, len(names)) or len(efforts) not in (0, len(names)):
                 raise ValueError("velocity[] / effort[] must be empty or one value per name[]")
+            for field, values in (("position", positions), ("velocity", velocities), ("effort", efforts)):
+                if not all(type(v) is float or type(v) is int for v in values):  # noqa: E721 - bool is no number here
+                    raise ValueError(f"{field}[] must hold numbers")
             if not math.isfinite(t):
                 raise ValueError("stamp is not finite")
         except Exception as exc:  # noqa: BLE001 - a malformed frame is dropped, the loop lives on

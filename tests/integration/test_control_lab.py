@@ -200,6 +200,9 @@ def test_invalid_trajectories_are_rejected_and_the_command_is_kept(lab):
     lab.node.session.put(f"{NS}/hardware/state", b"\xc1 not msgpack")
     lab.node.session.put(f"{NS}/hardware/state", msgpack.packb({"step": "seven", "stamp": {"sec": 0, "nanosec": 0},
                                                                 "name": ["joint1"], "position": [0.0]}))
+    lab.node.session.put(f"{NS}/hardware/state", msgpack.packb({"step": 7, "stamp": {"sec": 0, "nanosec": 0},
+                                                                "name": ["joint1"], "position": ["up"]}))
+    wait_until(lambda: "position[] must hold numbers" in lab.log(), timeout=20, message="non-numeric state report")
     wait_until(lambda: "dropped a malformed hardware/state frame" in lab.log(), timeout=20,
                message="malformed frame report")
     lab.wait_sim(1.0)
