@@ -83,11 +83,9 @@ class NodeControllerContext:
     def destroy_all(self) -> None:
         for entity in reversed(self._entities):
             try:
-                entity.destroy()
+                self.node.destroy_entity(entity)
             except Exception as exc:  # noqa: BLE001 - best effort; never stop the manager
                 self.logger.warn(f"{self.controller_name}: could not close an endpoint: {exc}")
-            if entity in self.node._entities:
-                self.node._entities.remove(entity)
         self._entities.clear()
 
 
@@ -160,7 +158,7 @@ class ControllerManagerNode(Node):
                 attempt += 1
                 time.sleep(0.3)
                 continue
-            self._enqueue(lambda found=info: self._start(found), where="hardware start")
+            self.call_soon(lambda found=info: self._start(found), where="hardware start")
             return
 
     def _start(self, info: Any) -> None:

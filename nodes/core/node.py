@@ -274,6 +274,18 @@ class Node:
         return _Header(stamp=self.now_msg(), frame_id=frame_id)
 
     # ------------------------------------------------------------ executor
+    def call_soon(self, fn: Callable[[], None], where: str = "callback") -> None:
+        """Run ``fn`` on the executor thread (from any thread), after what is already queued."""
+        self._enqueue(fn, where)
+
+    def destroy_entity(self, entity: Any) -> None:
+        """Undeclare one publisher/subscription/service/client/action endpoint of this node."""
+        try:
+            entity.destroy()
+        finally:
+            if entity in self._entities:
+                self._entities.remove(entity)
+
     def _enqueue(self, fn: Callable[[], None], where: str = "callback") -> None:
         self._queue.put((fn, where))
 

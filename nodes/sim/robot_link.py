@@ -94,11 +94,9 @@ class RobotLink:
     def destroy(self) -> None:
         for endpoint in self._endpoints:
             try:
-                endpoint.destroy()
+                self.node.destroy_entity(endpoint)
             except Exception:  # noqa: BLE001 - already gone
                 pass
-            if endpoint in self.node._entities:
-                self.node._entities.remove(endpoint)
 
     def _on_command(self, payload: bytes) -> None:
         try:
