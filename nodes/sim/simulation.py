@@ -62,7 +62,7 @@ class Simulation:
         if entity is None:
             return False
         self.hardware.pop(entity.namespace, None)
-        self.world.world.removeSkeleton(entity.skeleton)
+        self.world.remove_skeleton(entity.skeleton)
         return True
 
     def clear(self) -> None:

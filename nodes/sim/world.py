@@ -99,9 +99,15 @@ class PhysicsWorld:
     def remove_ground(self) -> bool:
         if self.ground is None:
             return False
-        self.world.removeSkeleton(self.ground)
+        self.remove_skeleton(self.ground)
         self.ground = None
         return True
+
+    def remove_skeleton(self, skeleton) -> None:
+        """Remove a skeleton and forget the last step's contacts, which point into its collision objects
+        (reading them after the removal is a use-after-free: measured as a crash)."""
+        self.world.removeSkeleton(skeleton)
+        self.world.getConstraintSolver().clearLastCollisionResult()
 
     @property
     def has_ground(self) -> bool:

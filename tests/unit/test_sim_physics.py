@@ -248,3 +248,39 @@ def test_every_collision_detector_holds_the_humanoid_on_the_ground(detector):
 def test_unknown_collision_detector_is_rejected():
     with pytest.raises(ValueError, match="collision_detector 'physx'"):
         PhysicsWorld(1000.0, collision_detector="physx")
+
+
+def test_deleting_a_model_in_contact_leaves_no_stale_contacts():
+    # The last step's contacts point into the deleted model's collision objects: reading them crashed the
+    # process (use-after-free), so this runs in a child process and checks its exit status.
+    import subprocess
+    import sys
+
+    script = f"""
+import sys
+sys.path.insert(0, {str(ROOT)!r})
+from nodes.sim.config import parse_gains
+from nodes.sim.entity import EntitySpec, Pose
+from nodes.sim.simulation import Simulation
+from nodes.sim.world import PhysicsWorld
+world = PhysicsWorld()
+world.add_ground()
+sim = Simulation(world, parse_gains(None))
+sim.spawn(EntitySpec("humanoid", open({str(ROOT / "robots" / "humanoid.urdf")!r}).read(),
+                     pose=Pose.from_xyz_rpy(0, 0, 0.915)))
+for _ in range(5):
+    sim.spawn(EntitySpec("arm", open({str(ROOT / "tests" / "data" / "sim_arm.urdf")!r}).read(), fixed=True,
+                         pose=Pose.from_xyz_rpy(3, 0, 0)))
+    sim.step(5)
+    assert len(world.contacts()) >= 4     # the arm base rests in the ground
+    sim.delete("arm")
+    for _ in range(20):
+        sim.balance("humanoid")
+    sim.delete("ground_plane")
+    sim.balance("humanoid")
+    world.add_ground()
+sim.clear()
+print("survived")
+"""
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0 and "survived" in result.stdout, result.stderr[-2000:]
