@@ -60,7 +60,9 @@ class PhysicsWorld:
     def reset_collision(self) -> None:
         """A fresh collision detector: its broad-phase tree orders contacts, so a reset that keeps the old
         one is not bit-identical to a fresh start (measured: 1e-13 rad apart after 200 steps)."""
-        self.world.getConstraintSolver().setCollisionDetector(_make_detector(self.collision_detector))
+        solver = self.world.getConstraintSolver()
+        solver.setCollisionDetector(_make_detector(self.collision_detector))
+        solver.clearLastCollisionResult()   # its contacts point into the old detector's objects
 
     # -- gravity ----------------------------------------------------------------------------------------
     def set_gravity(self, gravity) -> None:

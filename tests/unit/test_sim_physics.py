@@ -279,6 +279,12 @@ for _ in range(5):
     sim.delete("ground_plane")
     sim.balance("humanoid")
     world.add_ground()
+    sim.step(50)
+    sim.reset_world()          # a fresh collision detector: the old one's contacts must go too
+    sim.balance("humanoid")
+    sim.step(50)
+    sim.reset_simulation()
+    sim.balance("humanoid")
 sim.clear()
 print("survived")
 """
