@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 import dartpy as dart
@@ -10,6 +11,8 @@ import numpy as np
 
 from nodes.sim.geometry import pose_from_xyz_rpy, quaternion_from_rotation
 from nodes.sim.urdf_info import RobotInfo, parse_urdf
+
+_NAME = re.compile(r"^[A-Za-z0-9_.\-]+$")   # entity names and namespace parts: safe in key expressions
 
 
 class SpawnError(ValueError):
@@ -79,11 +82,14 @@ class Entity:
     """A spawned model: its skeleton, URDF info and spawn state (for reset_world)."""
 
     def __init__(self, spec: EntitySpec) -> None:
-        if not spec.name or "/" in spec.name or any(c.isspace() for c in spec.name):
-            raise SpawnError(f"name {spec.name!r} must be non-empty without '/' or spaces")
+        if not _NAME.match(spec.name or ""):
+            raise SpawnError(f"name {spec.name!r} must be letters, digits, '_', '-' or '.'")
         self.spec = spec
         self.name = spec.name
         self.namespace = (spec.namespace or spec.name).strip("/")
+        if not all(_NAME.match(part) for part in self.namespace.split("/")):
+            raise SpawnError(f"robot_namespace {spec.namespace!r} must be '/'-separated names of letters, digits, "
+                             "'_', '-' or '.'")
         self.info: RobotInfo = parse_urdf(spec.xml)
         self.pose = spec.pose.validated()
         self.skeleton = self._load_skeleton(spec)

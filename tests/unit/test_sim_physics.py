@@ -142,6 +142,9 @@ def test_spawn_rejects_bad_requests_and_leaves_world_unchanged(make_sim):
         (EntitySpec("arm5", ARM, initial_positions={"elbow": 3.0}), "outside"),
         (EntitySpec("arm6", ARM.replace("</robot>", "")), "line"),
         (EntitySpec("bad name", ARM), "name"),
+        (EntitySpec("arm*", ARM), "name"),
+        (EntitySpec("arm8", ARM, namespace="robots/**"), "robot_namespace"),
+        (EntitySpec("arm9", ARM, namespace="a//b"), "robot_namespace"),
     ]
     for spec, reason in bad:
         with pytest.raises(ValueError) as info:
