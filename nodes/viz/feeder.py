@@ -58,14 +58,15 @@ class Feeder(Node):
         self.period = self.declare_parameter("period", 2.0, min_value=0.1)
         self.delete_after = self.declare_parameter("delete_after", 0.0, min_value=0.0)
         self.wall_stamps = self.declare_parameter("stamp", "sim", choices=("sim", "wall")) == "wall"
+        controller = self.declare_parameter("controller", "joint_trajectory_controller")
         self.start = time.monotonic()
         self.step = 0
         self.clock_pub = self.create_publisher(Clock, "/sim/clock")
         self.models_pub = self.create_publisher(ModelStates, "/sim/model_states")
         self.pubs = {ns: {
             "js": self.create_publisher(JointState, f"/{ns}/joint_states"),
-            "cs": self.create_publisher(ControllerState, f"/{ns}/joint_trajectory_controller/controller_state"),
-            "traj": self.create_publisher(JointTrajectory, f"/{ns}/joint_trajectory_controller/joint_trajectory"),
+            "cs": self.create_publisher(ControllerState, f"/{ns}/{controller}/controller_state"),
+            "traj": self.create_publisher(JointTrajectory, f"/{ns}/{controller}/joint_trajectory"),
             "hs": self.create_publisher(HumanoidState, f"/{ns}/humanoid_state"),
         } for ns in self.robots}
         self.create_timer(1.0 / self.rate, self.tick, sim_time=False)

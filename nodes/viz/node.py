@@ -91,6 +91,7 @@ class Visualiser(Node):
             "humanoid_state": p("humanoid_state_rate", 20.0, description="Hz", min_value=0.0),
             "markers": p("marker_rate", 10.0, description="Hz", min_value=0.0),
         }
+        self.show_ground = p("ground", True, description="draw the ground plane (off for joint_animation)")
         self.tf_fallback_after = p("tf_fallback_after", 1.0, min_value=0.0,
                                    description="s of joint_states without tf before frames come from our FK")
 
@@ -114,7 +115,8 @@ class Visualiser(Node):
         if self.output.viewer_url:
             self.logger.info(f"web viewer: open {self.output.viewer_url}")
             print(f"Rerun web viewer: {self.output.viewer_url}", flush=True)
-        log_ground(self.recording)
+        if self.show_ground:
+            log_ground(self.recording)
 
         self.clock_limit = RateLimiter(10.0)  # sim/clock runs at the physics rate: 10 Hz is plenty for us
         self.model_states_limit = RateLimiter(self.rates["model_states"])

@@ -112,7 +112,7 @@ def test_headless_launch_records_model_frames_plots_and_markers(processes, tmp_p
 def test_robots_appear_and_disappear_under_their_namespaces(processes, tmp_path: Path) -> None:
     rrd = tmp_path / "two.rrd"
     viz, feeder = start_stack(processes, rrd, ["humanoid", "humanoid2"],
-                              ["--param", "delete_after:=4.0"])
+                              ["--param", "delete_after:=4.0", "--param", "controller:=legs_controller"])
     wait_until(lambda: "robot 'humanoid2' was deleted" in processes.output(viz), 40,
                message="the second robot's deletion")
     time.sleep(1.0)
@@ -128,6 +128,9 @@ def test_robots_appear_and_disappear_under_their_namespaces(processes, tmp_path:
     # Its pose sits 0.6 m to the side of the first robot, from sim/model_states through tf.
     y = data["world/humanoid2/frames/pelvis"].column("Transform3D:translation")[-1][1][0][1]
     assert abs(y - 0.6) < 1e-6
+    # A trajectory controller with another name is found in the node graph and plotted.
+    assert data["plots/humanoid/legs_controller/left_knee"].column("Scalars:scalars")
+    assert "plots/humanoid/joint_trajectory_controller/left_knee" not in data
     # The first robot keeps going after the deletion.
     last = data["world/humanoid/frames/left_shin"].column("Transform3D:quaternion")[-1][0]
     assert last > cleared_at + 0.3
@@ -139,7 +142,8 @@ def test_bad_input_is_reported_and_the_visualiser_keeps_running(processes, route
     from nodes.core import Node
 
     rrd = tmp_path / "bad.rrd"
-    viz = processes.start("-m", "nodes.viz", "--save", str(rrd), "--robots", "badbot", name="viz")
+    viz = processes.start("-m", "nodes.viz", "--save", str(rrd), "--robots", "badbot", "--param", "ground:=false",
+                          name="viz")
     wait_until(lambda: "showing robot 'badbot'" in processes.output(viz), 30, message="the visualiser")
     String = msgs.get_type("std_msgs/msg/String")
     JointState = msgs.get_type("sensor_msgs/msg/JointState")
@@ -158,8 +162,11 @@ def test_bad_input_is_reported_and_the_visualiser_keeps_running(processes, route
         wait_until(lambda: "robot 'badbot': model 'humanoid'" in processes.output(viz), 15,
                    message="a valid description after the bad ones")
     assert viz.poll() is None, "the visualiser died on bad input"
-    log = processes.output(viz)
+    log = stop(processes, viz)
     assert "joint[j]@type: unknown type 'hinge'" in log
+    data = load(rrd)
+    assert data["world/badbot/links/torso/visual_0"].rows, "the valid description was drawn"
+    assert "world/ground" not in data, "ground:=false (the joint_animation tutorial has no ground)"
 
 
 def test_headless_default_serves_the_web_viewer_on_loopback_only(processes) -> None:
