@@ -19,7 +19,8 @@ import msgpack
 import msgs
 from nodes.core import Node
 from nodes.core.endpoints import ServiceError
-from nodes.sim.config import StartupEntity, parse_entities, parse_gains
+from nodes.core.params import ParameterError, load_params_file
+from nodes.sim.config import DEFAULT_CONFIG, StartupEntity, parse_entities, parse_gains
 from nodes.sim.entity import EntitySpec, Pose, SpawnError
 from nodes.sim.interfaces import (
     MODES,
@@ -61,7 +62,13 @@ class SimulatorNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__("simulator", **kwargs)
-        p = self.declare_parameter
+        defaults = _file_defaults()
+
+        def p(name: str, default: Any, **options: Any) -> Any:
+            # config/sim.yaml is the single place for the tuned defaults (gains above all), so launch files
+            # that set only a few parameters still get them
+            return self.declare_parameter(name, defaults.get(name, default), **options)
+
         physics_rate = p("physics_rate", 1000.0, description="physics steps per simulated second",
                          min_value=10.0, max_value=100000.0)
         mode = p("mode", "lockstep", description="lockstep | realtime | kinematic", choices=MODES)
@@ -421,6 +428,14 @@ class SimulatorNode(Node):
 
     def on_process_exit(self) -> None:
         self.logger.info(f"simulator stopping at sim time {self.world.time:.3f} s after {self.sim.step_count} steps")
+
+
+def _file_defaults() -> dict[str, Any]:
+    """Parameter defaults from ``config/sim.yaml`` (empty if it is missing or unreadable)."""
+    try:
+        return load_params_file(DEFAULT_CONFIG, "simulator")
+    except ParameterError:
+        return {}
 
 
 def _next_due(previous_due: float, now: float, period: float) -> float:
