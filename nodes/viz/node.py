@@ -14,6 +14,7 @@ import argparse
 import math
 import queue
 import threading
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -62,6 +63,7 @@ class RobotView:
     pending_static: list = field(default_factory=list)  # tf_static rows that came before the scene
     limits: dict[str, RateLimiter] = field(default_factory=dict)
     last_positions: dict[str, float] = field(default_factory=dict)
+    first_state: float = 0.0  # monotonic time of the first joint_states with a model
 
 
 class Visualiser(Node):
@@ -298,6 +300,10 @@ class Visualiser(Node):
         scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort)
         if not robot.tf_seen and when >= self.tf_fallback_after and robot.limits["fk"].ready():
             scene.log_fk_transforms(when, scene.positions)
+        if not scene.base_known and not robot.in_sim:
+            # No simulator places this robot (arm_viz): after a second, its root is the world origin.
+            robot.first_state = robot.first_state or time.monotonic()
+            scene.base_known = time.monotonic() - robot.first_state > 1.0
         if robot.limits["markers"].ready():
             scene.log_paths(when)
 

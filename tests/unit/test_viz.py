@@ -249,3 +249,11 @@ def test_path_buffer_keeps_the_newest_points_in_order() -> None:
         path.append((i, 0, 0))
     assert len(path) == 3
     assert path.array()[:, 0].tolist() == [2.0, 3.0, 4.0]
+
+
+@pytest.mark.parametrize("robot", sorted(p.name for p in (ROOT / "robots").glob("*.urdf")))
+def test_every_project_robot_is_drawable(robot: str) -> None:
+    model = parse_urdf((ROOT / "robots" / robot).read_text())
+    assert model.visual_links(), f"{robot}: nothing to draw"
+    fk = ForwardKinematics(model)
+    assert set(fk.link_poses({})) == set(model.links), f"{robot}: links unreachable from the root"
