@@ -247,13 +247,11 @@ class SimulatorNode(Node):
         if not 1 <= request.steps <= MAX_STEP_REQUEST:
             return StepSimulation.Response(success=False,
                                            status_message=f"steps must be in 1..{MAX_STEP_REQUEST}")
-        for _ in range(request.steps):
-            for link in self.robots.values():
-                command = link.inbox.take()
-                if command is not None:
-                    link.apply(command)
-            self.sim.step(1)
-            self._publish_outputs()
+        # full control periods (hardware frames, lockstep hand-off), as Gazebo runs its plugins while stepping
+        target = self.sim.step_count + request.steps
+        while self.sim.step_count < target:
+            self._control_period(max_steps=target - self.sim.step_count, pace=False)
+        self._publish_outputs(force=True)
         return StepSimulation.Response(success=True, status_message=f"stepped {request.steps}, "
                                        f"sim time {self.world.time:.4f} s")
 
@@ -371,7 +369,8 @@ class SimulatorNode(Node):
         update_rate = max(rates) if rates else self.default_update_rate
         return max(1, int(round(self.world.physics_rate / update_rate)))
 
-    def _control_period(self) -> None:
+    def _control_period(self, max_steps: int | None = None, pace: bool = True) -> None:
+        """One control period: hardware frames out, commands in (waiting for them in lockstep), physics."""
         step, t = self.sim.step_count, self.world.time
         lockstep = self.sim.mode != "realtime"
         for link in self.robots.values():
@@ -397,11 +396,12 @@ class SimulatorNode(Node):
             elif (not lockstep and not link.holding
                   and time.monotonic() - link.inbox.last_wall > self.command_timeout):
                 link.hold(f"no hardware/command for {self.command_timeout:g} s")
-        if waited:
+        if waited or not pace:
             self.pacer.restart()   # lockstep: as fast as the controller manager answers
         else:
             self._lateness.append(self.pacer.wait_until_due(t, self._idle))
-        self.sim.step(self._period_steps())
+        steps = self._period_steps()
+        self.sim.step(steps if max_steps is None else min(steps, max_steps))
 
     def spin(self) -> None:
         # Everything long-lived exists now: keep the cyclic GC from pausing the physics loop for

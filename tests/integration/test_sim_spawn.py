@@ -131,15 +131,20 @@ def test_sim_cli_pause_step_gravity_reset(processes, node, zenoh_port):
     def props():
         return call(node, GetPhysicsProperties, "/sim/get_physics_properties")
 
+    arm = connect_controller(node, "arm", policy=lambda state: {"shoulder": 0.5}, record=True)
+    wait_until(lambda: arm.states > 20, 30, message="lockstep with the arm")
     assert run_cli(processes, "sim", "pause", *port).returncode == 0
     paused_at = props()
     assert paused_at.pause
     time.sleep(0.3)
     assert props().step == paused_at.step                      # nothing moves while paused
+    arm.reset_recording()
     result = run_cli(processes, "sim", "step", "25", *port)
     assert result.returncode == 0, result.stdout
     assert props().step == paused_at.step + 25
     assert props().sim_time == pytest.approx(paused_at.sim_time + 0.025, abs=1e-9)
+    # stepping runs whole control periods: the controller saw (and answered) every one of them
+    assert [row[0] for row in arm.trajectory] == list(range(paused_at.step, paused_at.step + 25))
 
     result = run_cli(processes, "sim", "gravity", "0", "0", "-1.62", *port)
     assert result.returncode == 0 and props().gravity.z == -1.62
