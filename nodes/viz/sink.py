@@ -123,12 +123,20 @@ class Output:
             grpc_url = self._start_web_server()
             sinks.append(rr.GrpcSink(grpc_url))
         if plan.spawn:
-            # The native viewer listens for gRPC; connecting through a sink lets it sit beside the others.
-            port = free_port() if plan.serve else (plan.grpc_port or free_port())
-            recording.spawn(port=port, connect=False)
-            sinks.append(rr.GrpcSink(f"rerun+http://127.0.0.1:{port}/proxy"))
+            sinks.append(rr.GrpcSink(self._spawn_viewer()))
         if sinks:
             recording.set_sinks(*sinks, default_blueprint=blueprint)
+
+    def _spawn_viewer(self) -> str:
+        """The native viewer, started like ``rr.spawn`` (detached: the window outlives the node) but with
+        its gRPC server on loopback: ``rr.spawn`` binds it to every interface."""
+        port = free_port() if self.plan.serve else (self.plan.grpc_port or free_port())
+        subprocess.Popen([*rerun_cli(), "--bind", "127.0.0.1", "--port", str(port), "--expect-data-soon",
+                          "--hide-welcome-screen"],
+                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        if not wait_for_port(port, 20.0):
+            raise RuntimeError(f"the Rerun viewer did not start listening on port {port}")
+        return f"rerun+http://127.0.0.1:{port}/proxy"
 
     def _start_web_server(self) -> str:
         grpc_port = self.plan.grpc_port or free_port()
