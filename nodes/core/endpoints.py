@@ -79,13 +79,14 @@ class Publisher:
 
 class Subscription:
     def __init__(self, node: Node, msg_type: Any, key: str, callback: Callable[[Any], None] | None, *,
-                 inline: bool = False, raw: bool = False) -> None:
+                 inline: bool = False, raw: bool = False, with_key: bool = False) -> None:
         self.node = node
         self.msg_type = msg_type
         self.key = key
         self.callback = callback
         self.raw = raw
         self.inline = inline
+        self.with_key = with_key  # callback(msg, key): for wildcard keys ("*/joint_states")
         self._sub = node.session.declare_subscriber(key, self._on_sample)
         self._token = node._graph_token("sub", key, msg_type._type if msg_type else "*")
 
@@ -104,9 +105,11 @@ class Subscription:
         if self.callback is None:
             self.node._deliver_event(topic, msg)
         elif self.inline:
-            self.node._run_callback(self.callback, msg, where=f"subscription '{self.key}'")
+            args = (msg, topic) if self.with_key else (msg,)
+            self.node._run_callback(self.callback, *args, where=f"subscription '{self.key}'")
         else:
-            self.node._enqueue(lambda: self.callback(msg), where=f"subscription '{self.key}'")
+            args = (msg, topic) if self.with_key else (msg,)
+            self.node._enqueue(lambda: self.callback(*args), where=f"subscription '{self.key}'")
 
     def destroy(self) -> None:
         self._token.undeclare()

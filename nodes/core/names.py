@@ -15,9 +15,15 @@ def _clean(ns: str) -> str:
     return "/".join(p for p in ns.split("/") if p)
 
 
-def resolve(name: str, namespace: str = "", node_name: str = "") -> str:
-    """``x`` → ``ns/x``; ``/x`` → ``x``; ``~/x`` → ``ns/node/x``."""
-    if not name or not _VALID.match(name) or "//" in name.strip("/"):
+def resolve(name: str, namespace: str = "", node_name: str = "", *, wildcards: bool = False) -> str:
+    """``x`` → ``ns/x``; ``/x`` → ``x``; ``~/x`` → ``ns/node/x``.
+
+    With ``wildcards`` (subscriptions), whole chunks ``*`` and ``**`` are allowed (Zenoh key wildcards).
+    """
+    checked = name
+    if wildcards:
+        checked = "/".join("w" if chunk in ("*", "**") else chunk for chunk in name.split("/"))
+    if not name or not _VALID.match(checked) or "//" in name.strip("/"):
         raise NameError_(f"invalid name {name!r}: use letters, digits, '_', '-', '.', '/' and a leading '~/' or '/'")
     ns = _clean(namespace)
     if name.startswith("~"):

@@ -101,8 +101,8 @@ class Node:
         self.create_service(_SetParameters, "~/set_parameters", self._srv_set_parameters)
 
     # ------------------------------------------------------------ names, graph, logging
-    def resolve(self, name: str) -> str:
-        resolved = names.resolve(name, self.namespace, self.name)
+    def resolve(self, name: str, *, wildcards: bool = False) -> str:
+        resolved = names.resolve(name, self.namespace, self.name, wildcards=wildcards)
         return names.apply_remap(resolved, self._remap, self.namespace, self.name)
 
     def _graph_token(self, kind: str, key: str, type_name: str) -> Any:
@@ -200,8 +200,9 @@ class Node:
         return pub
 
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], None] | None = None, *,
-                            inline: bool = False, raw: bool = False) -> Subscription:
-        sub = Subscription(self, msg_type, self.resolve(topic), callback, inline=inline, raw=raw)
+                            inline: bool = False, raw: bool = False, with_key: bool = False) -> Subscription:
+        """``with_key=True`` calls ``callback(msg, key)`` (useful with wildcards like ``"/*/joint_states"``)."""
+        sub = Subscription(self, msg_type, self.resolve(topic, wildcards=True), callback, inline=inline, raw=raw, with_key=with_key)
         self._entities.append(sub)
         return sub
 

@@ -227,3 +227,20 @@ def test_timers_follow_sim_clock(router, client) -> None:
         assert [round(t, 2) for t in ticks[5:]] == [0.1]
     finally:
         node.destroy()
+
+
+def test_wildcard_subscription_reports_the_key(router, client) -> None:
+    JointState = msgs.get_type("sensor_msgs/msg/JointState")
+    seen: list[tuple[str, list[str]]] = []
+    client.create_subscription(JointState, "/*/joint_states", lambda m, key: seen.append((key, m.name)),
+                               inline=True, with_key=True)
+    talker = Node("talker", connect=[router])
+    try:
+        a = talker.create_publisher(JointState, "/robot_a/joint_states")
+        b = talker.create_publisher(JointState, "/robot_b/joint_states")
+        wait_until(lambda: {k for k, _ in seen} >= {"robot_a/joint_states", "robot_b/joint_states"}
+                   or (a.publish(JointState(name=["a"])), b.publish(JointState(name=["b"])))[0],
+                   timeout=10, message="both robots' joint_states")
+    finally:
+        talker.destroy()
+    assert ("robot_a/joint_states", ["a"]) in seen and ("robot_b/joint_states", ["b"]) in seen

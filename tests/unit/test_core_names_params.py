@@ -67,3 +67,12 @@ def test_params_file_ros_format(tmp_path) -> None:
     broken.write_text("a: [\n")
     with pytest.raises(ParameterError, match="invalid YAML"):
         load_params_file(broken, "n")
+
+
+def test_wildcards_only_for_subscriptions() -> None:
+    assert resolve("/*/joint_states", "ns", "n", wildcards=True) == "*/joint_states"
+    assert resolve("sim/**", "", "n", wildcards=True) == "sim/**"
+    with pytest.raises(NameError_):
+        resolve("/*/joint_states", "ns", "n")
+    with pytest.raises(NameError_):
+        resolve("/a*/x", "ns", "n", wildcards=True)
