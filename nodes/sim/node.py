@@ -400,6 +400,8 @@ class SimulatorNode(Node):
             self.pacer.restart()   # lockstep: as fast as the controller manager answers
         else:
             self._lateness.append(self.pacer.wait_until_due(t, self._idle))
+            if self.paused or self.sim.step_count != step:
+                return   # paused or reset by a request served while waiting: this period is void
         steps = self._period_steps()
         self.sim.step(steps if max_steps is None else min(steps, max_steps))
 
