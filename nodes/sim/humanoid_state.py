@@ -1,8 +1,9 @@
 """Balance quantities of one robot: centre of mass, support polygon from its contacts, ZMP, is_balanced.
 
-On flat ground the ZMP equals the centre of pressure of the contact forces, which DART's constraint solver
-gives us per contact; without contact force (airborne, kinematic mode) it falls back to the cart-table
-estimate from the CoM acceleration.
+The ZMP is the cart-table estimate from the CoM and its acceleration (DART's, after the contact impulses):
+x_zmp = x_com - h * a_x / (a_z + g). Standing still it equals the centre of pressure of the contact forces;
+under a push or while tipping it leaves the support polygon, which the centre of pressure by construction
+never does - so ``is_balanced`` (ZMP inside the polygon) carries information.
 """
 
 from __future__ import annotations
@@ -59,7 +60,7 @@ def inside_polygon(point: tuple[float, float], polygon: list[tuple[float, float]
 
 
 def robot_contacts(contacts, skeleton_name: str) -> list[tuple[np.ndarray, float]]:
-    """(point, normal force magnitude) of every contact between the robot and anything else."""
+    """(point, vertical force magnitude) of every contact between the robot and anything else."""
     result = []
     for contact in contacts:
         first = contact.collisionObject1.getShapeFrame().getSkeleton().getName()
@@ -78,17 +79,12 @@ def balance_state(com: np.ndarray, com_acceleration: np.ndarray, gravity_z: floa
     hull = convex_hull((float(p[0]), float(p[1])) for p, _ in contacts)
     ground_z = float(np.mean([p[2] for p, _ in contacts])) if contacts else 0.0
     polygon = [(x, y, ground_z) for x, y in hull]
-    total = sum(f for _, f in contacts)
-    if total > 1e-6:
-        zmp = sum((p[:2] * f for p, f in contacts), np.zeros(2)) / total
+    height = com[2] - ground_z
+    denominator = float(com_acceleration[2]) - gravity_z
+    if abs(denominator) > 1e-6:
+        zmp = com[:2] - height * np.asarray(com_acceleration[:2]) / denominator
     else:
-        # cart-table model: x_zmp = x_com - h * a_x / (a_z + g)
-        height = com[2] - ground_z
-        denominator = float(com_acceleration[2]) - gravity_z
-        if abs(denominator) > 1e-6:
-            zmp = com[:2] - height * np.asarray(com_acceleration[:2]) / denominator
-        else:
-            zmp = com[:2].copy()
+        zmp = com[:2].copy()    # free fall or no gravity: the estimate is undefined, use the CoM
     zmp_xy = (float(zmp[0]), float(zmp[1]))
     return BalanceState(
         center_of_mass=(float(com[0]), float(com[1]), float(com[2])),

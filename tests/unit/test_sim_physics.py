@@ -293,3 +293,21 @@ print("survived")
 """
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0 and "survived" in result.stdout, result.stderr[-2000:]
+
+
+def test_a_push_moves_the_zmp_out_of_the_support_polygon(make_sim):
+    sim = make_sim()
+    sim.spawn(EntitySpec("humanoid", HUMANOID, pose=Pose.from_xyz_rpy(0, 0, 0.915)))
+    sim.step(500)
+    assert sim.balance("humanoid").is_balanced
+    torso = sim.entities["humanoid"].skeleton.getBodyNode("torso")
+    during = []
+    for _ in range(100):                       # 250 N forward on the torso for 0.1 s
+        torso.addExtForce(np.array([250.0, 0.0, 0.0]), np.zeros(3), False, False)
+        sim.step(1)
+        during.append(sim.balance("humanoid"))
+    assert not all(b.is_balanced for b in during)
+    assert min(b.zmp[0] for b in during) < -0.08       # behind the heels (x_min of the feet = -0.08)
+    sim.step(3000)
+    settled = sim.balance("humanoid")
+    assert settled.is_balanced and settled.center_of_mass[2] > 0.8   # it recovered and still stands
