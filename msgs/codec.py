@@ -87,7 +87,7 @@ def _field_encoder(f: FieldSpec) -> Callable[[Any], Any]:
             if f.base in FLOAT_TYPES:
                 return _encode_float_list
             if f.base in STRING_TYPES:
-                return lambda v: v if type(v) is list and all(type(x) is str for x in v) else [str(x) for x in v]
+                return lambda v: v if type(v) is list and _STR_ONLY.issuperset(map(type, v)) else [str(x) for x in v]
             return lambda v: [scalar(x) for x in v]
         return scalar
     if f.is_array:
@@ -95,8 +95,12 @@ def _field_encoder(f: FieldSpec) -> Callable[[Any], Any]:
     return lambda v, t=f.base: _encoder(t)(v)
 
 
+_FLOAT_ONLY = frozenset({float})
+_STR_ONLY = frozenset({str})
+
+
 def _encode_float_list(v: Any) -> list[float]:
-    if type(v) is list and all(type(x) is float for x in v):
+    if type(v) is list and _FLOAT_ONLY.issuperset(map(type, v)):
         return v
     if hasattr(v, "tolist"):  # numpy arrays
         return [float(x) for x in v.tolist()]
@@ -153,8 +157,20 @@ _decoders: dict[tuple[str, Limits], Callable[[Any], Any]] = {}
 _MISSING = object()
 
 
+_default_decoders: dict[str, Callable[[Any], Any]] = {}
+
+
 def _decoder(type_name: str, limits: Limits) -> Callable[[Any], Any]:
     """A compiled validating decoder for ``type_name``: fast on valid data, precise on errors."""
+    if limits is DEFAULT_LIMITS:  # the common case, without hashing the Limits dataclass
+        dec = _default_decoders.get(type_name)
+        if dec is None:
+            dec = _default_decoders[type_name] = _compiled_decoder(type_name, limits)
+        return dec
+    return _compiled_decoder(type_name, limits)
+
+
+def _compiled_decoder(type_name: str, limits: Limits) -> Callable[[Any], Any]:
     key = (type_name, limits)
     dec = _decoders.get(key)
     if dec is not None:
@@ -250,7 +266,14 @@ def _scalar_decoder(f: FieldSpec, limits: Limits) -> Callable[[Any], Any]:
 
         return dec_str
     nested = f.base
-    return lambda v: _decoder(nested, limits)(v)
+    resolved: list[Callable[[Any], Any]] = []  # looked up on first use: types may be recursive
+
+    def dec_nested(v: Any) -> Any:
+        if not resolved:
+            resolved.append(_decoder(nested, limits))
+        return resolved[0](v)
+
+    return dec_nested
 
 
 def _array_decoder(f: FieldSpec, limits: Limits) -> Callable[[Any], Any]:
@@ -296,9 +319,9 @@ def _array_decoder(f: FieldSpec, limits: Limits) -> Callable[[Any], Any]:
             raise _FieldError(f"expected a list, got {_kind(v)}")
         check_len(len(v))
         # Fast paths: all floats with a finite sum (so every element is finite); all strings.
-        if is_float and all(type(x) is float for x in v) and (allow or math.isfinite(sum(v))):
+        if is_float and _FLOAT_ONLY.issuperset(map(type, v)) and (allow or math.isfinite(sum(v))):
             return v
-        if is_str and all(type(x) is str for x in v) and all(len(x) <= limits.max_string_length for x in v):
+        if is_str and _STR_ONLY.issuperset(map(type, v)) and sum(map(len, v)) <= limits.max_string_length:
             return v
         return items(v)
 
