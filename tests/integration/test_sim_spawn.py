@@ -188,3 +188,14 @@ def test_realtime_mode_holds_latest_command_then_position(processes, node, sessi
     assert position[0] == pytest.approx(0.5, abs=0.02) and position[1] == pytest.approx(-0.7, abs=0.02)
     assert proc.poll() is None
     queryable.undeclare()
+
+
+@pytest.mark.parametrize("param, message", [
+    ("mode:=fast", "parameter 'mode'"),
+    ('gains:={"*": {"q": 1}}', "gains.*: unknown keys"),
+    ("entities:=[{name: x}]", "entities[0]: give exactly one of file and topic"),
+])
+def test_bad_parameters_exit_2_naming_the_parameter(processes, param, message):
+    proc = start_sim(processes, param)
+    assert proc.wait(60) == 2          # and it exits: the Zenoh session is closed on the way out
+    assert message in processes.output(proc)
