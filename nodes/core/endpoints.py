@@ -64,6 +64,14 @@ class Publisher:
             raise TypeError(f"publisher on '{self.key}' sends {self.msg_type._type}, got {type(msg).__name__}")
         self.publish_raw(msgs.encode(msg))
 
+    @property
+    def has_subscribers(self) -> bool:
+        """True when at least one subscriber matches this key (skip costly messages nobody reads)."""
+        try:
+            return bool(self._pub.matching_status.matching)
+        except Exception:  # noqa: BLE001 - undeclared or closed: nobody to send to
+            return False
+
     def publish_raw(self, payload: bytes) -> None:
         if self.node._closed:
             return  # a callback still running while the node shuts down: nothing to send to

@@ -12,6 +12,7 @@ import queue
 import threading
 import time
 import traceback
+import weakref
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -59,6 +60,14 @@ class Timer:
         self.next_due = (self.node.now() if self.sim_time else time.monotonic()) + self.period
 
 
+_LIVE_NODES: weakref.WeakSet[Node] = weakref.WeakSet()
+
+
+def live_nodes() -> set[Node]:
+    """Nodes constructed and not yet destroyed in this process."""
+    return set(_LIVE_NODES)
+
+
 class Node:
     def __init__(self, name: str, *, namespace: str = "", params: dict[str, Any] | None = None,
                  remap: dict[str, str] | None = None, session: zenoh.Session | None = None,
@@ -72,6 +81,15 @@ class Node:
         self.logger = Logger(self.fully_qualified_name.lstrip("/"), log_level)
         self._owns_session = session is None
         self.session = session if session is not None else open_peer(connect)
+        try:
+            self._init_runtime(params, remap)
+        except BaseException:
+            if self._owns_session:
+                self.session.close()  # an open session would keep the process from exiting
+            raise
+        _LIVE_NODES.add(self)
+
+    def _init_runtime(self, params: dict[str, Any] | None, remap: dict[str, str] | None) -> None:
         self.session_id = str(self.session.info.zid())
         self._remap = dict(remap or {})
         self._overrides = dict(params or {})
@@ -377,6 +395,7 @@ class Node:
         if self._closed:
             return
         self._closed = True  # first: publishers called from in-flight callbacks become no-ops
+        _LIVE_NODES.discard(self)
         self.request_shutdown()
         self.logger.set_sink(None)
         for entity in reversed(self._entities):

@@ -244,3 +244,34 @@ def test_wildcard_subscription_reports_the_key(router, client) -> None:
     finally:
         talker.destroy()
     assert ("robot_a/joint_states", ["a"]) in seen and ("robot_b/joint_states", ["b"]) in seen
+
+
+BAD_NODE = """
+from nodes.core import Node, run_node
+class Bad(Node):
+    def __init__(self, **kw):
+        super().__init__("bad", **kw)
+        self.declare_parameter("rate", 1.0, min_value=2.0)
+raise SystemExit(run_node(Bad))
+"""
+
+
+def test_bad_parameter_exits_2_with_the_reason_and_no_hang(router) -> None:
+    env = dict(os.environ, ZENOH_CONNECT=router, PYTHONPATH=str(ROOT))
+    result = subprocess.run([sys.executable, "-c", BAD_NODE], capture_output=True, text=True, env=env,
+                            timeout=30, cwd=ROOT)
+    assert result.returncode == 2
+    assert "parameter 'rate': 1.0 is below the minimum 2.0" in result.stderr
+
+
+def test_publisher_knows_whether_anyone_listens(router, client) -> None:
+    JointState = msgs.get_type("sensor_msgs/msg/JointState")
+    pub = client.create_publisher(JointState, "/lonely/joint_states")
+    assert not pub.has_subscribers
+    other = Node("listener2", connect=[router])
+    try:
+        other.create_subscription(JointState, "/lonely/joint_states", lambda m: None)
+        wait_until(lambda: pub.has_subscribers, timeout=5, message="matching subscriber")
+    finally:
+        other.destroy()
+    wait_until(lambda: not pub.has_subscribers, timeout=5, message="subscriber gone")
