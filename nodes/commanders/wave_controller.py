@@ -55,8 +55,14 @@ class WaveController(Node):
 
     def control_callback(self) -> None:
         targets = wave_targets(self.time_step * self.period, self.arm_amplitude, self.leg_amplitude)
+        # One start stamp for all four limbs: each controller starts its trajectory at that time (ROS JTC
+        # semantics), so the limbs stay in phase even when the messages arrive a few cycles apart.
+        stamp = self.now_msg() if self.now() > 0.0 else None
         for controller, target in targets.items():
-            self.publishers[controller].publish(single_point([LIMBS[controller]], [target], self.move_time))
+            trajectory = single_point([LIMBS[controller]], [target], self.move_time)
+            if stamp is not None:
+                trajectory.header.stamp = stamp
+            self.publishers[controller].publish(trajectory)
         self.time_step += 1
         if "left_arm_joint" in self.current_joint_positions:
             self.logger.info(f"Left arm: {self.current_joint_positions['left_arm_joint']:.2f} rad")

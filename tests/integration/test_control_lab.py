@@ -113,7 +113,9 @@ def test_follow_joint_trajectory_to_1_57_in_3_s_succeeds(lab):
     assert status == SUCCEEDED and result.error_code == 0, result
     assert abs(lab.position - 1.57) < 0.01
     assert feedback and list(feedback[-1].joint_names) == ["joint1"]
-    wait_until(lambda: controller_states, timeout=10, message="controller_state")
+    # controller_state is published at state_publish_rate: wait for one sent after the goal finished
+    wait_until(lambda: controller_states and controller_states[-1].reference.positions[0] == pytest.approx(1.57),
+               timeout=10, message="controller_state at the goal")
     last = controller_states[-1]
     assert list(last.joint_names) == ["joint1"]
     assert last.reference.positions[0] == pytest.approx(1.57)
