@@ -111,6 +111,7 @@ def test_follow_joint_trajectory_to_1_57_in_3_s_succeeds(lab):
     assert handle.accepted
     status, result = handle.get_result(timeout=90)
     assert status == SUCCEEDED and result.error_code == 0, result
+    lab.wait_sim(0.1)  # our joint_states subscription may trail the result by a few messages under load
     assert abs(lab.position - 1.57) < 0.01
     assert feedback and list(feedback[-1].joint_names) == ["joint1"]
     # controller_state is published at state_publish_rate: wait for one sent after the goal finished
@@ -141,6 +142,7 @@ def test_sine_trajectory_is_tracked_and_square_runs_to_completion(lab):
     assert handle.accepted
     status, result = handle.get_result(timeout=120)
     assert status == SUCCEEDED, result
+    lab.wait_sim(0.1)  # let our joint_states subscription catch up with the result
     assert abs(lab.position - square[-1][1]) < 0.01
 
 
@@ -306,6 +308,7 @@ def test_spawner_waits_for_the_manager_and_hardware_loss_is_reported(processes, 
         wait_until(lambda: "hardware is back" in lab.log(), timeout=60, message="hardware back")
         handle = lab.action.send_goal(goal([(1.0, -0.5)]))
         assert handle.get_result(timeout=60)[0] == SUCCEEDED
+        lab.wait_sim(0.1)  # let our joint_states subscription catch up with the result
         assert abs(lab.position + 0.5) < 0.01
     finally:
         lab.close()
@@ -330,6 +333,7 @@ crasher:
                    message="crash report")
         handle = lab.action.send_goal(goal([(1.0, 0.7)]))
         assert handle.get_result(timeout=60)[0] == SUCCEEDED
+        lab.wait_sim(0.1)  # let our joint_states subscription catch up with the result
         assert abs(lab.position - 0.7) < 0.01
         listing = _cli(lab, "list_controllers")
         states = {line.split()[0]: line.split()[-1] for line in listing.stdout.splitlines() if not line.startswith("\t")}
