@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 import zenoh
 
 import msgs
-from nodes.core.endpoints import Publisher, ServiceError, call_raw, encoding_for
+from nodes.core.endpoints import Publisher, ServiceError, call_raw, decode_request, encoding_for
 
 if TYPE_CHECKING:
     from nodes.core.node import Node
@@ -118,16 +118,7 @@ class ActionServer:
 
     # -- zenoh side: decode, then hand the work to the node's executor
     def _decode(self, query: zenoh.Query, cls: Any) -> Any | None:
-        from nodes.core.endpoints import _error_payload
-
-        try:
-            payload = query.payload.to_bytes() if query.payload is not None else b"\x80"
-            return msgs.decode(cls, payload)
-        except msgs.DecodeError as exc:
-            self.node.logger.warn_throttle(1.0, f"action '{self.key}': bad request: {exc}", key=f"act:{self.key}")
-            query.reply_err(_error_payload(str(exc)))
-            query.drop()
-            return None
+        return decode_request(self.node, query, cls, f"action '{self.key}'")
 
     def _on_send_goal(self, query: zenoh.Query) -> None:
         request = self._decode(query, self.action_type.SendGoalRequest)

@@ -128,6 +128,21 @@ def _error_payload(reason: str) -> bytes:
     return msgpack.packb({"error": reason}, use_bin_type=True)
 
 
+_EMPTY_MAP = msgpack.packb({})
+
+
+def decode_request(node: Node, query: zenoh.Query, cls: Any, what: str) -> Any | None:
+    """The query's request as ``cls``; on a bad payload, answer ``reply_err`` naming the field and return None."""
+    payload = query.payload.to_bytes() if query.payload is not None else b""
+    try:
+        return msgs.decode(cls, payload or _EMPTY_MAP)  # no payload: a request without fields
+    except DecodeError as exc:
+        node.logger.warn_throttle(1.0, f"{what}: bad request: {exc}", key=f"bad request:{what}")
+        query.reply_err(_error_payload(str(exc)))
+        query.drop()
+        return None
+
+
 class ServiceServer:
     """A queryable on ``key``: request map in, response map out (DESIGN §4 wire protocol)."""
 
@@ -143,13 +158,8 @@ class ServiceServer:
         self._token = node._graph_token("srv", key, srv_type._type)
 
     def _on_query(self, query: zenoh.Query) -> None:
-        payload = query.payload.to_bytes() if query.payload is not None else b""
-        try:
-            request = msgs.decode(self.srv_type.Request, payload or msgpack.packb({}))
-        except DecodeError as exc:
-            self.node.logger.warn_throttle(1.0, f"service '{self.key}': bad request: {exc}", key=f"srv:{self.key}")
-            query.reply_err(_error_payload(str(exc)))
-            query.drop()
+        request = decode_request(self.node, query, self.srv_type.Request, f"service '{self.key}'")
+        if request is None:
             return
         if self.inline:
             self._serve(query, request)

@@ -6,10 +6,18 @@ import argparse
 import sys
 
 import msgs
-from nodes.core import ServiceError, graph
+from nodes.core import ServiceError
 from nodes.core.action import STATUS_NAMES, ActionClient
 from nodes.tools.cli import UsageError
-from nodes.tools.common import add_common, cli_node, key_of, message_from_yaml, resolve_type, to_yaml
+from nodes.tools.common import (
+    add_common,
+    cli_node,
+    key_of,
+    message_from_yaml,
+    print_endpoints,
+    resolve_type,
+    to_yaml,
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -28,14 +36,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.cmd == "list":
-        node = cli_node(args, "action")
-        try:
-            actions = {(e.name, e.type_name) for e in graph.snapshot(node.session) if e.kind == "act"}
-        finally:
-            node.destroy()
-        for name, type_name in sorted(actions):
-            print(f"/{name} [{type_name}]" if args.show_types else f"/{name}")
-        return 0
+        return print_endpoints(args, "act", "action")
     action = resolve_type(args.type)
     if not isinstance(action, msgs.Action):
         raise UsageError(f"'{args.type}' is not an action type")

@@ -22,6 +22,25 @@ def cli_node(args: argparse.Namespace, purpose: str) -> Node:
     return Node(f"zenroid_{purpose}_{os.getpid()}", connect=connect_from_args(args), log_level="warn")
 
 
+def graph_entries(args: argparse.Namespace, purpose: str) -> list[Any]:
+    """The live graph as seen by a short-lived CLI node."""
+    from nodes.core import graph
+
+    node = cli_node(args, purpose)
+    try:
+        return graph.snapshot(node.session)
+    finally:
+        node.destroy()
+
+
+def print_endpoints(args: argparse.Namespace, kind: str, purpose: str) -> int:
+    """``service list`` / ``action list``: every endpoint of ``kind`` with (``-t``) its type."""
+    found = {(e.name, e.type_name) for e in graph_entries(args, purpose) if e.kind == kind}
+    for name, type_name in sorted(found):
+        print(f"/{name} [{type_name}]" if args.show_types else f"/{name}")
+    return 0
+
+
 def resolve_type(type_name: str) -> Any:
     try:
         return msgs.get_type(type_name)

@@ -6,7 +6,7 @@ import argparse
 from collections import defaultdict
 
 from nodes.core import graph
-from nodes.tools.common import add_common, cli_node
+from nodes.tools.common import add_common, graph_entries
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -16,11 +16,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    node = cli_node(args, "graph")
-    try:
-        entries = graph.snapshot(node.session)
-    finally:
-        node.destroy()
+    entries = graph_entries(args, "graph")
 
     def shown(e: graph.GraphEntry) -> bool:
         if args.all:

@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from nodes.core import graph
-from nodes.tools.common import add_common, cli_node
+from nodes.tools.common import add_common, graph_entries
 
 _SECTIONS = (("pub", "Publishers"), ("sub", "Subscribers"), ("srv", "Service Servers"), ("cli", "Service Clients"),
              ("act", "Action Servers"), ("actc", "Action Clients"))
@@ -22,11 +21,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    node = cli_node(args, "node")
-    try:
-        entries = graph.snapshot(node.session)
-    finally:
-        node.destroy()
+    entries = graph_entries(args, "node")
     if args.cmd == "list":
         names = sorted({e.node for e in entries if e.kind == "node"})
         for name in names:

@@ -6,10 +6,18 @@ import argparse
 import sys
 
 import msgs
-from nodes.core import ServiceError, graph
+from nodes.core import ServiceError
 from nodes.core.endpoints import Client
 from nodes.tools.cli import UsageError
-from nodes.tools.common import add_common, cli_node, key_of, message_from_yaml, resolve_type, to_yaml
+from nodes.tools.common import (
+    add_common,
+    cli_node,
+    key_of,
+    message_from_yaml,
+    print_endpoints,
+    resolve_type,
+    to_yaml,
+)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -27,14 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.cmd == "list":
-        node = cli_node(args, "service")
-        try:
-            services = {(e.name, e.type_name) for e in graph.snapshot(node.session) if e.kind == "srv"}
-        finally:
-            node.destroy()
-        for name, type_name in sorted(services):
-            print(f"/{name} [{type_name}]" if args.show_types else f"/{name}")
-        return 0
+        return print_endpoints(args, "srv", "service")
     srv = resolve_type(args.type)
     if not isinstance(srv, msgs.Service):
         raise UsageError(f"'{args.type}' is not a service type")
