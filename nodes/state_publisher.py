@@ -24,7 +24,6 @@ import numpy as np
 
 import msgs
 from nodes.core import Node, ParameterError, run_node
-from nodes.core.latched import LatchedPublisher
 from nodes.kinematics import KinematicTree
 from nodes.urdf import UrdfError, load_robot_description, parse_urdf, parse_xacro_args, validate
 
@@ -151,8 +150,8 @@ class RobotStatePublisher(Node):
         self.urdf = urdf
         self.add_on_set_parameter_callback(self._on_set_parameter)
 
-        self.description_pub = LatchedPublisher(self, String, "robot_description")
-        self.static_pub = LatchedPublisher(self, TFMessage, "tf_static")
+        self.description_pub = self.create_publisher(String, "robot_description", latched=True)
+        self.static_pub = self.create_publisher(TFMessage, "tf_static", latched=True)
         self.tf_pub = self.create_publisher(TFMessage, "tf")
         self.create_subscription(JointState, "joint_states", self.on_joint_states)
         if self.use_model_states:

@@ -212,10 +212,23 @@ class Node:
 
     # ------------------------------------------------------------ endpoints
     def create_publisher(self, msg_type: Any, topic: str, *, reliable: bool = True,
-                         priority: zenoh.Priority | None = None, express: bool = False) -> Publisher:
+                         priority: zenoh.Priority | None = None, express: bool = False,
+                         latched: bool = False) -> Any:
+        """``latched=True``: the last message is also answered as a queryable on the key, so late joiners
+        get it with ``fetch_latched`` (ROS "transient local", as for robot_description and tf_static)."""
+        if latched:
+            from nodes.core.latched import LatchedPublisher
+
+            return LatchedPublisher(self, msg_type, topic)
         pub = Publisher(self, msg_type, self.resolve(topic), reliable=reliable, priority=priority, express=express)
         self._entities.append(pub)
         return pub
+
+    def fetch_latched(self, msg_type: Any, topic: str, timeout: float = 2.0) -> Any | None:
+        """The last message of a latched topic (None when nobody answers within ``timeout`` s)."""
+        from nodes.core.latched import fetch_latched
+
+        return fetch_latched(self.session, msg_type, self.resolve(topic), timeout)
 
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], None] | None = None, *,
                             inline: bool = False, raw: bool = False, with_key: bool = False) -> Subscription:
