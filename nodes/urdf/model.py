@@ -1,9 +1,12 @@
-"""A small, strict URDF model: links, joints, inertials, mimic and the ``<ros2_control>`` block.
+"""A small, strict URDF model: links (inertial, visual and collision geometry, material colours), joints,
+mimic and the ``<ros2_control>`` block. The one URDF parser of the project: the state publisher, the URDF tools,
+the visualiser and the simulator all build on it, so every description goes through the XML safety check.
 
 Why our own parser (and not only yourdfpy): the CLI must report *why* a broken file is broken (missing links,
 bad numbers, limits), the input may be untrusted (entity attacks), and the kinematics code needs exactly the
 joint origins/axes/mimic data in plain numpy form. Structural checks live in ``validate``; this module only
-refuses what it cannot represent (bad numbers, unknown joint types, missing required elements).
+refuses what it cannot represent (bad numbers, unknown joint types, missing required elements). Elements carry
+their source ``line`` so a consumer (the simulator) can point at the offending line.
 """
 
 from __future__ import annotations
@@ -18,10 +21,19 @@ from nodes.urdf.xml_safety import UnsafeXmlError, parse_xml
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
 MOVABLE_TYPES = ("revolute", "continuous", "prismatic")
+GEOMETRY_KINDS = ("box", "cylinder", "sphere", "mesh")
+DEFAULT_RGBA = (0.7, 0.7, 0.7, 1.0)  # a visual without a usable material (RViz's grey)
 
 
 class UrdfError(ValueError):
-    """The robot description cannot be parsed; the message names the element and the reason."""
+    """The robot description cannot be parsed; the message names the element and the reason.
+
+    ``line`` is the source line of the offending element when known (None otherwise).
+    """
+
+    def __init__(self, message: str, line: int | None = None) -> None:
+        super().__init__(message)
+        self.line = line
 
 
 @dataclass
@@ -29,6 +41,32 @@ class Inertial:
     mass: float
     origin: np.ndarray  # 4x4, centre of mass frame in the link frame
     inertia: np.ndarray  # 3x3 symmetric, about the centre of mass
+    line: int | None = None  # of the <mass> element
+
+
+@dataclass(frozen=True)
+class Shape:
+    """The geometry of a ``<visual>`` or ``<collision>``: ``kind`` is box / cylinder / sphere / mesh (metres)."""
+
+    kind: str
+    origin: np.ndarray  # 4x4, shape frame in the link frame
+    size: tuple[float, float, float] = (0.0, 0.0, 0.0)  # box
+    radius: float = 0.0  # cylinder, sphere
+    length: float = 0.0  # cylinder
+    filename: str = ""  # mesh
+    scale: tuple[float, float, float] = (1.0, 1.0, 1.0)  # mesh
+    line: int | None = None  # of the shape element (<box>, <mesh>, ...)
+
+
+@dataclass(frozen=True)
+class Visual(Shape):
+    rgba: tuple[float, float, float, float] = DEFAULT_RGBA  # inline <color>, else the named material, else grey
+    material: str | None = None  # the material's name, if any
+
+
+@dataclass(frozen=True)
+class Collision(Shape):
+    pass
 
 
 @dataclass
@@ -37,6 +75,9 @@ class Link:
     inertial: Inertial | None = None
     has_visual: bool = False
     has_collision: bool = False
+    visuals: list[Visual] = field(default_factory=list)
+    collisions: list[Collision] = field(default_factory=list)
+    line: int | None = None
 
 
 @dataclass
@@ -59,6 +100,7 @@ class Joint:
     effort: float | None = None
     velocity: float | None = None
     mimic: Mimic | None = None
+    line: int | None = None
 
     @property
     def movable(self) -> bool:
@@ -71,6 +113,9 @@ class Ros2ControlJoint:
     command_interfaces: list[str]
     state_interfaces: list[str]
     params: dict[str, dict[str, str]] = field(default_factory=dict)  # interface -> {param: value}
+    # <param name="min|max"> of each command interface as numbers (absent side = -inf / +inf)
+    bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+    line: int | None = None
 
 
 @dataclass
@@ -81,6 +126,9 @@ class RobotModel:
     ros2_control: list[Ros2ControlJoint] = field(default_factory=list)
     duplicate_links: list[str] = field(default_factory=list)
     duplicate_joints: list[str] = field(default_factory=list)
+    materials: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)  # top-level, with colour
+    line: int | None = None  # of <robot>
+    duplicate_lines: dict[tuple[str, str], int | None] = field(default_factory=dict)  # ("link"|"joint", name)
 
     def roots(self) -> list[str]:
         children = {j.child for j in self.joints.values()}
@@ -101,6 +149,14 @@ class RobotModel:
 
     def total_mass(self) -> float:
         return sum(link.inertial.mass for link in self.links.values() if link.inertial)
+
+    def leaf_links(self) -> list[str]:
+        """Links that are no joint's parent: hands, feet, head (default end-effectors)."""
+        parents = {j.parent for j in self.joints.values()}
+        return [name for name in self.links if name not in parents]
+
+    def visual_links(self) -> list[str]:
+        return [name for name, link in self.links.items() if link.visuals]
 
 
 def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
@@ -123,17 +179,19 @@ def _where(element: etree._Element) -> str:
 
 def _floats(element: etree._Element, attribute: str, count: int, default: str | None, owner: str) -> list[float]:
     text = element.get(attribute, default)
+    line = element.sourceline
     if text is None:
-        raise UrdfError(f"{owner}: <{element.tag}> is missing attribute '{attribute}'")
+        raise UrdfError(f"{owner}: <{element.tag}> is missing attribute '{attribute}'", line)
     parts = text.split()
     if len(parts) != count:
-        raise UrdfError(f"{owner}: <{element.tag} {attribute}='{text}'> needs {count} numbers, got {len(parts)}")
+        raise UrdfError(
+            f"{owner}: <{element.tag} {attribute}='{text}'> needs {count} number(s), got {len(parts)}", line)
     try:
         values = [float(p) for p in parts]
     except ValueError:
-        raise UrdfError(f"{owner}: <{element.tag} {attribute}='{text}'> is not a number") from None
+        raise UrdfError(f"{owner}: <{element.tag} {attribute}='{text}'> is not a number", line) from None
     if not all(math.isfinite(v) for v in values):
-        raise UrdfError(f"{owner}: <{element.tag} {attribute}='{text}'> is not finite")
+        raise UrdfError(f"{owner}: <{element.tag} {attribute}='{text}'> is not finite", line)
     return values
 
 
@@ -149,30 +207,89 @@ def _origin(parent: etree._Element, owner: str) -> np.ndarray:
 def _parse_inertial(element: etree._Element, owner: str) -> Inertial:
     mass_el = element.find("mass")
     if mass_el is None:
-        raise UrdfError(f"{owner}: <inertial> has no <mass>")
+        raise UrdfError(f"{owner}: <inertial> has no <mass>", element.sourceline)
     mass = _floats(mass_el, "value", 1, None, owner)[0]
     inertia = np.zeros((3, 3))
     inertia_el = element.find("inertia")
     if inertia_el is None:
-        raise UrdfError(f"{owner}: <inertial> has no <inertia>")
+        raise UrdfError(f"{owner}: <inertial> has no <inertia>", element.sourceline)
     values = {k: _floats(inertia_el, k, 1, "0", owner)[0] for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
     inertia[0, 0], inertia[1, 1], inertia[2, 2] = values["ixx"], values["iyy"], values["izz"]
     inertia[0, 1] = inertia[1, 0] = values["ixy"]
     inertia[0, 2] = inertia[2, 0] = values["ixz"]
     inertia[1, 2] = inertia[2, 1] = values["iyz"]
-    return Inertial(mass=mass, origin=_origin(element, owner), inertia=inertia)
+    return Inertial(mass=mass, origin=_origin(element, owner), inertia=inertia, line=mass_el.sourceline)
+
+
+def _shape_fields(element: etree._Element, owner: str) -> dict:
+    """Origin and geometry of a <visual> or <collision>, as keyword arguments of Shape."""
+    geometry = element.find("geometry")
+    shapes = [] if geometry is None else [child for child in geometry if isinstance(child.tag, str)]
+    if not shapes:
+        raise UrdfError(f"{owner}: <{element.tag}> has no <geometry>", element.sourceline)
+    shape = shapes[0]
+    fields: dict = {"kind": shape.tag, "origin": _origin(element, owner), "line": shape.sourceline}
+    if shape.tag == "box":
+        fields["size"] = tuple(_floats(shape, "size", 3, None, owner))
+    elif shape.tag == "cylinder":
+        fields["radius"] = _floats(shape, "radius", 1, None, owner)[0]
+        fields["length"] = _floats(shape, "length", 1, None, owner)[0]
+    elif shape.tag == "sphere":
+        fields["radius"] = _floats(shape, "radius", 1, None, owner)[0]
+    elif shape.tag == "mesh":
+        fields["filename"] = shape.get("filename", "")
+        if not fields["filename"]:
+            raise UrdfError(f"{owner}: <mesh> has no filename", shape.sourceline)
+        fields["scale"] = tuple(_floats(shape, "scale", 3, "1 1 1", owner))
+    else:
+        raise UrdfError(f"{owner}: unknown geometry '{shape.tag}' (expected one of {', '.join(GEOMETRY_KINDS)})",
+                        shape.sourceline)
+    return fields
+
+
+def _rgba(color: etree._Element, owner: str) -> tuple[float, float, float, float]:
+    return tuple(_floats(color, "rgba", 4, None, owner))  # type: ignore[return-value]
+
+
+def _parse_visual(element: etree._Element, materials: dict, owner: str) -> Visual:
+    rgba, name = DEFAULT_RGBA, None
+    material = element.find("material")
+    if material is not None:
+        name = material.get("name")
+        color = material.find("color")
+        # An inline colour wins; else a reference to a top-level <material>; unknown names stay grey, like RViz.
+        rgba = _rgba(color, owner) if color is not None else materials.get(name or "", DEFAULT_RGBA)
+    return Visual(**_shape_fields(element, owner), rgba=rgba, material=name)
+
+
+def _parse_link(element: etree._Element, link_name: str, materials: dict) -> Link:
+    owner = f"link '{link_name}'"
+    inertial_el = element.find("inertial")
+    visuals = [_parse_visual(v, materials, f"{owner}, visual {i}") for i, v in enumerate(element.findall("visual"))]
+    collisions = [Collision(**_shape_fields(c, f"{owner}, collision {i}"))
+                  for i, c in enumerate(element.findall("collision"))]
+    return Link(
+        link_name,
+        _parse_inertial(inertial_el, owner) if inertial_el is not None else None,
+        bool(visuals),
+        bool(collisions),
+        visuals,
+        collisions,
+        element.sourceline,
+    )
 
 
 def _parse_joint(element: etree._Element) -> Joint:
     owner = f"joint '{element.get('name')}'"
     joint_type = element.get("type")
+    line = element.sourceline
     if joint_type not in JOINT_TYPES:
-        raise UrdfError(f"{owner}: unknown type '{joint_type}' (expected one of {', '.join(JOINT_TYPES)})")
+        raise UrdfError(f"{owner}: unknown type '{joint_type}' (expected one of {', '.join(JOINT_TYPES)})", line)
     ends: dict[str, str] = {}
     for end in ("parent", "child"):
         end_el = element.find(end)
         if end_el is None or not end_el.get("link"):
-            raise UrdfError(f"{owner}: missing <{end} link='...'>")
+            raise UrdfError(f"{owner}: missing <{end} link='...'>", line)
         ends[end] = end_el.get("link")
     axis = np.array([1.0, 0.0, 0.0])
     axis_el = element.find("axis")
@@ -180,10 +297,11 @@ def _parse_joint(element: etree._Element) -> Joint:
         axis = np.array(_floats(axis_el, "xyz", 3, None, owner))
     norm = float(np.linalg.norm(axis))
     if joint_type in MOVABLE_TYPES and norm < 1e-12:
-        raise UrdfError(f"{owner}: <axis xyz> is the zero vector")
+        raise UrdfError(f"{owner}: <axis xyz> is the zero vector", axis_el.sourceline)
     if norm > 0:
         axis = axis / norm
-    joint = Joint(element.get("name"), joint_type, ends["parent"], ends["child"], _origin(element, owner), axis)
+    joint = Joint(element.get("name"), joint_type, ends["parent"], ends["child"], _origin(element, owner), axis,
+                  line=line)
     limit = element.find("limit")
     if limit is not None:
         joint.lower = _floats(limit, "lower", 1, "0", owner)[0]
@@ -195,11 +313,11 @@ def _parse_joint(element: etree._Element) -> Joint:
         if joint_type == "continuous":
             joint.lower = joint.upper = None
     elif joint_type in ("revolute", "prismatic"):
-        raise UrdfError(f"{owner}: a {joint_type} joint needs a <limit> element")
+        raise UrdfError(f"{owner}: a {joint_type} joint needs a <limit> element", line)
     mimic = element.find("mimic")
     if mimic is not None:
         if not mimic.get("joint"):
-            raise UrdfError(f"{owner}: <mimic> has no joint attribute")
+            raise UrdfError(f"{owner}: <mimic> has no joint attribute", mimic.sourceline)
         joint.mimic = Mimic(
             mimic.get("joint"),
             _floats(mimic, "multiplier", 1, "1", owner)[0],
@@ -208,17 +326,38 @@ def _parse_joint(element: etree._Element) -> Joint:
     return joint
 
 
+def _param_number(element: etree._Element, owner: str) -> float:
+    """A ``<param>`` value as a number; infinities are allowed (no bound), NaN and text are not."""
+    text = (element.text or "").strip()
+    where = f"{owner}: <param name='{element.get('name')}'>"
+    try:
+        value = float(text)
+    except ValueError:
+        raise UrdfError(f"{where} value '{text}' is not a number", element.sourceline) from None
+    if math.isnan(value):
+        raise UrdfError(f"{where} value is NaN", element.sourceline)
+    return value
+
+
 def _parse_ros2_control(root: etree._Element) -> list[Ros2ControlJoint]:
     out: list[Ros2ControlJoint] = []
     for block in root.findall("ros2_control"):
         for joint_el in block.findall("joint"):
+            owner = f"<ros2_control> joint '{joint_el.get('name', '')}'"
             params: dict[str, dict[str, str]] = {}
+            bounds: dict[str, tuple[float, float]] = {}
             commands = []
             for ci in joint_el.findall("command_interface"):
-                commands.append(ci.get("name", ""))
-                params[ci.get("name", "")] = {p.get("name", ""): (p.text or "").strip() for p in ci.findall("param")}
+                interface = ci.get("name", "")
+                commands.append(interface)
+                params[interface] = {p.get("name", ""): (p.text or "").strip() for p in ci.findall("param")}
+                numbers = {p.get("name"): _param_number(p, owner) for p in ci.findall("param")
+                           if p.get("name") in ("min", "max")}
+                if numbers:
+                    bounds[interface] = (numbers.get("min", -math.inf), numbers.get("max", math.inf))
             states = [si.get("name", "") for si in joint_el.findall("state_interface")]
-            out.append(Ros2ControlJoint(joint_el.get("name", ""), commands, states, params))
+            out.append(Ros2ControlJoint(joint_el.get("name", ""), commands, states, params, bounds,
+                                        joint_el.sourceline))
     return out
 
 
@@ -229,39 +368,41 @@ def parse_urdf(xml: str | bytes) -> RobotModel:
     except UnsafeXmlError as exc:
         raise UrdfError(str(exc)) from None
     except ValueError as exc:
-        raise UrdfError(str(exc)) from None
+        raise UrdfError(str(exc), getattr(exc, "line", None)) from None
     if root.tag != "robot":
-        raise UrdfError(f"root element is <{root.tag}>, expected <robot>")
+        raise UrdfError(f"root element is <{root.tag}>, expected <robot>", root.sourceline)
     name = root.get("name")
     if not name:
-        raise UrdfError("<robot> has no name attribute")
+        raise UrdfError("<robot> has no name attribute", root.sourceline)
+    materials: dict[str, tuple[float, float, float, float]] = {}
+    for element in root.findall("material"):
+        color = element.find("color")
+        if color is not None:
+            materials[element.get("name", "")] = _rgba(color, f"material '{element.get('name')}'")
     links: dict[str, Link] = {}
     joints: dict[str, Joint] = {}
     duplicate_links: list[str] = []
     duplicate_joints: list[str] = []
+    duplicate_lines: dict[tuple[str, str], int | None] = {}
     for element in root.findall("link"):
         link_name = element.get("name")
         if not link_name:
-            raise UrdfError(f"{_where(element)}: link without a name")
+            raise UrdfError(f"{_where(element)}: link without a name", element.sourceline)
         if link_name in links:
             duplicate_links.append(link_name)
+            duplicate_lines.setdefault(("link", link_name), element.sourceline)
             continue
-        inertial_el = element.find("inertial")
-        owner = f"link '{link_name}'"
-        links[link_name] = Link(
-            link_name,
-            _parse_inertial(inertial_el, owner) if inertial_el is not None else None,
-            element.find("visual") is not None,
-            element.find("collision") is not None,
-        )
+        links[link_name] = _parse_link(element, link_name, materials)
     for element in root.findall("joint"):
         if not element.get("name"):
-            raise UrdfError(f"{_where(element)}: joint without a name")
+            raise UrdfError(f"{_where(element)}: joint without a name", element.sourceline)
         joint = _parse_joint(element)
         if joint.name in joints:
             duplicate_joints.append(joint.name)
+            duplicate_lines.setdefault(("joint", joint.name), element.sourceline)
             continue
         joints[joint.name] = joint
     if not links:
-        raise UrdfError(f"robot '{name}' has no links")
-    return RobotModel(name, links, joints, _parse_ros2_control(root), duplicate_links, duplicate_joints)
+        raise UrdfError(f"robot '{name}' has no links", root.sourceline)
+    return RobotModel(name, links, joints, _parse_ros2_control(root), duplicate_links, duplicate_joints,
+                      materials, root.sourceline, duplicate_lines)

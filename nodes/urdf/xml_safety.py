@@ -25,6 +25,14 @@ class UnsafeXmlError(ValueError):
     """The document declares entities or references an external DTD."""
 
 
+class XmlSyntaxError(ValueError):
+    """The document is not well-formed XML; ``line`` is where the parser stopped (None when unknown)."""
+
+    def __init__(self, message: str, line: int | None = None) -> None:
+        super().__init__(message)
+        self.line = line
+
+
 def xml_text(data: bytes | str) -> str:
     """The document as text. Why decode ourselves: a check on raw bytes misses a UTF-16 document."""
     if isinstance(data, str):
@@ -69,7 +77,7 @@ def parse_xml(data: bytes | str) -> etree._Element:
     try:
         root = etree.fromstring(raw, parser=_parser())
     except etree.XMLSyntaxError as exc:
-        raise ValueError(f"XML syntax error: {exc}") from None
+        raise XmlSyntaxError(f"XML syntax error: {exc}", exc.lineno) from None
     # Belt and braces: an undeclared entity reference would survive as an _Entity node.
     for node in root.iter():
         if isinstance(node, etree._Entity):
