@@ -18,7 +18,7 @@ from typing import Any
 import msgs
 from nodes.core import Node, run_node
 from nodes.core.paths import robot_path
-from nodes.viz.urdf_model import parse_urdf
+from nodes.urdf.model import parse_urdf
 
 JointState = msgs.get_type("sensor_msgs/msg/JointState")
 Clock = msgs.get_type("rosgraph_msgs/msg/Clock")
@@ -53,7 +53,7 @@ class Feeder(Node):
         super().__init__("viz_feeder", **kwargs)
         self.robots = [r for r in self.declare_parameter("robots", ["humanoid"]) if r]
         model = parse_urdf(robot_path(self.declare_parameter("robot_file", "humanoid")).read_text())
-        self.joints = [j.name for j in model.moving_joints]
+        self.joints = [j.name for j in model.movable_joints()]
         self.rate = self.declare_parameter("rate", 100.0, min_value=1.0, max_value=2000.0)
         self.period = self.declare_parameter("period", 2.0, min_value=0.1)
         self.delete_after = self.declare_parameter("delete_after", 0.0, min_value=0.0)

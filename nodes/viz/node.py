@@ -24,12 +24,12 @@ import msgs
 from nodes.core import Node, Subscription
 from nodes.core import graph as core_graph
 from nodes.core.latched import fetch_latched
+from nodes.urdf.model import UrdfError
 
 from .blueprint import build_blueprint
 from .ratelimit import RateLimiter
-from .scene import RobotScene, log_ground
+from .scene import RobotScene, log_ground, parse_model
 from .sink import Output, OutputPlan
-from .urdf_model import UrdfError, parse_urdf
 
 String = msgs.get_type("std_msgs/msg/String")
 JointState = msgs.get_type("sensor_msgs/msg/JointState")
@@ -191,7 +191,7 @@ class Visualiser(Node):
         if xml_text == robot.description and robot.scene is not None:
             return
         try:
-            model = parse_urdf(xml_text)
+            model = parse_model(xml_text)
             scene = RobotScene(self.recording, robot.namespace, model, self.end_effectors, self.world_frames)
         except (UrdfError, ValueError) as exc:
             self.logger.error(f"robot '{robot.namespace}': unusable robot_description: {exc}")

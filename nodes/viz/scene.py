@@ -24,8 +24,9 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
-from .kinematics import ForwardKinematics, matrix_to_quat, pose_transform, rpy_to_matrix
-from .urdf_model import RobotModel, Visual
+from nodes.kinematics import KinematicTree, matrix_to_quaternion, pose_matrix
+from nodes.urdf.model import RobotModel, UrdfError, Visual, parse_urdf
+from nodes.urdf.validate import validate
 
 SIM_TIMELINE = "sim_time"
 WALL_TIMELINE = "wall_time"
@@ -45,6 +46,18 @@ def frame_name(namespace: str, frame: str, world_frames: Sequence[str] = ("world
     if frame.startswith(f"{namespace}/"):
         return frame
     return f"{namespace}/{frame}"
+
+
+def parse_model(xml_text: str) -> RobotModel:
+    """A ``robot_description`` as a drawable model: the project's URDF parser (with its XML safety check:
+    entity declarations and external DTDs are refused) plus its tree checks. Raises ``UrdfError``."""
+    if not xml_text or not xml_text.strip():
+        raise UrdfError("robot_description: empty")
+    model = parse_urdf(xml_text)
+    errors = [issue.message for issue in validate(model) if issue.severity == "error"]
+    if errors:
+        raise UrdfError(errors[0])
+    return model
 
 
 def rgba8(rgba: Sequence[float]) -> list[int]:
@@ -97,8 +110,8 @@ def log_ground(recording: rr.RecordingStream, half_extent: float = 2.0) -> None:
 
 def visual_archetype(visual: Visual, mesh_root: Path | None = None) -> rr.AsComponents | None:
     """The Rerun archetype of one URDF visual in its link frame (None for an unresolvable mesh)."""
-    center = [list(visual.origin.xyz)]
-    quat = [list(matrix_to_quat(rpy_to_matrix(*visual.origin.rpy)))]
+    center = [visual.origin[:3, 3].tolist()]
+    quat = [matrix_to_quaternion(visual.origin[:3, :3]).tolist()]
     color = [rgba8(visual.rgba)]
     if visual.kind == "box":
         return rr.Boxes3D(half_sizes=[[s / 2 for s in visual.size]], centers=center, quaternions=quat,
@@ -126,7 +139,7 @@ class RobotScene:
         self.recording = recording
         self.namespace = namespace
         self.model = model
-        self.fk = ForwardKinematics(model)
+        self.fk = KinematicTree(model)
         self.world_frames = tuple(world_frames)
         self.set_time = SceneTime(recording)
         wanted = [link for link in end_effectors if link]
@@ -136,7 +149,7 @@ class RobotScene:
         self.end_effectors = wanted or model.leaf_links()
         self.world = f"world/{namespace}"
         self.plots = f"plots/{namespace}"
-        self.root_frame = frame_name(namespace, model.root_link, self.world_frames)
+        self.root_frame = frame_name(namespace, model.root, self.world_frames)
         self.relations: dict[str, tuple[str, list]] = {}  # child frame -> (parent frame, frame components)
         self.last_pose: dict[str, tuple[float, ...]] = {}  # child frame -> last logged xyz + quaternion
         self.base_pose = np.eye(4)
@@ -154,9 +167,9 @@ class RobotScene:
         """Log every visual in its link frame; returns how many entities were logged."""
         self.set_time(sim_time)
         count = 0
-        for link, visuals in self.model.links.items():
+        for link, link_model in self.model.links.items():
             frame = rr.CoordinateFrame(frame_name(self.namespace, link, self.world_frames))
-            for index, visual in enumerate(visuals):
+            for index, visual in enumerate(link_model.visuals):
                 archetype = visual_archetype(visual, mesh_root)
                 if archetype is None:
                     self.skipped_meshes.append(visual.filename)
@@ -191,7 +204,7 @@ class RobotScene:
                 continue
             if child_frame == self.root_frame and parent_frame == WORLD_FRAME:
                 self.base_from_tf = self.base_known = True
-                self.base_pose = pose_transform(xyz, quat)
+                self.base_pose = pose_matrix(xyz, quat)
             self._log_relation(parent_frame, child_frame, xyz, quat)
 
     def _log_relation(self, parent_frame: str, child_frame: str, xyz: Sequence[float],
@@ -219,16 +232,19 @@ class RobotScene:
 
     def log_fk_transforms(self, sim_time: float, positions: Mapping[str, float]) -> None:
         """Fallback without a state publisher: link frames from our own forward kinematics."""
-        rows = []
-        for child, (parent, transform) in self.fk.joint_transforms(positions).items():
-            rows.append((parent, child, transform[:3, 3], matrix_to_quat(transform[:3, :3])))
-        self.log_transforms(sim_time, rows)
+        translation, quat = self.fk.local_poses(self.fk.configuration(positions))
+        self.log_transforms(sim_time, list(zip(self.fk.parent_names, self.fk.child_names, translation.tolist(),
+                                               quat.tolist(), strict=True)))
+
+    def link_poses(self, positions: Mapping[str, float]) -> np.ndarray:
+        """World pose of every link (``fk.link_names`` order) at ``positions`` (joints not named at 0)."""
+        return self.base_pose @ self.fk.link_transforms(self.fk.configuration(positions))
 
     def log_base_pose(self, sim_time: float, position: Sequence[float], orientation_xyzw: Sequence[float]) -> None:
         """The root link in the world (from sim/model_states), unless tf already places it."""
         if self.base_from_tf:  # tf places the root (a state publisher relays model_states): it wins
             return
-        self.base_pose = pose_transform(position, orientation_xyzw)
+        self.base_pose = pose_matrix(position, orientation_xyzw)
         self.base_known = True
         self.set_time(sim_time)
         self._log_relation(WORLD_FRAME, self.root_frame, position, orientation_xyzw)
@@ -286,9 +302,9 @@ class RobotScene:
         """End-effector (from forward kinematics on the latest joint positions) and CoM paths as line strips."""
         if not self.base_known:
             return
-        poses = self.fk.link_poses(self.positions, self.base_pose)
+        poses = self.link_poses(self.positions)
         for link, path in self.ee_paths.items():
-            path.append(poses[link][:3, 3])
+            path.append(poses[self.fk.link_index[link], :3, 3])
         self.set_time(sim_time)
         markers = f"{self.world}/markers"
         strips = [path.array() for path in self.ee_paths.values() if len(path) >= 2]
@@ -304,12 +320,13 @@ class RobotScene:
         """The target pose of the active trajectory: a skeleton of the robot at the target joint values."""
         positions = dict(self.positions)
         positions.update(target)
-        poses = self.fk.link_poses(positions, self.base_pose)
-        segments = [[poses[j.parent][:3, 3].tolist(), poses[j.child][:3, 3].tolist()]
-                    for j in self.fk.ordered]
+        points = self.link_poses(positions)[:, :3, 3]
+        index = self.fk.link_index
+        segments = [[points[index[parent]].tolist(), points[index[child]].tolist()]
+                    for parent, child in zip(self.fk.parent_names, self.fk.child_names, strict=True)]
         self.set_time(sim_time)
         entity = f"{self.world}/markers/target"
         self.recording.log(entity, rr.LineStrips3D(segments, radii=0.006, colors=[[255, 140, 0, 160]]))
         self.recording.log(f"{entity}/end_effectors", rr.Points3D(
-            [poses[link][:3, 3].tolist() for link in self.end_effectors], radii=0.025,
+            [points[index[link]].tolist() for link in self.end_effectors], radii=0.025,
             colors=[[255, 140, 0, 255]]))

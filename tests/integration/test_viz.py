@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from nodes.viz.readback import load
-from nodes.viz.urdf_model import parse_urdf
+from nodes.viz.scene import parse_model as parse_urdf
 from tests.conftest import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -86,7 +86,7 @@ def test_headless_launch_records_model_frames_plots_and_markers(processes, tmp_p
     assert pelvis["Transform3D:parent_frame"] == ["tf#/world"], "the floating base is placed in the world"
 
     # Joint plots: positions, velocities and efforts for every moving joint, at the joint_states rate.
-    assert names == [j.name for j in model.moving_joints]
+    assert names == [j.name for j in model.movable_joints()]
     for quantity in ("position", "velocity", "effort"):
         rows = data[f"plots/humanoid/joint_states/{quantity}"].column("Scalars:scalars")
         assert len(rows) > 200 and all(len(v) == len(names) for _, v in rows)
@@ -163,7 +163,7 @@ def test_bad_input_is_reported_and_the_visualiser_keeps_running(processes, route
                    message="a valid description after the bad ones")
     assert viz.poll() is None, "the visualiser died on bad input"
     log = stop(processes, viz)
-    assert "joint[j]@type: unknown type 'hinge'" in log
+    assert "joint 'j': unknown type 'hinge'" in log
     data = load(rrd)
     assert data["world/badbot/links/torso/visual_0"].rows, "the valid description was drawn"
     assert "world/ground" not in data, "ground:=false (the joint_animation tutorial has no ground)"

@@ -11,18 +11,17 @@ import rerun as rr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from nodes.kinematics import KinematicTree
+from nodes.kinematics import matrix_to_quaternion as matrix_to_quat
+from nodes.kinematics import quaternion_to_matrix as quat_to_matrix
+from nodes.urdf.model import UrdfError
+from nodes.urdf.model import rpy_matrix as rpy_to_matrix
 from nodes.viz.blueprint import build_blueprint
-from nodes.viz.kinematics import (
-    ForwardKinematics,
-    matrix_to_quat,
-    quat_to_matrix,
-    rpy_to_matrix,
-)
 from nodes.viz.ratelimit import RateLimiter
 from nodes.viz.readback import load
 from nodes.viz.scene import WORLD_FRAME, RobotScene, frame_name, log_ground
+from nodes.viz.scene import parse_model as parse_urdf
 from nodes.viz.sink import OutputPlan
-from nodes.viz.urdf_model import UrdfError, parse_urdf
 
 ROOT = Path(__file__).resolve().parents[2]
 HUMANOID = (ROOT / "robots" / "humanoid.urdf").read_text()
@@ -44,38 +43,41 @@ LEG = """<robot name="leg">
 # -- URDF model -----------------------------------------------------------------------------------------
 def test_urdf_visuals_colours_and_tree() -> None:
     model = parse_urdf(LEG)
-    assert model.root_link == "hip"
-    assert [v.kind for link in ("hip", "thigh", "foot") for v in model.links[link]] == ["box", "cylinder", "sphere"]
-    assert model.links["hip"][0].rgba == (1.0, 0.0, 0.0, 1.0)  # named top-level material
-    assert model.links["thigh"][0].rgba == (0.0, 0.0, 1.0, 0.5)  # inline colour
-    assert model.links["foot"][0].rgba == (0.7, 0.7, 0.7, 1.0)  # default grey
-    assert [j.name for j in model.moving_joints] == ["hip_pitch"]
+    assert model.root == "hip"
+    assert [v.kind for link in ("hip", "thigh", "foot") for v in model.links[link].visuals] == [
+        "box", "cylinder", "sphere"]
+    assert model.links["hip"].visuals[0].rgba == (1.0, 0.0, 0.0, 1.0)  # named top-level material
+    assert model.links["thigh"].visuals[0].rgba == (0.0, 0.0, 1.0, 0.5)  # inline colour
+    assert model.links["foot"].visuals[0].rgba == (0.7, 0.7, 0.7, 1.0)  # default grey
+    assert [j.name for j in model.movable_joints()] == ["hip_pitch"]
     assert model.leaf_links() == ["foot"]
 
 
 def test_humanoid_has_a_visual_on_every_link() -> None:
     model = parse_urdf(HUMANOID)
     assert len(model.links) == 23 and model.visual_links() == list(model.links)
-    assert model.root_link == "pelvis" and len(model.moving_joints) == 22
+    assert model.root == "pelvis" and len(model.movable_joints()) == 22
 
 
 @pytest.mark.parametrize("xml, reason", [
     ("", "robot_description: empty"),
-    ("<robot", "not XML"),
+    ("<robot", "XML syntax error"),
     ("<model/>", "root element is <model>"),
-    ('<!DOCTYPE r [<!ENTITY a "aaaa">]><robot name="r"/>', "DTD/entity"),
-    ('<robot name="r"></robot>', "no <link>"),
+    ('<!DOCTYPE r [<!ENTITY a "aaaa">]><robot name="r"/>', "XML declares entities (<!ENTITY ...>): refused"),
+    ('<robot name="r"></robot>', "robot 'r' has no links"),
     ('<robot name="r"><link name="a"><visual><geometry><box size="1 2"/></geometry></visual></link></robot>',
-     "link[a]/visual[0]/geometry/box@size: expected 3 numbers, got 2"),
+     "link 'a', visual 0: <box size='1 2'> needs 3 number(s), got 2"),
     ('<robot name="r"><link name="a"><visual><geometry><sphere radius="nan"/></geometry></visual></link></robot>',
-     "link[a]/visual[0]/geometry/sphere@radius: 'nan' is not finite"),
+     "link 'a', visual 0: <sphere radius='nan'> is not finite"),
     ('<robot name="r"><link name="a"><visual><geometry><cone/></geometry></visual></link></robot>',
      "unknown geometry 'cone'"),
     ('<robot name="r"><link name="a"/><joint name="j" type="revolute"><parent link="a"/><child link="b"/>'
-     '</joint></robot>', "joint[j]/child: unknown link 'b'"),
-    ('<robot name="r"><link name="a"/><link name="b"/></robot>', "expected one root link, found 2"),
+     '</joint></robot>', "joint 'j': a revolute joint needs a <limit> element"),
+    ('<robot name="r"><link name="a"/><joint name="j" type="continuous"><parent link="a"/><child link="b"/>'
+     '</joint></robot>', "joint 'j': child link 'b' does not exist"),
+    ('<robot name="r"><link name="a"/><link name="b"/></robot>', "several root links: a, b"),
     ('<robot name="r"><link name="a"/><link name="b"/><joint name="j" type="revolute"><parent link="a"/>'
-     '<child link="b"/><axis xyz="0 0 0"/></joint></robot>', "joint[j]/axis@xyz: zero axis"),
+     '<child link="b"/><axis xyz="0 0 0"/></joint></robot>', "joint 'j': <axis xyz> is the zero vector"),
 ])
 def test_bad_urdf_names_the_element_and_reason(xml: str, reason: str) -> None:
     with pytest.raises(UrdfError, match=None) as info:
@@ -102,27 +104,50 @@ def test_rpy_is_fixed_axis_xyz() -> None:
 
 
 def test_forward_kinematics_of_a_pitched_leg() -> None:
-    fk = ForwardKinematics(parse_urdf(LEG))
-    poses = fk.link_poses({"hip_pitch": math.pi / 2})
+    fk = KinematicTree(parse_urdf(LEG))
+    foot = fk.link_transform(fk.configuration({"hip_pitch": math.pi / 2}), "foot")
     # Pitching +90 deg about y swings the foot (0.4 m down the thigh) forward to -x... about +y: z -> x
-    assert np.allclose(poses["foot"][:3, 3], [-0.4, 0.0, 0.0], atol=1e-12)
-    tf = fk.joint_transforms({"hip_pitch": 0.3})
-    assert tf["thigh"][0] == "hip" and tf["foot"][0] == "thigh"
+    assert np.allclose(foot[:3, 3], [-0.4, 0.0, 0.0], atol=1e-12)
+    tf = dict(zip(fk.child_names, fk.parent_names, strict=True))  # child -> parent, what tf publishes
+    assert tf["thigh"] == "hip" and tf["foot"] == "thigh"
+
+
+def _reference_link_poses(model, values: dict[str, float]) -> dict[str, np.ndarray]:
+    """Naive FK, one joint at a time from the root (what the visualiser's own FK used to do)."""
+    poses = {model.root: np.eye(4)}
+    frontier = [model.root]
+    while frontier:
+        link = frontier.pop()
+        for joint in model.children_of(link):
+            motion = np.eye(4)
+            q = values.get(joint.name, 0.0)
+            if joint.type in ("revolute", "continuous"):
+                x, y, z = joint.axis
+                c, s, t = math.cos(q), math.sin(q), 1.0 - math.cos(q)
+                motion[:3, :3] = [[t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+                                  [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+                                  [t * x * z - s * y, t * y * z + s * x, t * z * z + c]]
+            elif joint.type == "prismatic":
+                motion[:3, 3] = np.asarray(joint.axis) * q
+            poses[joint.child] = poses[link] @ joint.origin @ motion
+            frontier.append(joint.child)
+    return poses
 
 
 def test_our_fk_matches_the_projects_fk_on_the_humanoid() -> None:
     from nodes.kinematics import KinematicTree
     from nodes.urdf import parse_urdf as project_parse
 
-    ours = ForwardKinematics(parse_urdf(HUMANOID))
-    theirs = KinematicTree(project_parse(HUMANOID))
+    model = project_parse(HUMANOID)
+    theirs = KinematicTree(model)
     rng = np.random.default_rng(7)
     for _ in range(5):
         values = {name: float(v) for name, v in zip(theirs.dof_names, rng.uniform(-1, 1, len(theirs.dof_names)),
                                                     strict=True)}
         q = theirs.configuration(values)
+        ours = _reference_link_poses(model, values)
         for link in ("left_foot", "right_forearm", "head"):
-            assert np.allclose(ours.link_poses(values)[link], theirs.link_transform(q, link), atol=1e-9), link
+            assert np.allclose(ours[link], theirs.link_transform(q, link), atol=1e-9), link
 
 
 # -- rate limits ----------------------------------------------------------------------------------------
@@ -255,5 +280,14 @@ def test_path_buffer_keeps_the_newest_points_in_order() -> None:
 def test_every_project_robot_is_drawable(robot: str) -> None:
     model = parse_urdf((ROOT / "robots" / robot).read_text())
     assert model.visual_links(), f"{robot}: nothing to draw"
-    fk = ForwardKinematics(model)
-    assert set(fk.link_poses({})) == set(model.links), f"{robot}: links unreachable from the root"
+    fk = KinematicTree(model)
+    assert set(fk.link_names) == set(model.links), f"{robot}: links unreachable from the root"
+
+
+def test_model_parse_refuses_a_billion_laughs_description() -> None:
+    """The visualiser's model parse goes through the project's XML safety check: entities are never expanded."""
+    text = (ROOT / "tests" / "data" / "urdf_broken" / "billion_laughs.urdf").read_text()
+    with pytest.raises(UrdfError, match="XML declares entities .*refused"):
+        parse_urdf(text)
+    with pytest.raises(UrdfError, match="declares entities"):
+        parse_urdf(text.replace('<?xml version="1.0"?>', '<?xml version="1.0" encoding="UTF-16"?>'))
