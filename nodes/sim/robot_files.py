@@ -31,18 +31,15 @@ def resolve_robot_file(file: str) -> Path:
 
 
 def read_robot_xml(path: Path) -> str:
-    """URDF text of a file; xacro files are expanded first."""
-    if path.name.endswith(".xacro"):
-        import xacro  # only needed for xacro sources
+    """URDF text of a file; xacro files are expanded first. Like every URDF entry point, the text goes through
+    the XML safety check (entity declarations and external DTDs refused), before xacro runs and after."""
+    from nodes.urdf.description import load_robot_description  # numpy/lxml: only paid when a file is read
+    from nodes.urdf.model import UrdfError
 
-        try:
-            return xacro.process_file(str(path)).toprettyxml(indent="  ")
-        except Exception as exc:  # xacro raises many exception types; report them uniformly
-            raise ConfigError(f"{path}: xacro failed: {exc}") from None
     try:
-        return path.read_text()
-    except OSError as exc:
-        raise ConfigError(f"{path}: {exc.strerror}") from None
+        return load_robot_description(path)
+    except UrdfError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
 
 
 def fetch_robot_description(node: Node, key: str, timeout: float = 2.0) -> str:

@@ -97,6 +97,9 @@ def test_spawn_from_file_topic_and_service_with_poses_and_bad_input(processes, n
     assert not response.success and "namespace 'arm'" in response.status_message
     response = spawn(name="empty", xml="")
     assert not response.success and "xml is empty" in response.status_message
+    hostile = (ROOT / "tests" / "data" / "urdf_broken" / "billion_laughs.urdf").read_text()
+    response = spawn(name="lol", xml=hostile)
+    assert not response.success and "XML declares entities" in response.status_message, response.status_message
     nan_pose = msgpack.packb({"name": "nan", "xml": ARM, "initial_pose": {"position": {"x": float("nan")}}})
     with pytest.raises(ServiceError, match="initial_pose.position.x"):
         from nodes.core.endpoints import call_raw

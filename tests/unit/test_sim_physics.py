@@ -311,3 +311,14 @@ def test_a_push_moves_the_zmp_out_of_the_support_polygon(make_sim):
     sim.step(3000)
     settled = sim.balance("humanoid")
     assert settled.is_balanced and settled.center_of_mass[2] > 0.8   # it recovered and still stands
+
+
+def test_spawn_refuses_a_billion_laughs_urdf(make_sim):
+    """The spawn path goes through the project's XML safety check: entities are refused, never expanded."""
+    from nodes.sim.urdf_info import UrdfError
+
+    sim = make_sim()
+    hostile = (ROOT / "tests" / "data" / "urdf_broken" / "billion_laughs.urdf").read_text()
+    with pytest.raises(UrdfError, match="XML declares entities .*refused"):
+        sim.spawn(EntitySpec("lol", hostile))
+    assert sim.world.world.getNumSkeletons() == 1 and not sim.entities   # only the ground

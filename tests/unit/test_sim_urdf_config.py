@@ -72,6 +72,25 @@ def test_bad_urdf_errors_name_line_and_reason(mutate, expected):
         assert message.startswith("line "), message
 
 
+def test_entity_declarations_are_refused_before_parsing():
+    hostile = (DATA / "urdf_broken" / "billion_laughs.urdf").read_text()
+    with pytest.raises(UrdfError, match="XML declares entities"):
+        parse_urdf(hostile)
+    with pytest.raises(UrdfError, match="external DTD"):
+        parse_urdf((DATA / "urdf_broken" / "external_dtd.urdf").read_text())
+
+
+def test_robot_files_are_checked_before_xacro_runs(tmp_path):
+    from nodes.sim.robot_files import read_robot_xml
+
+    hostile = tmp_path / "lol.urdf.xacro"
+    hostile.write_text((DATA / "urdf_broken" / "billion_laughs.urdf").read_text().replace(
+        '<robot name=', '<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name='))
+    with pytest.raises(ConfigError, match="declares entities"):
+        read_robot_xml(hostile)
+    assert "<robot" in read_robot_xml(Path(__file__).resolve().parents[2] / "robots" / "simple_robot.urdf.xacro")
+
+
 def test_gain_patterns_first_match_wins_and_fallback():
     gains_for = parse_gains({"*_knee": {"p": 100, "d": 2}, "left_*": {"p": 50}})
     assert (gains_for("left_knee").kp, gains_for("left_knee").kd) == (100.0, 2.0)
