@@ -135,7 +135,10 @@ def run_once(mode: str, endpoint: str, rate: float, seconds: float) -> dict:
     node.destroy()
     data = json.loads(out.strip().splitlines()[-1]) if out.strip() else {"latencies_ns": [], "received": 0}
     lat = sorted(x / 1000 for x in data["latencies_ns"])
-    pct = (lambda p: lat[min(len(lat) - 1, int(p * len(lat)))] if lat else float("nan"))
+
+    def pct(p: float) -> float:
+        return lat[min(len(lat) - 1, int(p * len(lat)))] if lat else float("nan")
+
     return {"p50": pct(0.5), "p99": pct(0.99), "lost": count - data["received"], "sent": count}
 
 
