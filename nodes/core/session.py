@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import ipaddress
 import json
 import os
+import socket
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -39,16 +41,50 @@ def _base_config() -> zenoh.Config:
     return config
 
 
+def _local_addresses_toward(endpoints: list[str]) -> list[str]:
+    """This host's address on the route to each non-loopback TCP endpoint (a UDP ``connect`` sends nothing)."""
+    found: list[str] = []
+    for endpoint in endpoints:
+        if not endpoint.startswith("tcp/"):
+            continue
+        host, _, port = endpoint[4:].split("#", 1)[0].rpartition(":")
+        host = host.strip("[]")
+        try:
+            address = ipaddress.ip_address(socket.gethostbyname(host) if not _is_ip(host) else host)
+            if address.is_loopback:
+                continue
+            family = socket.AF_INET6 if address.version == 6 else socket.AF_INET
+            with socket.socket(family, socket.SOCK_DGRAM) as probe:
+                probe.connect((str(address), int(port)))
+                local = probe.getsockname()[0]
+        except (OSError, ValueError):
+            continue
+        entry = f"tcp/[{local}]:0" if ":" in local else f"tcp/{local}:0"
+        if entry not in found:
+            found.append(entry)
+    return found
+
+
+def _is_ip(host: str) -> bool:
+    try:
+        ipaddress.ip_address(host)
+        return True
+    except ValueError:
+        return False
+
+
 def peer_config(connect: list[str] | None = None) -> zenoh.Config:
     """A peer session config that connects to ``connect`` (default: ``default_endpoints()``)."""
     config = _base_config()
     if os.environ.get(ENV_CONFIG) and connect is None:
         return config
+    endpoints = connect or default_endpoints()
     config.insert_json5("mode", json.dumps("peer"))
-    config.insert_json5("connect/endpoints", json.dumps(connect or default_endpoints()))
-    # Peers learn each other through the router (gossip) and connect directly, but only on loopback:
-    # zenoh's default peer listener binds every interface.
-    config.insert_json5("listen/endpoints", json.dumps(["tcp/127.0.0.1:0"]))
+    config.insert_json5("connect/endpoints", json.dumps(endpoints))
+    # Peers learn each other through the router (gossip) and connect directly. They listen on loopback,
+    # and, when the router is on another host, on the one local address that faces it, so peers on other
+    # hosts can reach them; never on every interface (zenoh's default).
+    config.insert_json5("listen/endpoints", json.dumps(["tcp/127.0.0.1:0", *_local_addresses_toward(endpoints)]))
     return config
 
 

@@ -28,6 +28,7 @@ VERBS: dict[str, tuple[str, str]] = {
     "xacro": ("nodes.tools.xacro_cmd", "expand a xacro file to URDF"),
     "graph": ("nodes.tools.graph", "print the node graph"),
     "doctor": ("nodes.tools.doctor", "check the installation and the network"),
+    "router": ("nodes.tools.router", "run a standalone Zenoh router (zenohd stand-in)"),
     "bag": ("nodes.tools.bag", "record/play/info bags"),
 }
 
