@@ -123,11 +123,7 @@ class RobotStatePublisher(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__("robot_state_publisher", **kwargs)
-        try:
-            self._setup()
-        except BaseException:
-            self.destroy()  # close the Zenoh session, or the failed process could hang on exit
-            raise
+        self._setup()
 
     def _setup(self) -> None:
         self.declare_parameter("robot_description", "", description="URDF (or xacro) XML text")

@@ -96,11 +96,7 @@ class ControllerManagerNode(Node):
 
     def __init__(self, *, cli_args: Any = None, **kwargs: Any) -> None:
         super().__init__("controller_manager", **kwargs)
-        try:
-            self._setup(cli_args)
-        except Exception:
-            self.destroy()  # an open session would keep the process from exiting
-            raise
+        self._setup(cli_args)
 
     def _setup(self, cli_args: Any) -> None:
         self.update_rate = int(self.declare_parameter(

@@ -6,13 +6,13 @@ Callbacks run one at a time on the thread that calls ``spin()`` (rclpy's single-
 
 from __future__ import annotations
 
+import functools
 import heapq
 import itertools
 import queue
 import threading
 import time
 import traceback
-import weakref
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -60,15 +60,26 @@ class Timer:
         self.next_due = (self.node.now() if self.sim_time else time.monotonic()) + self.period
 
 
-_LIVE_NODES: weakref.WeakSet[Node] = weakref.WeakSet()
-
-
-def live_nodes() -> set[Node]:
-    """Nodes constructed and not yet destroyed in this process."""
-    return set(_LIVE_NODES)
-
-
 class Node:
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Every subclass constructor that raises after ``Node.__init__`` opened the session destroys the
+        node on the way out: an open Zenoh session would keep the process from exiting and reporting."""
+        super().__init_subclass__(**kwargs)
+        init = cls.__dict__.get("__init__")
+        if init is None:
+            return
+
+        @functools.wraps(init)
+        def guarded_init(self: Node, *args: Any, **kw: Any) -> None:
+            try:
+                init(self, *args, **kw)
+            except BaseException:
+                if getattr(self, "_closed", True) is False:
+                    self.destroy()
+                raise
+
+        cls.__init__ = guarded_init  # type: ignore[method-assign]
+
     def __init__(self, name: str, *, namespace: str = "", params: dict[str, Any] | None = None,
                  remap: dict[str, str] | None = None, session: zenoh.Session | None = None,
                  connect: list[str] | None = None, log_level: str = "info", node_name: str | None = None) -> None:
@@ -84,10 +95,10 @@ class Node:
         try:
             self._init_runtime(params, remap)
         except BaseException:
+            self._closed = True
             if self._owns_session:
                 self.session.close()  # an open session would keep the process from exiting
             raise
-        _LIVE_NODES.add(self)
 
     def _init_runtime(self, params: dict[str, Any] | None, remap: dict[str, str] | None) -> None:
         self.session_id = str(self.session.info.zid())
@@ -408,7 +419,6 @@ class Node:
         if self._closed:
             return
         self._closed = True  # first: publishers called from in-flight callbacks become no-ops
-        _LIVE_NODES.discard(self)
         self.request_shutdown()
         self.logger.set_sink(None)
         for entity in reversed(self._entities):

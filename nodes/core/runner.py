@@ -72,20 +72,11 @@ def run_node(factory: Callable[..., Any], argv: list[str] | None = None, *,
         return 2
     if _accepts(factory, "cli_args"):
         kwargs["cli_args"] = args
-    from nodes.core.node import live_nodes
-
-    before = live_nodes()
     try:
-        node = factory(**kwargs)
-    except BaseException as exc:
-        # A subclass constructor that fails after Node.__init__ opened a session: close it, or the
-        # process would hang on exit instead of reporting the error.
-        for orphan in live_nodes() - before:
-            orphan.destroy()
-        if isinstance(exc, (ParameterError, ValueError, FileNotFoundError)):
-            print(f"error: {exc}", file=sys.stderr)
-            return 2
-        raise
+        node = factory(**kwargs)  # a failing constructor has already closed its session (Node.__init_subclass__)
+    except (ParameterError, ValueError, FileNotFoundError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
 
     def stop(signum: int, _frame: Any) -> None:
         node.logger.info(f"received {signal.Signals(signum).name}, shutting down")

@@ -62,11 +62,7 @@ class SimulatorNode(Node):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__("simulator", **kwargs)
-        try:
-            self._setup()
-        except BaseException:
-            self.destroy()   # an open Zenoh session would keep the process from exiting on a bad parameter
-            raise
+        self._setup()
 
     def _setup(self) -> None:
         defaults = _file_defaults()

@@ -275,3 +275,16 @@ def test_publisher_knows_whether_anyone_listens(router, client) -> None:
     finally:
         other.destroy()
     wait_until(lambda: not pub.has_subscribers, timeout=5, message="subscriber gone")
+
+
+def test_failing_subclass_constructor_closes_its_session(router, client) -> None:
+    class Broken(Node):
+        def __init__(self, **kwargs) -> None:
+            super().__init__("broken_ctor", **kwargs)
+            raise RuntimeError("setup failed")
+
+    with pytest.raises(RuntimeError, match="setup failed"):
+        Broken(connect=[router])
+    # the half-built node's liveliness token goes away with its closed session
+    wait_until(lambda: "/broken_ctor" not in graph.node_names(client.session, 0.3), timeout=5,
+               message="broken_ctor gone from the graph")
