@@ -4,19 +4,17 @@ from __future__ import annotations
 
 import argparse
 import os
-import signal
 import sys
 import time
 from pathlib import Path
 
 import yaml
 
+from launch import interrupts
 from launch.description import parse_file
 from launch.resolve import LaunchPlan, find_launch_file, resolve
 from launch.yaml_source import LaunchError, Source
 from nodes.tools.cli import UsageError
-
-PROJECT_ROOT = Path(__file__).resolve().parents[1]
 
 
 def _usage_error(message: str) -> UsageError:
@@ -67,16 +65,27 @@ def zenoh_port_of(plan: LaunchPlan) -> int:
     return port
 
 
+def ros2_wire_of(plan: LaunchPlan) -> bool:
+    """The ``ros2`` argument (true/false): whether nodes also speak rmw_zenoh (DESIGN §10)."""
+    text = str(plan.args.get("ros2", "true")).strip().lower()
+    if text not in ("true", "false", "1", "0"):
+        raise LaunchError(f"argument 'ros2' must be true or false, got '{text}'", Source(plan.file, 1))
+    return text in ("true", "1")
+
+
 def default_log_dir(path: Path) -> Path:
     base = Path(os.environ.get("ZENROID_LOG_DIR") or Path.home() / ".zenroid" / "log")
     return base / f"{path.stem}-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
 
 
-def child_environment(endpoint: str | None) -> dict[str, str]:
-    """What every node inherits: our environment, unbuffered output, the project importable, the router."""
+def child_environment(endpoint: str | None, ros2: bool = True) -> dict[str, str]:
+    """What every node inherits: our environment (the nodes import the packages from where the launcher
+    does: the installed distribution, or a checkout on PYTHONPATH), unbuffered output, the router, and
+    ``ZENROID_ROS2=0`` when the launch turned the ROS 2 wire off (``ros2:=false``)."""
     env = dict(os.environ)
+    if not ros2:
+        env["ZENROID_ROS2"] = "0"
     env["PYTHONUNBUFFERED"] = "1"
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(PROJECT_ROOT), env.get("PYTHONPATH", "")) if p)
     if endpoint is not None:  # embedded router: children connect to it and nothing else
         env["ZENOH_CONNECT"] = endpoint
         env.pop("ZENOH_CONFIG", None)
@@ -127,6 +136,8 @@ def execute(plan: LaunchPlan, log_dir: Path) -> int:
     from nodes.core import session as zsession
 
     port = zenoh_port_of(plan)
+    if _interrupted_early():
+        return 0
     log_dir.mkdir(parents=True, exist_ok=True)
     reaper = Reaper()
     session = None
@@ -147,14 +158,14 @@ def execute(plan: LaunchPlan, log_dir: Path) -> int:
             where = f"embedded router on {endpoint}"
         print(f"[launch] [INFO] zenoh: {where}", flush=True)
         readiness = NodeReadiness(session)
-        supervisor = Supervisor(plan, log_dir, child_environment(endpoint), readiness, reaper=reaper,
+        environment = child_environment(endpoint, ros2_wire_of(plan))
+        supervisor = Supervisor(plan, log_dir, environment, readiness, reaper=reaper,
                                 own_process_tree=True)
-        previous = {sig: signal.signal(sig, supervisor.handle_signal) for sig in (signal.SIGINT, signal.SIGTERM)}
+        interrupts.hand_over(supervisor.handle_signal)  # a signal that came during start-up stops it at once
         try:
             return supervisor.run()
         finally:
-            for sig, handler in previous.items():
-                signal.signal(sig, handler)
+            interrupts.release()
     finally:
         if readiness is not None:
             readiness.close()
@@ -163,7 +174,16 @@ def execute(plan: LaunchPlan, log_dir: Path) -> int:
         reaper.close()
 
 
+def _interrupted_early() -> bool:
+    """A SIGINT/SIGTERM that arrived before any node started ends the launch here, quietly."""
+    name = interrupts.requested()
+    if name is not None:
+        print(f"[launch] [INFO] received {name} before any node started: nothing to stop", flush=True)
+    return name is not None
+
+
 def run(args: argparse.Namespace) -> int:
+    interrupts.install()  # also for `zenroid launch`, which imports us late
     path, plan = load_plan(args)
     if args.show_args:
         try:
@@ -187,6 +207,7 @@ def run(args: argparse.Namespace) -> int:
         return 0
     try:
         zenoh_port_of(plan)
+        ros2_wire_of(plan)
     except LaunchError as exc:
         raise _usage_error(str(exc)) from None
     return execute(plan, args.log_dir or default_log_dir(path))

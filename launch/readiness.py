@@ -1,43 +1,41 @@
-"""Which nodes are up: the launcher watches the graph's node liveliness tokens (``wait_for``)."""
+"""Which nodes are up and which still serve: the launcher watches the graph's node liveliness tokens
+(``wait_for``) and probes each watched node's ``<node>/get_parameters`` service once a second (health).
+
+A liveliness token only says the node's Zenoh session is open: Zenoh's own threads keep it alive even
+when the node's Python loop is stuck, and a token can linger until the lease expires when the link is
+cut. A service reply comes from the node's executor over the same links its data takes, so "answered
+recently" means the node can still serve. The supervisor decides what to do with a silent node.
+"""
 
 from __future__ import annotations
 
 import threading
-from urllib.parse import unquote
+import time
+from typing import Any
 
-import zenoh
+from nodes.core import graph
 
-NODE_TOKENS = "@graph/node/**"
-
-
-def node_name_of(key: str) -> str | None:
-    """The node name in a graph node token ``@graph/node/<session id>/<percent-encoded name>``."""
-    try:
-        from nodes.core.graph import parse_key
-    except ImportError:  # the graph layout is owned by nodes.core; this fallback mirrors it
-        parts = str(key).split("/")
-        if len(parts) == 4 and parts[:2] == ["@graph", "node"]:
-            return unquote(parts[3])
-        return None
-    entry = parse_key(str(key))
-    return entry.node if entry is not None and entry.kind == "node" else None
+PROBE_PERIOD_S = 1.0
+PROBE_TIMEOUT_S = 2.0
 
 
 class NodeReadiness:
-    """Keeps the set of live node names seen through liveliness (history included)."""
+    """Keeps the set of live node names seen through the graph (history included) and probes the watched ones."""
 
-    def __init__(self, session: zenoh.Session) -> None:
+    def __init__(self, session: Any) -> None:
+        self._session = session
         self._lock = threading.Lock()
         self._alive: dict[str, int] = {}
-        self._subscriber = session.liveliness().declare_subscriber(NODE_TOKENS, self._on_sample, history=True)
+        self._answered: dict[str, float | None] = {}  # watched node -> monotonic time of its last reply
+        self._closed = threading.Event()
+        self._watch = graph.NodeWatch(session, self._on_change)
+        self._prober = threading.Thread(target=self._probe_loop, daemon=True, name="health-probe")
+        self._prober.start()
 
-    def _on_sample(self, sample: zenoh.Sample) -> None:
-        name = node_name_of(str(sample.key_expr))
-        if name is None:
-            return
-        name = name.strip("/")
+    def _on_change(self, node: str, alive: bool) -> None:
+        name = node.strip("/")
         with self._lock:
-            if sample.kind == zenoh.SampleKind.PUT:
+            if alive:
                 self._alive[name] = self._alive.get(name, 0) + 1
             else:
                 count = self._alive.get(name, 0) - 1
@@ -55,8 +53,39 @@ class NodeReadiness:
         with self._lock:
             return sorted(self._alive)
 
+    # -- health ---------------------------------------------------------------------------------------
+    def watch(self, full_name: str) -> None:
+        """Probe ``full_name`` (``ns/name``) from now on; forgets replies from an earlier watch."""
+        with self._lock:
+            self._answered[full_name.strip("/")] = None
+
+    def unwatch(self, full_name: str) -> None:
+        with self._lock:
+            self._answered.pop(full_name.strip("/"), None)
+
+    def last_answer(self, full_name: str) -> float | None:
+        """Monotonic time of the node's last reply to a probe since ``watch``, None if none yet."""
+        with self._lock:
+            return self._answered.get(full_name.strip("/"))
+
+    def _probe_loop(self) -> None:
+        while not self._closed.wait(PROBE_PERIOD_S):
+            with self._lock:
+                names = list(self._answered)
+            for name in names:
+                try:
+                    graph.probe_node(self._session, name, self._replied(name), PROBE_TIMEOUT_S)
+                except Exception:  # noqa: BLE001 - the session is closing: the loop ends with it
+                    return
+
+    def _replied(self, name: str):  # noqa: ANN202 - called on a Zenoh thread
+        def on_answer() -> None:
+            # Any reply, even an error one, comes from the node's executor: it is serving.
+            with self._lock:
+                if name in self._answered:
+                    self._answered[name] = time.monotonic()
+        return on_answer
+
     def close(self) -> None:
-        try:
-            self._subscriber.undeclare()
-        except Exception:  # the session may already be closing; nothing to clean up then
-            pass
+        self._closed.set()
+        self._watch.close()

@@ -2,7 +2,8 @@
 
 The launcher starts it first (before any thread exists) and writes ``+PGID`` / ``-PGID`` lines to its
 stdin as node groups start and end. When stdin reaches EOF — the launcher exited, even by SIGKILL — the
-groups still listed get SIGTERM and, 3 s later, SIGKILL. So no node outlives its launcher.
+groups still listed get SIGTERM and, 1.5 s later, SIGKILL: every node is gone within 2 s of its launcher
+(no orphans holding ports).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import subprocess
 import sys
 import time
 
-GRACE_S = 3.0
+GRACE_S = 1.5
 
 
 def _alive(pgid: int) -> bool:

@@ -36,6 +36,10 @@ _TRUE = {"true", "1", "yes", "on"}
 _FALSE = {"false", "0", "no", "off", ""}
 DEFAULT_RESPAWN_MAX = 5
 DEFAULT_WAIT_TIMEOUT = 60.0
+# A node that stops answering its own get_parameters service for this long (hung, or its Zenoh link is
+# gone) is restarted when it respawns; long enough that a busy shared machine or a short network
+# partition that Zenoh rides out does not trigger it.
+DEFAULT_HEALTH_TIMEOUT = 6.0
 
 
 @dataclass
@@ -59,6 +63,7 @@ class NodeSpec:
     wait_for: list[str]
     wait_timeout: float
     source: str
+    health_timeout: float = DEFAULT_HEALTH_TIMEOUT
 
     @property
     def full_name(self) -> str:
@@ -91,6 +96,8 @@ class NodeSpec:
             out["respawn"] = {"delay": self.respawn_delay, "max": self.respawn_max}
         if self.required:
             out["required"] = True
+        if self.health_timeout != DEFAULT_HEALTH_TIMEOUT:
+            out["health_timeout"] = self.health_timeout
         if self.output != "screen":
             out["output"] = self.output
         out["source"] = self.source
@@ -349,10 +356,13 @@ class _Resolver:
         wait_for = self.word_list(f.get("wait_for"), scope, decl, "wait_for", split=True)
         wait_timeout = self.number(f.get("wait_timeout", DEFAULT_WAIT_TIMEOUT), scope, at("wait_timeout"),
                                    "wait_timeout")
+        health_timeout = self.number(f.get("health_timeout", DEFAULT_HEALTH_TIMEOUT), scope, at("health_timeout"),
+                                     "health_timeout")
         spec = NodeSpec(name=name, namespace=namespace, module=module, executable=executable, args=args,
                         params=params, param_files=param_files, remaps=remaps, env=env, respawn=respawn,
                         respawn_delay=respawn_delay, respawn_max=respawn_max, required=required, output=output,
-                        wait_for=wait_for, wait_timeout=wait_timeout, source=str(decl.source))
+                        wait_for=wait_for, wait_timeout=wait_timeout, source=str(decl.source),
+                        health_timeout=health_timeout)
         for other in self.plan.nodes:
             if other.name == name:
                 raise LaunchError(f"duplicate node name '{name}' (also at {other.source})", at("name"))

@@ -1,4 +1,5 @@
-"""Launch substitutions: ``$(var NAME)``, ``$(env NAME [default])``, ``$(dirname)``, ``$(robot NAME)``.
+"""Launch substitutions: ``$(var NAME)``, ``$(env NAME [default])``, ``$(dirname)``, ``$(robot NAME)``,
+``$(config NAME)``.
 
 Pure text replacement, never evaluation. Substitutions nest; ``$$(`` is a literal ``$(``.
 """
@@ -12,7 +13,7 @@ from pathlib import Path
 
 from launch.yaml_source import LaunchError, Source
 
-KINDS = ("var", "env", "dirname", "robot")
+KINDS = ("var", "env", "dirname", "robot", "config")
 
 
 @dataclass
@@ -26,9 +27,9 @@ class SubstitutionContext:
 
 
 def _default_robot_resolver(name: str) -> Path:
-    from nodes.core.paths import robot_path
+    from nodes.share import robot_file
 
-    return robot_path(name)
+    return robot_file(name)
 
 
 def _evaluate(kind: str, words: list[str], ctx: SubstitutionContext, source: Source) -> str:
@@ -63,6 +64,15 @@ def _evaluate(kind: str, words: list[str], ctx: SubstitutionContext, source: Sou
             return str(resolver(words[0]))
         except FileNotFoundError as exc:
             raise LaunchError(f"$(robot {words[0]}): {exc}", source) from None
+    if kind == "config":
+        from nodes.share import config_file
+
+        if len(words) != 1:
+            raise LaunchError("$(config NAME) takes one file name", source)
+        try:
+            return str(config_file(words[0]))
+        except FileNotFoundError as exc:
+            raise LaunchError(f"$(config {words[0]}): {exc}", source) from None
     raise LaunchError(f"unknown substitution '$({kind})' (known: {', '.join(KINDS)})", source)
 
 

@@ -1,5 +1,6 @@
 """Runs a resolved launch plan: starts nodes in readiness order, prefixes and logs their output,
-respawns, honours ``required``, and shuts everything down (SIGINT → SIGTERM after 5 s → SIGKILL after 10 s).
+respawns, honours ``required``, restarts respawnable nodes that stop serving (health probes), and shuts
+everything down (SIGINT → SIGTERM after 4 s → SIGKILL after 7 s: a Ctrl-C ends the tree within 10 s).
 
 Every node runs in its own process group so signals reach its children too; the reaper guards against
 orphans if the launcher itself is killed.
@@ -22,9 +23,14 @@ import yaml
 from launch.reaper import Reaper
 from launch.resolve import LaunchPlan, NodeSpec
 
-SIGTERM_AFTER_S = 5.0
-SIGKILL_AFTER_S = 10.0
+SIGTERM_AFTER_S = 4.0
+SIGKILL_AFTER_S = 7.0
 POLL_S = 0.02
+# A process that ran this long before it exited starts a fresh respawn count: respawn_max caps crash
+# loops, not the number of unrelated faults over a long run.
+RESPAWN_RESET_AFTER_S = 30.0
+STATE_DIR_ENV = "ZENROID_STATE_DIR"  # where nodes keep what they restore after a respawn
+RESPAWN_ENV = "ZENROID_RESPAWN"  # how many times this node has been respawned (0: first start)
 _COLOURS = (32, 36, 33, 35, 34, 91, 92, 93, 94, 95, 96)
 
 
@@ -67,6 +73,14 @@ class Readiness(Protocol):
     def is_alive(self, full_name: str) -> bool: ...
 
 
+class Health(Protocol):
+    """Optional part of a readiness source (``launch.readiness.NodeReadiness``): service probes."""
+
+    def watch(self, full_name: str) -> None: ...
+    def unwatch(self, full_name: str) -> None: ...
+    def last_answer(self, full_name: str) -> float | None: ...
+
+
 @dataclass
 class Managed:
     """A node and its current process."""
@@ -81,6 +95,9 @@ class Managed:
     next_start: float = 0.0
     waiting_since: float = field(default_factory=time.monotonic)
     reader: threading.Thread | None = None
+    started_at: float = 0.0
+    probed: bool = False  # its health is being probed (it showed up on the graph)
+    silent_reported: bool = False
 
 
 class Supervisor:
@@ -145,6 +162,8 @@ class Supervisor:
         spec = managed.spec
         argv = spec.command(self.python, self._params_file(spec) if spec.module else None)
         env = dict(self.child_env)
+        env[STATE_DIR_ENV] = str(self.log_dir / "state")
+        env[RESPAWN_ENV] = str(managed.restarts)
         env.update(spec.env)
         try:
             proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
@@ -157,6 +176,8 @@ class Supervisor:
             return
         managed.proc = proc
         managed.pgid = proc.pid  # start_new_session: the child leads its own group
+        managed.started_at = time.monotonic()
+        managed.probed = managed.silent_reported = False
         if self.reaper:
             self.reaper.watch(proc.pid)
         managed.state = "running"
@@ -185,6 +206,9 @@ class Supervisor:
 
     def _on_exit(self, managed: Managed) -> None:
         spec, code = managed.spec, managed.exit_code
+        if managed.probed and self._health is not None:
+            self._health.unwatch(spec.full_name)
+            managed.probed = False
         if managed.pgid is not None:
             # Whatever the node left running in its group (its own children) must not outlive it.
             try:
@@ -205,6 +229,8 @@ class Supervisor:
                     self.say(handler.log)
                 if handler.shutdown:
                     self.request_stop(f"on_exit of '{spec.name}' asked for shutdown")
+        if spec.respawn and time.monotonic() - managed.started_at >= RESPAWN_RESET_AFTER_S:
+            managed.restarts = 0
         if spec.respawn and managed.restarts < spec.respawn_max and self._stop_reason is None:
             managed.restarts += 1
             managed.state = "respawn_pending"
@@ -218,6 +244,40 @@ class Supervisor:
             if code != 0:
                 self.exit_status = 1
             self.request_stop(f"required node '{spec.name}' exited ({describe})")
+
+    @property
+    def _health(self) -> Health | None:
+        readiness = self.readiness
+        return readiness if readiness is not None and hasattr(readiness, "last_answer") else None  # type: ignore[return-value]
+
+    def _check_health(self, managed: Managed, now: float) -> None:
+        """A running node that stopped answering for ``health_timeout`` is not alive: restart it (respawn)."""
+        spec, health = managed.spec, self._health
+        if health is None or spec.health_timeout <= 0:
+            return
+        if not managed.probed:
+            if self.readiness.is_alive(spec.full_name):  # a node (not a plain program) is on the graph
+                health.watch(spec.full_name)
+                managed.probed = True
+            return
+        last = health.last_answer(spec.full_name)
+        if last is None:
+            return  # not serving yet (start-up): only a node that served once can stop serving
+        silent = now - last
+        if silent < spec.health_timeout:
+            if managed.silent_reported:
+                managed.silent_reported = False
+                self.say(f"'{spec.name}' answers again")
+            return
+        if managed.silent_reported:
+            return
+        managed.silent_reported = True
+        why = f"'{spec.name}' has not answered for {silent:.1f} s (hung, or its Zenoh link is lost)"
+        if spec.respawn:
+            self.say(f"{why}: killing it to respawn it", "ERROR")
+            self._kill_group(managed, signal.SIGKILL)
+        else:
+            self.say(f"{why}; it does not respawn, so it is left running", "WARN")
 
     def request_stop(self, reason: str) -> None:
         if self._stop_reason is None:
@@ -262,6 +322,8 @@ class Supervisor:
                 managed.exit_code = managed.proc.returncode
                 managed.state = "exited"
                 self._on_exit(managed)
+            elif managed.state == "running":
+                self._check_health(managed, now)
             elif managed.state == "respawn_pending" and now >= managed.next_start and self._stop_reason is None:
                 self._start(managed)
 

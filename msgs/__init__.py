@@ -10,7 +10,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from msgs import packages
 from msgs.codec import DEFAULT_LIMITS, DecodeError, Limits, decode, encode, from_dict, to_dict
+from msgs.compiled import builder, packer
 from msgs.idl import DefinitionError
 from msgs.registry import (
     Action,
@@ -22,19 +24,27 @@ from msgs.registry import (
     package_names,
     register_message,
 )
-from msgs.timeutil import duration_from_sec, duration_to_sec, time_from_sec, time_to_sec
+from msgs.timeutil import duration_from_sec, duration_to_sec, time_from_sec, time_map, time_to_sec
+
+packages.install()  # ``from msgs.sensor_msgs import JointState`` (msgs/packages.py)
 
 __all__ = [
     "Action", "DEFAULT_LIMITS", "DecodeError", "DefinitionError", "Limits", "Service", "add_search_path",
-    "decode", "duration_from_sec", "duration_to_sec", "encode", "from_dict", "get_class", "get_type",
-    "list_types", "package_names", "register_message", "time_from_sec", "time_to_sec", "to_dict",
+    "builder", "decode", "duration_from_sec", "duration_to_sec", "encode", "from_dict", "get_class", "get_type",
+    "list_types", "package_names", "packer", "register_message", "time_from_sec", "time_map", "time_to_sec",
+    "to_dict",
 ]
 
 
 def __getattr__(name: str) -> Any:
-    """``msgs.JointState``: a message class by its bare name when exactly one package defines it."""
+    """``msgs.JointState``: a message class by its bare name when exactly one package defines it;
+    ``msgs.sensor_msgs``: the module of a message package."""
     if name.startswith("_"):
         raise AttributeError(name)
+    if name in package_names():
+        import importlib
+
+        return importlib.import_module(f"{__name__}.{name}")
     matches = [t for t in list_types() if t.rsplit("/", 1)[-1] == name]
     if len(matches) == 1:
         return get_type(matches[0])

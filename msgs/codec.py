@@ -13,6 +13,8 @@ from typing import Any
 
 import msgpack
 
+from msgs import compiled
+from msgs.compiled import _FLOAT_ONLY, _STR_ONLY
 from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
 from msgs.registry import default_value, get_class, get_spec
 
@@ -41,7 +43,7 @@ class Limits:
 DEFAULT_LIMITS = Limits()
 
 # Cross-field rules ROS messages carry in their comments; checked after field decoding.
-_EQUAL_LENGTH_RULES: dict[str, tuple[str, tuple[str, ...], bool]] = {
+EQUAL_LENGTH_RULES: dict[str, tuple[str, tuple[str, ...], bool]] = {
     # type: (reference field, fields that must match it, empty allowed)
     "sensor_msgs/msg/JointState": ("name", ("position", "velocity", "effort"), True),
     "zenroid_msgs/msg/HardwareState": ("name", ("position", "velocity", "effort"), False),
@@ -55,66 +57,11 @@ _EQUAL_LENGTH_RULES: dict[str, tuple[str, tuple[str, ...], bool]] = {
 
 def to_dict(msg: Any) -> dict[str, Any]:
     """A message as plain msgpack-ready data (nested dicts, lists, bytes)."""
-    return _encoder(msg._type)(msg)
+    return compiled.encoder(msg._type)(msg)
 
 
 def encode(msg: Any) -> bytes:
-    return msgpack.packb(to_dict(msg), use_bin_type=True)
-
-
-_encoders: dict[str, Callable[[Any], dict]] = {}
-
-
-def _encoder(type_name: str) -> Callable[[Any], dict]:
-    enc = _encoders.get(type_name)
-    if enc is None:
-        spec = get_spec(type_name)
-        steps = [(f.name, _field_encoder(f)) for f in spec.fields]
-
-        def enc(msg: Any, steps=steps) -> dict:
-            return {name: conv(getattr(msg, name)) for name, conv in steps}
-
-        _encoders[type_name] = enc
-    return enc
-
-
-def _field_encoder(f: FieldSpec) -> Callable[[Any], Any]:
-    if f.is_bytes:
-        return lambda v: bytes(v)
-    if f.is_primitive:
-        scalar = _scalar_encoder(f.base)
-        if f.is_array:
-            if f.base in FLOAT_TYPES:
-                return _encode_float_list
-            if f.base in STRING_TYPES:
-                return lambda v: v if type(v) is list and _STR_ONLY.issuperset(map(type, v)) else [str(x) for x in v]
-            return lambda v: [scalar(x) for x in v]
-        return scalar
-    if f.is_array:
-        return lambda v, t=f.base: [_encoder(t)(x) for x in v]
-    return lambda v, t=f.base: _encoder(t)(v)
-
-
-_FLOAT_ONLY = frozenset({float})
-_STR_ONLY = frozenset({str})
-
-
-def _encode_float_list(v: Any) -> list[float]:
-    if type(v) is list and _FLOAT_ONLY.issuperset(map(type, v)):
-        return v
-    if hasattr(v, "tolist"):  # numpy arrays
-        return [float(x) for x in v.tolist()]
-    return [float(x) for x in v]
-
-
-def _scalar_encoder(base: str) -> Callable[[Any], Any]:
-    if base in FLOAT_TYPES:
-        return float
-    if base == "bool":
-        return bool
-    if base in INT_RANGES:
-        return int
-    return str
+    return msgpack.packb(compiled.encoder(msg._type)(msg), use_bin_type=True)
 
 
 # ---------------------------------------------------------------- decode
@@ -133,11 +80,28 @@ def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFA
         )
     except (msgpack.ExtraData, msgpack.FormatError, msgpack.StackError, ValueError, TypeError) as exc:
         raise DecodeError(type_name, "", f"not a valid msgpack payload ({type(exc).__name__}: {exc})") from None
-    return from_dict(cls, obj, limits)
+    try:   # unpackb bounded every string and array with these limits
+        return compiled.decoder(type_name, limits.max_array_length, limits.max_string_length,
+                                limits.allow_nonfinite, True)(obj)
+    except compiled.Reject:
+        return _precise(cls, obj, limits)
 
 
 def from_dict(cls: Any, obj: Any, limits: Limits = DEFAULT_LIMITS) -> Any:
-    """Build a validated ``cls`` message from plain data (missing fields take ROS defaults)."""
+    """Build a validated ``cls`` message from plain data (missing fields take ROS defaults).
+
+    The generated decoder accepts valid data fast; whatever it declines goes through the precise
+    decoder below, which accepts the same inputs and names the field and the reason when it rejects.
+    """
+    try:
+        return compiled.decoder(cls._type, limits.max_array_length, limits.max_string_length,
+                                limits.allow_nonfinite)(obj)
+    except compiled.Reject:
+        return _precise(cls, obj, limits)
+
+
+def _precise(cls: Any, obj: Any, limits: Limits) -> Any:
+    """The explaining decoder: raises DecodeError naming the field path and the reason."""
     try:
         return _decoder(cls._type, limits)(obj)
     except _FieldError as exc:
@@ -181,7 +145,7 @@ def _compiled_decoder(type_name: str, limits: Limits) -> Callable[[Any], Any]:
     _decoders[key] = lambda obj: _decoders[key](obj)
     steps = [(f.name, _field_decoder(f, limits), f) for f in spec.fields]
     names = frozenset(f.name for f in spec.fields)
-    rule = _EQUAL_LENGTH_RULES.get(type_name)
+    rule = EQUAL_LENGTH_RULES.get(type_name)
 
     def dec(obj: Any) -> Any:
         if type(obj) is not dict:

@@ -18,6 +18,12 @@ def _split(seconds: float) -> tuple[int, int]:
     return int(sec), nanosec
 
 
+def time_map(seconds: float) -> dict[str, int]:
+    """builtin_interfaces/Time of ``seconds`` as its msgpack map (hot paths: no message instance)."""
+    sec, nanosec = _split(seconds)
+    return {"sec": sec, "nanosec": nanosec}
+
+
 def time_from_sec(seconds: float) -> Any:
     sec, nanosec = _split(seconds)
     return get_class("builtin_interfaces/msg/Time")(sec=sec, nanosec=nanosec)

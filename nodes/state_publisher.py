@@ -15,11 +15,9 @@ Run: ``python -m nodes.state_publisher --ns humanoid --param robot_description_f
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
-import msgpack
 import numpy as np
 
 import msgs
@@ -33,22 +31,21 @@ String = msgs.get_type("std_msgs/msg/String")
 TFMessage = msgs.get_type("tf2_msgs/msg/TFMessage")
 
 
-def _stamp(seconds: float) -> dict[str, int]:
-    sec = math.floor(seconds)
-    nanosec = min(int(round((seconds - sec) * 1e9)), 999_999_999)
-    return {"sec": int(sec), "nanosec": nanosec}
+_stamp = msgs.time_map
+_pack_tf = msgs.packer("tf2_msgs/msg/TFMessage")
+_header = msgs.builder("std_msgs/msg/Header")
+_transform_stamped = msgs.builder("geometry_msgs/msg/TransformStamped")
+_transform_map = msgs.builder("geometry_msgs/msg/Transform")
+_vector3 = msgs.builder("geometry_msgs/msg/Vector3")
+_quaternion = msgs.builder("geometry_msgs/msg/Quaternion")
 
 
 def _transform(stamp: dict[str, int], parent: str, child: str, xyz: Sequence[float], quat: Sequence[float]) -> dict:
-    """One geometry_msgs/TransformStamped as the plain msgpack map (ROS field names)."""
-    return {
-        "header": {"stamp": stamp, "frame_id": parent},
-        "child_frame_id": child,
-        "transform": {
-            "translation": {"x": xyz[0], "y": xyz[1], "z": xyz[2]},
-            "rotation": {"x": quat[0], "y": quat[1], "z": quat[2], "w": quat[3]},
-        },
-    }
+    """One geometry_msgs/TransformStamped as its msgpack map."""
+    return _transform_stamped(
+        header=_header(stamp=stamp, frame_id=parent), child_frame_id=child,
+        transform=_transform_map(translation=_vector3(x=xyz[0], y=xyz[1], z=xyz[2]),
+                                 rotation=_quaternion(x=quat[0], y=quat[1], z=quat[2], w=quat[3])))
 
 
 class TransformTree:
@@ -148,8 +145,9 @@ class RobotStatePublisher(Node):
 
         self.description_pub = self.create_publisher(String, "robot_description", latched=True)
         self.static_pub = self.create_publisher(TFMessage, "tf_static", latched=True)
-        self.tf_pub = self.create_publisher(TFMessage, "tf")
-        self.create_subscription(JointState, "joint_states", self.on_joint_states)
+        self.tf_pub = self.create_publisher(TFMessage, "tf", reliable=False)  # periodic: drop, never block
+        # joint_states may come at 1 kHz: wake at the tf rate and take everything that arrived meanwhile
+        self.create_subscription(JointState, "joint_states", self.on_joint_states, max_rate=self.frequency)
         if self.use_model_states:
             self.create_subscription(ModelStates, "/sim/model_states", self.on_model_states)
 
@@ -227,8 +225,9 @@ class RobotStatePublisher(Node):
             self.tokens = max(self.tokens, 1.0)  # publish this one now, whatever the rate limit
         self.last_stamp = stamp
         self.stamp_s = stamp
-        self.dirty = True
-        self._maybe_publish()
+        if not self.dirty:
+            self.dirty = True
+            self.call_soon(self._maybe_publish, where="tf")   # after the rest of this batch: the newest state
 
     def on_model_states(self, msg: Any) -> None:
         name = self.get_parameter("model_name") or self.tree.model.name
@@ -267,7 +266,7 @@ class RobotStatePublisher(Node):
         return False
 
     def _maybe_publish(self) -> None:
-        if self._take_token():
+        if self.dirty and self._take_token():
             self._publish_tf()
 
     def _flush(self) -> None:
@@ -283,7 +282,7 @@ class RobotStatePublisher(Node):
             xyz, quat = self.base_pose
             transforms.append(_transform(stamp, self.world_frame, self.tree.root_frame, xyz, quat))
         # Built as plain maps and packed directly: ~5x cheaper than through message objects.
-        self.tf_pub.publish_raw(msgpack.packb({"transforms": transforms}, use_bin_type=True))
+        self.tf_pub.publish_raw(_pack_tf(transforms=transforms))
         self.dirty = False
 
 

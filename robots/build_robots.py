@@ -1,4 +1,5 @@
-"""Generates the primitive-geometry URDFs in this folder (``python robots/build_robots.py``).
+"""Generates the primitive-geometry URDFs in this folder (``python robots/build_robots.py``), and
+``humanoid.urdf.xacro``, the humanoid with xacro arguments for variants (seed 000's 20-DOF exercise).
 
 Why a generator: masses, inertias and collision shapes must agree with each other; writing them by hand
 invites copy-paste errors. Inertias come from the solid box / cylinder / sphere formulas, so each link's
@@ -103,7 +104,10 @@ class Joint:
     damping: float = 0.0
     mimic: tuple[str, float, float] | None = None
 
-    def xml(self) -> str:
+    def xml(self, effort: str | None = None, velocity: str | None = None) -> str:
+        """The <joint> element; ``effort`` / ``velocity`` replace the limit numbers (xacro expressions)."""
+        effort = fmt(self.effort) if effort is None else effort
+        velocity = fmt(self.velocity) if velocity is None else velocity
         lines = [
             f'  <joint name="{self.name}" type="{self.kind}">',
             f'    <parent link="{self.parent}"/>',
@@ -113,11 +117,11 @@ class Joint:
         if self.kind != "fixed":
             lines.append(f'    <axis xyz="{fmt(*self.axis)}"/>')
             if self.kind == "continuous":
-                lines.append(f'    <limit effort="{fmt(self.effort)}" velocity="{fmt(self.velocity)}"/>')
+                lines.append(f'    <limit effort="{effort}" velocity="{velocity}"/>')
             else:
                 lines.append(
                     f'    <limit lower="{fmt(self.lower)}" upper="{fmt(self.upper)}" '
-                    f'effort="{fmt(self.effort)}" velocity="{fmt(self.velocity)}"/>'
+                    f'effort="{effort}" velocity="{velocity}"/>'
                 )
             if self.damping:
                 lines.append(f'    <dynamics damping="{fmt(self.damping)}" friction="0"/>')
@@ -145,25 +149,37 @@ class Robot:
         return sum(link.mass for link in self.links)
 
     def xml(self) -> str:
+        return self.render(lambda joint: joint.xml(), self._control_joint_xml)
+
+    @staticmethod
+    def _control_joint_xml(name: str) -> str:
+        return (
+            f'    <joint name="{name}">\n'
+            '      <command_interface name="position"/>\n'
+            '      <state_interface name="position"/>\n'
+            '      <state_interface name="velocity"/>\n'
+            "    </joint>"
+        )
+
+    def render(self, joint_xml, control_joint_xml, robot_open: str | None = None, preamble: str = "") -> str:
+        """The URDF text, with the joint elements and the <ros2_control> joint entries from the callbacks
+        (so the xacro flavour shares everything else)."""
         used = sorted({link.colour for link in self.links})
-        out = ['<?xml version="1.0"?>', f"<!-- {self.header.strip()} -->", f'<robot name="{self.name}">', ""]
+        out = ['<?xml version="1.0"?>', f"<!-- {self.header.strip()} -->",
+               robot_open or f'<robot name="{self.name}">', ""]
+        if preamble:
+            out.append(preamble)
         out += [f'  <material name="{c}"><color rgba="{fmt(*COLOURS[c])}"/></material>' for c in used]
         out.append("")
         for link in self.links:
             out.append(link.xml())
         for joint in self.joints:
-            out.append(joint.xml())
+            out.append(joint_xml(joint))
         if self.ros2_control_joints:
             out.append('  <ros2_control name="GazeboSystem" type="system">')
             out.append("    <hardware>\n      <plugin>gazebo_ros2_control/GazeboSystem</plugin>\n    </hardware>")
             for name in self.ros2_control_joints:
-                out.append(
-                    f'    <joint name="{name}">\n'
-                    '      <command_interface name="position"/>\n'
-                    '      <state_interface name="position"/>\n'
-                    '      <state_interface name="velocity"/>\n'
-                    "    </joint>"
-                )
+                out.append(control_joint_xml(name))
             out.append("  </ros2_control>\n")
             out.append(
                 '  <gazebo>\n    <plugin filename="libgazebo_ros2_control.so" name="gazebo_ros2_control">\n'
@@ -275,6 +291,102 @@ def humanoid() -> Robot:
         )
     r.ros2_control_joints = [j.name for j in r.joints if j.kind != "fixed"]
     return r
+
+
+# Joints the 20-DOF variant locks (fixed joints): 12 leg + 8 arm joints stay movable.
+LOCKED_IN_20_DOF = ("waist_yaw", "neck_pitch")
+
+
+def humanoid_xacro() -> str:
+    """``humanoid.urdf.xacro``: the same humanoid with xacro arguments for variants.
+
+    With no arguments it expands to the robot of ``humanoid.urdf`` (a test checks this). Seed 000's
+    "20-DOF humanoid" exercise is ``dof:=20 velocity_limit:=2 effort_limit:=50``: waist and neck locked,
+    every remaining joint limited to 2 rad/s and 50 Nm in its <limit> and in the <ros2_control> block
+    (velocity and effort command interfaces with min/max, as ros2_control reads limits from there)."""
+    r = humanoid()
+    r.header = (
+        "The humanoid of humanoid.urdf as xacro, with arguments for variants: dof (22, or 20 with "
+        "waist_yaw and neck_pitch locked), velocity_limit (rad/s) and effort_limit (Nm) for every joint "
+        "(0: each joint's own). Expand with `zenroid xacro robots/humanoid.urdf.xacro dof:=20 "
+        "velocity_limit:=2 effort_limit:=50`. Generated by robots/build_robots.py: edit that, not this file."
+    )
+    locked = "${dof == 20}"
+    preamble = "\n".join([
+        '  <xacro:arg name="dof" default="22"/>',
+        '  <xacro:arg name="velocity_limit" default="0"/>',
+        '  <xacro:arg name="effort_limit" default="0"/>',
+        '  <xacro:property name="dof" value="$(arg dof)"/>',
+        '  <xacro:property name="velocity_limit" value="$(arg velocity_limit)"/>',
+        '  <xacro:property name="effort_limit" value="$(arg effort_limit)"/>',
+        '  <xacro:if value="${dof not in (20, 22)}">${xacro.fatal(\'dof must be 22 or 20, got \' + str(dof))}'
+        "</xacro:if>",
+        '  <xacro:if value="${velocity_limit &lt; 0 or effort_limit &lt; 0}">'
+        "${xacro.fatal('velocity_limit and effort_limit must not be negative')}</xacro:if>",
+        "",
+        "  <!-- One joint of the <ros2_control> block; the limits, when given, as min/max of a velocity and",
+        "       an effort command interface (position control only: the controllers claim 'position'). -->",
+        '  <xacro:macro name="control_joint" params="joint">',
+        '    <joint name="${joint}">',
+        '      <command_interface name="position"/>',
+        '      <xacro:if value="${velocity_limit > 0}">',
+        '        <command_interface name="velocity">',
+        '          <param name="min">${-velocity_limit}</param>',
+        '          <param name="max">${velocity_limit}</param>',
+        "        </command_interface>",
+        "      </xacro:if>",
+        '      <xacro:if value="${effort_limit > 0}">',
+        '        <command_interface name="effort">',
+        '          <param name="min">${-effort_limit}</param>',
+        '          <param name="max">${effort_limit}</param>',
+        "        </command_interface>",
+        "      </xacro:if>",
+        '      <state_interface name="position"/>',
+        '      <state_interface name="velocity"/>',
+        "    </joint>",
+        "  </xacro:macro>",
+        "",
+    ])
+
+    def joint_xml(joint: Joint) -> str:
+        if joint.kind == "fixed":
+            return joint.xml()
+        text = joint.xml(effort=f"${{effort_limit if effort_limit > 0 else {fmt(joint.effort)}}}",
+                         velocity=f"${{velocity_limit if velocity_limit > 0 else {fmt(joint.velocity)}}}")
+        if joint.name not in LOCKED_IN_20_DOF:
+            return text
+        fixed = Joint(joint.name, "fixed", joint.parent, joint.child, joint.xyz, joint.rpy).xml()
+        return (f'  <xacro:if value="{locked}">\n{fixed}  </xacro:if>\n'
+                f'  <xacro:unless value="{locked}">\n{text}  </xacro:unless>\n')
+
+    def control_joint_xml(name: str) -> str:
+        entry = f'    <xacro:control_joint joint="{name}"/>'
+        if name in LOCKED_IN_20_DOF:
+            return f'    <xacro:unless value="{locked}">\n  {entry}\n    </xacro:unless>'
+        return entry
+
+    robot_open = '<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="humanoid">'
+    return r.render(joint_xml, control_joint_xml, robot_open, preamble)
+
+
+def humanoid_20dof_xacro() -> str:
+    """Seed 000's exercise "a 20-DOF humanoid, position control, 2 rad/s, 50 Nm": xacro arguments on
+    ``humanoid.urdf.xacro`` (an argument given here is its default; the command line still overrides)."""
+    return (
+        '<?xml version="1.0"?>\n'
+        "<!-- The 20-DOF humanoid of seed 000's controller-setup exercise: humanoid.urdf.xacro with waist and\n"
+        "     neck locked, 2 rad/s and 50 Nm on every joint (in <limit> and in the <ros2_control> block).\n"
+        "     Generated by robots/build_robots.py. -->\n"
+        '<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="humanoid_20dof">\n'
+        '  <xacro:arg name="dof" default="20"/>\n'
+        '  <xacro:arg name="velocity_limit" default="2"/>\n'
+        '  <xacro:arg name="effort_limit" default="50"/>\n'
+        '  <xacro:include filename="humanoid.urdf.xacro"/>\n'
+        "</robot>\n"
+    )
+
+
+XACRO_BUILDERS = {"humanoid.urdf.xacro": humanoid_xacro, "humanoid_20dof.urdf.xacro": humanoid_20dof_xacro}
 
 
 # ------------------------------------------------------------------------------ Module 2 lab upper body
@@ -447,6 +559,9 @@ def main() -> None:
         robot = build()
         (HERE / f"{name}.urdf").write_text(robot.xml())
         print(f"{name}.urdf: {len(robot.links)} links, {len(robot.joints)} joints, {robot.total_mass():.1f} kg")
+    for file, build_text in XACRO_BUILDERS.items():
+        (HERE / file).write_text(build_text())
+        print(f"{file}: xacro")
 
 
 if __name__ == "__main__":

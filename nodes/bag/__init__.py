@@ -1,1 +1,1 @@
-"""Bags: recorded messages in MCAP files with ROS 2 (CDR) encoding, readable by ros2 bag and Foxglove."""
+"""Bags: rosbag2 directories (metadata.yaml + MCAP) of CDR-encoded messages; reads MCAP and sqlite3 bags from ROS 2."""

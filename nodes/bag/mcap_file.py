@@ -1,151 +1,126 @@
-"""Reading and writing MCAP bags of zenroid messages (no Zenoh here: the CLI verb does the transport).
+"""One MCAP storage file, as rosbag2's MCAP storage plugin (Jazzy) writes and reads it.
 
-Messages are stored CDR-encoded with ``ros2msg`` schemas, exactly as ``ros2 bag record -s mcap`` writes
-them, so a bag converts losslessly in both directions. Topics are the Zenoh keys with a leading ``/``.
+Profile ``ros2``; one ``ros2msg`` schema per type, named ``pkg/msg/Name``; one ``cdr`` channel per topic
+whose metadata holds ``offered_qos_profiles`` (YAML text) and ``topic_type_hash`` (RIHS01); and a
+metadata record named ``rosbag2`` whose ``serialized_metadata`` is the bag's metadata, so ``ros2 bag info``
+on the bare file shows the same as on the directory. Payloads are bytes here: nodes/bag/cdr.py encodes.
 """
 
 from __future__ import annotations
 
-import time
+import importlib.metadata
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
+import yaml
 from mcap.reader import make_reader
-from mcap_ros2.decoder import DecoderFactory
-from mcap_ros2.writer import Writer
+from mcap.writer import CompressionType
+from mcap.writer import Writer as McapWriter
 
-import msgs
-from msgs.idl import FieldSpec
-from msgs.registry import get_spec
-from msgs.schema_text import full_definition
+from nodes.bag.rosbag2 import TopicInfo
 
 
-class BagError(Exception):
-    """A bag that cannot be opened, written or understood; the message says which and why."""
+class StorageError(Exception):
+    """A storage file that cannot be read or written; the message says which and why."""
 
 
-def resolve_bag_path(path: str | Path) -> Path:
-    """A bag is an ``.mcap`` file or a ros2-bag-style directory holding one."""
-    p = Path(path)
-    if p.is_dir():
-        files = sorted(p.glob("*.mcap"))
-        if not files:
-            raise BagError(f"no .mcap file in directory {p}")
-        return files[0]
-    if not p.is_file():
-        raise BagError(f"no bag at {p}")
-    return p
+def _library() -> str:
+    try:
+        return f"zenroid {importlib.metadata.version('zenroid')}; mcap {importlib.metadata.version('mcap')}"
+    except importlib.metadata.PackageNotFoundError:
+        return "zenroid"
 
 
-class BagWriter:
-    def __init__(self, path: str | Path) -> None:
-        p = Path(path)
-        if p.suffix != ".mcap":
-            p.mkdir(parents=True, exist_ok=False)
-            p = p / f"{p.name}_0.mcap"
-        self.path = p
-        self._file = open(p, "wb")
-        self._writer = Writer(self._file)
-        self._schemas: dict[str, Any] = {}
-        self.count = 0
-        self.unrecordable: set[str] = set()
+class McapStorageWriter:
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self._file = open(path, "xb")  # never overwrite a bag
+        # Chunks are zstd-compressed inside the file (transparent to every MCAP reader, and not what
+        # rosbag2 calls "compression", which stays empty in metadata.yaml).
+        self._writer = McapWriter(self._file, chunk_size=1 << 20, compression=CompressionType.ZSTD)
+        self._writer.start(profile="ros2", library=_library())
+        self._schemas: dict[str, int] = {}
 
-    def write(self, key: str, msg: Any, log_time_ns: int | None = None) -> bool:
-        """Store ``msg`` under topic ``/key``; False (and remembered) if its type has no ROS schema."""
-        type_name = msg._type
-        schema = self._schemas.get(type_name)
-        if schema is None:
-            if type_name in self.unrecordable:
-                return False
-            try:
-                schema = self._writer.register_msgdef(type_name, full_definition(type_name))
-                self._schemas[type_name] = schema
-            except Exception:  # noqa: BLE001 - a type ROS tools cannot name (action wrappers)
-                self.unrecordable.add(type_name)
-                return False
-        t = log_time_ns if log_time_ns is not None else time.time_ns()
-        try:
-            self._writer.write_message("/" + key.lstrip("/"), schema, msg, log_time=t, publish_time=t)
-        except Exception:  # noqa: BLE001
-            self.unrecordable.add(type_name)
-            return False
-        self.count += 1
-        return True
+    def add_topic(self, topic: str, type_name: str, schema_text: str, qos_yaml: str, type_hash: str) -> int:
+        schema_id = self._schemas.get(type_name)
+        if schema_id is None:
+            schema_id = self._schemas[type_name] = self._writer.register_schema(
+                type_name, "ros2msg", schema_text.encode())
+        return self._writer.register_channel(topic, "cdr", schema_id,
+                                             {"offered_qos_profiles": qos_yaml, "topic_type_hash": type_hash})
 
-    def close(self) -> None:
+    def write(self, channel_id: int, log_time_ns: int, data: bytes) -> None:
+        self._writer.add_message(channel_id, log_time=log_time_ns, data=data, publish_time=log_time_ns)
+
+    def close(self, serialized_metadata: str | None = None) -> None:
+        if serialized_metadata is not None:
+            self._writer.add_metadata("rosbag2", {"serialized_metadata": serialized_metadata})
         self._writer.finish()
         self._file.close()
 
 
 @dataclass
-class BagMessage:
-    key: str
+class RawMessage:
+    topic: str
     type_name: str
-    msg: Any
+    schema_text: str | None
     log_time_ns: int
+    data: bytes
 
 
-def _to_plain(spec_type: str, ros_msg: Any) -> dict[str, Any]:
-    """The decoder's dynamic object → a plain map following our own definition of the type."""
-    out: dict[str, Any] = {}
-    for f in get_spec(spec_type).fields:
-        value = getattr(ros_msg, f.name)
-        out[f.name] = _plain_field(f, value)
-    return out
+def _reader(f: IO[bytes], where: str) -> Any:
+    try:
+        return make_reader(f)
+    except Exception as exc:  # noqa: BLE001 - mcap raises many kinds on corrupt files
+        raise StorageError(f"{where}: not a readable MCAP bag ({type(exc).__name__}: {exc})") from None
 
 
-def _plain_field(f: FieldSpec, value: Any) -> Any:
-    if f.is_bytes:
-        return bytes(value)
-    if f.is_primitive:
-        return list(value) if f.is_array else value
-    if f.is_array:
-        return [_to_plain(f.base, v) for v in value]
-    return _to_plain(f.base, value)
-
-
-def read_bag(path: str | Path, keys: list[str] | None = None) -> Iterator[BagMessage]:
-    """Messages in log-time order, decoded and validated into zenroid message classes."""
-    bag = resolve_bag_path(path)
-    wanted = {"/" + k.strip("/") for k in keys} if keys else None
-    with open(bag, "rb") as f:
-        try:
-            reader = make_reader(f, decoder_factories=[DecoderFactory()])
-            for schema, channel, message, ros_msg in reader.iter_decoded_messages(
-                    topics=sorted(wanted) if wanted else None, log_time_order=True):
-                type_name = schema.name if "/msg/" in schema.name else _with_kind(schema.name)
-                cls = msgs.get_type(type_name)
-                yield BagMessage(channel.topic.lstrip("/"), type_name,
-                                 msgs.from_dict(cls, _to_plain(type_name, ros_msg)), message.log_time)
-        except (msgs.DecodeError, KeyError) as exc:
-            raise BagError(f"{bag}: {exc}") from None
-        except Exception as exc:  # noqa: BLE001 - mcap raises many kinds on corrupt files
-            raise BagError(f"{bag}: not a readable MCAP bag ({type(exc).__name__}: {exc})") from None
-
-
-def _with_kind(name: str) -> str:
-    parts = name.split("/")
-    return f"{parts[0]}/msg/{parts[1]}" if len(parts) == 2 else name
-
-
-def bag_info(path: str | Path) -> dict[str, Any]:
-    bag = resolve_bag_path(path)
-    with open(bag, "rb") as f:
-        try:
-            summary = make_reader(f).get_summary()
-        except Exception as exc:  # noqa: BLE001
-            raise BagError(f"{bag}: not a readable MCAP bag ({type(exc).__name__}: {exc})") from None
-    if summary is None or summary.statistics is None:
-        raise BagError(f"{bag}: no summary section (was the recording interrupted?)")
-    stats = summary.statistics
+def summary(f: IO[bytes], where: str) -> tuple[list[TopicInfo], int, int, int, str]:
+    """(topics, message count, first and last log time in ns, ros_distro) from the file's summary."""
+    reader = _reader(f, where)
+    try:
+        summ = reader.get_summary()
+    except Exception as exc:  # noqa: BLE001
+        raise StorageError(f"{where}: not a readable MCAP bag ({type(exc).__name__}: {exc})") from None
+    if summ is None or summ.statistics is None:
+        raise StorageError(f"{where}: no summary section (was the recording interrupted?)")
+    stats = summ.statistics
     topics = []
-    for cid, channel in sorted(summary.channels.items(), key=lambda kv: kv[1].topic):
-        schema = summary.schemas.get(channel.schema_id)
-        topics.append({"topic": channel.topic, "type": schema.name if schema else "?",
-                       "count": stats.channel_message_counts.get(cid, 0), "serialization": channel.message_encoding})
-    return {"path": str(bag), "size_bytes": bag.stat().st_size, "messages": stats.message_count,
-            "start_ns": stats.message_start_time, "end_ns": stats.message_end_time,
-            "duration_s": (stats.message_end_time - stats.message_start_time) / 1e9 if stats.message_count else 0.0,
-            "topics": topics}
+    for cid, channel in sorted(summ.channels.items(), key=lambda kv: kv[1].topic):
+        schema = summ.schemas.get(channel.schema_id)
+        topics.append(TopicInfo(name=channel.topic, type=schema.name if schema else "?",
+                                count=stats.channel_message_counts.get(cid, 0),
+                                serialization_format=channel.message_encoding,
+                                type_hash=channel.metadata.get("topic_type_hash", "")))
+    distro = ""
+    try:
+        for record in reader.iter_metadata():
+            if record.name == "rosbag2":
+                distro = record.metadata.get("ROS_DISTRO", distro)
+                doc = yaml.safe_load(record.metadata.get("serialized_metadata") or "null")
+                if isinstance(doc, dict) and doc.get("ros_distro"):
+                    distro = str(doc["ros_distro"])
+    except Exception:  # noqa: BLE001 - metadata records are optional; a bad one only hides the distro
+        pass
+    return topics, stats.message_count, stats.message_start_time, stats.message_end_time, distro
+
+
+def messages(f: IO[bytes], where: str, topics: set[str] | None) -> Iterator[RawMessage]:
+    """Every message of the file in log-time order (payloads as stored)."""
+    reader = _reader(f, where)
+    try:
+        for schema, channel, message in reader.iter_messages(
+                topics=sorted(topics) if topics is not None else None, log_time_order=True):
+            if schema is None:
+                raise StorageError(f"{where}: channel {channel.topic} has no schema")
+            if channel.message_encoding != "cdr":
+                raise StorageError(f"{where}: topic {channel.topic} is encoded as "
+                                   f"'{channel.message_encoding}', only cdr is supported")
+            text = schema.data.decode() if schema.encoding == "ros2msg" and schema.data else None
+            yield RawMessage(channel.topic, schema.name, text, message.log_time, message.data)
+    except StorageError:
+        raise
+    except Exception as exc:  # noqa: BLE001
+        raise StorageError(f"{where}: not a readable MCAP bag ({type(exc).__name__}: {exc})") from None

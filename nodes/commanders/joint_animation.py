@@ -16,6 +16,7 @@ import sys
 from msgs import get_type
 from msgs.rosgraph_msgs import Clock
 from msgs.trajectory_msgs import JointTrajectory
+from nodes.commanders.live import restart
 from nodes.commanders.trajectories import point, trajectory
 from nodes.core import Node, run_node
 
@@ -58,7 +59,8 @@ class JointAnimation(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("joint_control", **kwargs)
         controller = self.declare_parameter("controller", "joint_trajectory_controller",
-                                            description="the trajectory controller that plays the animation")
+                                            description="the trajectory controller that plays the animation",
+                                            read_only=restart("controller"))
         self.points = self.declare_parameter("points", 1500, min_value=1, description="n in the tutorial")
         self.dt = self.declare_parameter("dt", 0.01, min_value=0.0001, description="seconds between points")
         self.rps = self.declare_parameter("rps", 0.05, description="wave frequency (revolutions per second)")
@@ -71,7 +73,15 @@ class JointAnimation(Node):
         self.create_subscription(Clock, "/sim/clock", self.on_clock)
         self.create_subscription(ControllerState, f"{controller}/controller_state", self.on_controller_state)
         self.create_timer(0.1, self.tick)
+        self.add_on_set_parameter_callback(self.on_parameter)
         self.logger.info("waiting for the sim clock and the trajectory controller")
+
+    def on_parameter(self, name: str, value) -> str | None:
+        """Read when the animation is (re)sent: applies from the next loop on."""
+        attribute = {"points": "points", "dt": "dt", "rps": "rps", "joint_prefix": "prefix", "loop": "loop"}.get(name)
+        if attribute is not None:
+            setattr(self, attribute, value)
+        return None
 
     def on_clock(self, msg: Clock) -> None:
         self.clock_seen = self.clock_seen or (msg.clock.sec, msg.clock.nanosec) != (0, 0)

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import sys
 
+from msgs import time_from_sec
 from msgs.trajectory_msgs import JointTrajectory
+from nodes.commanders.live import restart
 from nodes.commanders.trajectories import single_point
 from nodes.core import Node, run_node
 
@@ -37,26 +39,62 @@ class JointCommander(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("joint_commander", **kwargs)
         controller = self.declare_parameter("controller", "joint_trajectory_controller",
-                                            description="joint trajectory controller to command")
-        self.joints = self.declare_parameter("joints", list(LEG_JOINTS), description="joints to command (URDF names)")
+                                            description="joint trajectory controller to command",
+                                            read_only=restart("controller"))
+        self.joints = self.declare_parameter("joints", list(LEG_JOINTS), description="joints to command (URDF names)",
+                                             validator=lambda v: None if v else "needs at least one joint")
         period = self.declare_parameter("period", 2.0, description="seconds between commands", min_value=0.05)
         self.move_time = self.declare_parameter("move_time", 1.0, description="time_from_start of each pose (s)",
                                                 min_value=0.0)
-        self.bend = knee_bend_pose(
-            self.joints,
-            self.declare_parameter("hip_pitch", -0.2, description="hip pitch of the bend (rad)"),
-            self.declare_parameter("knee", 0.4, description="knee angle of the bend (rad)"),
-            self.declare_parameter("ankle_pitch", -0.2, description="ankle pitch of the bend (rad)"),
-        )
+        self.enabled = self.declare_parameter("enabled", True, description="false: stop sending (hand the robot "
+                                              "to someone else), true: resume")
+        self.declare_parameter("hip_pitch", -0.2, description="hip pitch of the bend (rad)")
+        self.declare_parameter("knee", 0.4, description="knee angle of the bend (rad)")
+        self.declare_parameter("ankle_pitch", -0.2, description="ankle pitch of the bend (rad)")
+        self.bend = self._bend({})
+        self.start_delay = self.declare_parameter(
+            "start_delay", 0.2, min_value=0.0, max_value=60.0,
+            description="with use_sim_time: stamp each pose to start this long after its tick (s), so it starts "
+                        "at the same simulated instant in every lockstep run; 0: start on receipt")
         self.publisher = self.create_publisher(JointTrajectory, f"{controller}/joint_trajectory")
         self.position_index = 0
-        self.create_timer(period, self.send_command)
+        self.timer = self.create_timer(period, self.send_command)
+        self.add_on_set_parameter_callback(self.on_parameter)
         self.logger.info(f"Joint Commander initialized: {len(self.joints)} joints -> "
                          f"{self.resolve(controller + '/joint_trajectory')} every {period:g} s")
 
+    def _bend(self, changed: dict) -> list[float]:
+        value = {n: changed.get(n, self.get_parameter(n)) for n in ("joints", "hip_pitch", "knee", "ankle_pitch")}
+        return knee_bend_pose(value["joints"], value["hip_pitch"], value["knee"], value["ankle_pitch"])
+
+    def on_parameter(self, name: str, value) -> str | None:
+        """Every parameter but ``controller`` applies at once (``zenroid param set``)."""
+        if name == "period":
+            self.timer.cancel()
+            self.timer = self.create_timer(value, self.send_command)
+        elif name == "move_time":
+            self.move_time = value
+        elif name == "enabled":
+            self.enabled = value
+        elif name == "start_delay":
+            self.start_delay = value
+        elif name in ("joints", "hip_pitch", "knee", "ankle_pitch"):
+            self.bend = self._bend({name: value})
+            if name == "joints":
+                self.joints = list(value)
+        else:
+            return None
+        self.logger.info(f"{name} is now {value}")
+        return None
+
     def send_command(self) -> None:
+        if not self.enabled:
+            return
         positions = pose_for(self.position_index, self.joints, self.bend)
-        self.publisher.publish(single_point(self.joints, positions, self.move_time))
+        msg = single_point(self.joints, positions, self.move_time)
+        if self.use_sim_time and self.start_delay > 0.0:
+            msg.header.stamp = time_from_sec(self.timer.due_time + self.start_delay)
+        self.publisher.publish(msg)
         self.logger.info(f"Sent command (pose {self.position_index % 2})")
         self.position_index += 1
 

@@ -29,7 +29,13 @@ class JointMonitor(Node):
         self.log_period = self.declare_parameter("log_period", 1.0, description="seconds between reports (0: every "
                                                  "message)", min_value=0.0)
         self.last_report: float | None = None
+        self.add_on_set_parameter_callback(self.on_parameter)
         self.create_subscription(JointState, "joint_states", self.joint_state_callback)
+
+    def on_parameter(self, name: str, value: float) -> str | None:
+        if name == "log_period":  # read at every message: applies at once
+            self.log_period = value
+        return None
 
     def joint_state_callback(self, msg: JointState) -> None:
         now = self.now()

@@ -9,8 +9,9 @@ import math
 import sys
 
 from msgs.sensor_msgs import JointState
+from nodes.commanders.live import restart
 from nodes.core import Node, run_node
-from nodes.core.paths import robot_path
+from nodes.share import robot_file
 
 
 def sweep_positions(limits: list[tuple[float, float]], t: float, frequency: float, fraction: float) -> list[float]:
@@ -27,7 +28,7 @@ def movable_joints(robot: str) -> list[tuple[str, float, float]]:
     from nodes.urdf.description import load_robot_description
     from nodes.urdf.model import parse_urdf
 
-    model = parse_urdf(load_robot_description(str(robot_path(robot))))
+    model = parse_urdf(load_robot_description(str(robot_file(robot))))
     joints = []
     for joint in model.joints.values():
         if not joint.movable or joint.mimic is not None:
@@ -43,7 +44,8 @@ class JointSweep(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__("joint_state_publisher", **kwargs)
-        robot = self.declare_parameter("robot", "humanoid_simplified", description="URDF path or robot name")
+        robot = self.declare_parameter("robot", "humanoid_simplified", description="URDF path or robot name",
+                                       read_only=restart("robot"))
         rate = self.declare_parameter("rate", 30.0, min_value=0.1, max_value=1000.0, description="Hz")
         self.frequency = self.declare_parameter("frequency", 0.2, min_value=0.0, description="sweep frequency (Hz)")
         self.fraction = self.declare_parameter("fraction", 0.8, min_value=0.0, max_value=1.0,
@@ -53,8 +55,18 @@ class JointSweep(Node):
         self.limits = [(lower, upper) for _, lower, upper in joints]
         self.publisher = self.create_publisher(JointState, "joint_states")
         self.start = self.now()
-        self.create_timer(1.0 / rate, self.tick)
+        self.timer = self.create_timer(1.0 / rate, self.tick)
+        self.add_on_set_parameter_callback(self.on_parameter)
         self.logger.info(f"sweeping {len(self.names)} joints of {robot} at {self.frequency:g} Hz")
+
+    def on_parameter(self, name: str, value: float) -> str | None:
+        """``rate``, ``frequency`` and ``fraction`` apply at once; ``robot`` is read-only."""
+        if name == "rate":
+            self.timer.cancel()
+            self.timer = self.create_timer(1.0 / value, self.tick)
+        elif name in ("frequency", "fraction"):
+            setattr(self, name, value)
+        return None
 
     def tick(self) -> None:
         positions = sweep_positions(self.limits, self.now() - self.start, self.frequency, self.fraction)

@@ -12,6 +12,7 @@ import sys
 import threading
 
 from msgs import get_type
+from nodes.commanders.live import restart
 from nodes.commanders.trajectories import single_point, trajectory, waveform_points
 from nodes.core import Node, run_node
 
@@ -32,10 +33,11 @@ class TrajectorySender(Node):
     def __init__(self, **kwargs) -> None:
         super().__init__("trajectory_sender", **kwargs)
         controller = self.declare_parameter("controller", "joint_trajectory_controller",
-                                            description="the JTC whose follow_joint_trajectory action is used")
+                                            description="the JTC whose follow_joint_trajectory action is used",
+                                            read_only=restart("controller"))
         self.joints = self.declare_parameter("joints", ["joint1"], description="joints of the goal")
         self.waveforms = self.declare_parameter("waveforms", ["sine"], description="goals to send, in order",
-                                                validator=_check_waveforms)
+                                                validator=_check_waveforms, read_only=restart("waveforms"))
         self.amplitude = self.declare_parameter("amplitude", 1.57, description="rad")
         self.frequency = self.declare_parameter("frequency", 0.0, min_value=0.0,
                                                 description="Hz (0: the lab's 0.1 for sine, 0.05 for square)")
@@ -44,12 +46,20 @@ class TrajectorySender(Node):
         self.point_time = self.declare_parameter("point_time", 3.0, min_value=0.0,
                                                  description="time to reach the 'point' target (s)")
         self.server_timeout = self.declare_parameter("server_timeout", 60.0, min_value=0.0,
-                                                     description="seconds to wait for the action server")
+                                                     description="seconds to wait for the action server",
+                                                     read_only=restart("server_timeout"))
         self.exit_when_done = self.declare_parameter("exit_when_done", True, description="exit after the goals")
+        # The rest is read when each goal is built: a change applies from the next goal on.
+        self.add_on_set_parameter_callback(self.on_parameter)
         self.client = self.create_action_client(FollowJointTrajectory, f"{controller}/follow_joint_trajectory")
         # Goals block for their whole length: run them off the executor thread so SIGINT stays prompt.
         self.worker = threading.Thread(target=self.run_sequence, name="trajectory-goals", daemon=True)
         self.worker.start()
+
+    def on_parameter(self, name: str, value) -> str | None:
+        if name in ("joints", "amplitude", "frequency", "duration", "dt", "point_time", "exit_when_done"):
+            setattr(self, name, value)
+        return None
 
     def build_goal(self, waveform: str):
         if waveform == "point":

@@ -45,16 +45,29 @@ class WaveController(Node):
         self.current_joint_positions: dict[str, float] = {}
         self.create_subscription(JointState, "joint_states", self.joint_state_callback)
         self.time_step = 0
-        self.create_timer(self.period, self.control_callback)
+        self.wave_time = 0.0  # lab time of the next command: time_step * period while the period is unchanged
+        self.timer = self.create_timer(self.period, self.control_callback)
+        self.add_on_set_parameter_callback(self.on_parameter)
         self.logger.info(f"wave controller ready: arms ±{self.arm_amplitude:.2f} rad, "
                          f"legs ±{self.leg_amplitude:.2f} rad")
+
+    def on_parameter(self, name: str, value: float) -> str | None:
+        """Every parameter applies at once (``zenroid param set /lab_robot/robot_controller period 1.0``)."""
+        if name not in ("period", "move_time", "arm_amplitude", "leg_amplitude"):
+            return None
+        setattr(self, name, value)
+        if name == "period":
+            self.timer.cancel()
+            self.timer = self.create_timer(value, self.control_callback)
+        self.logger.info(f"{name} is now {value}")
+        return None
 
     def joint_state_callback(self, msg: JointState) -> None:
         for name, position in zip(msg.name, msg.position):
             self.current_joint_positions[name] = position
 
     def control_callback(self) -> None:
-        targets = wave_targets(self.time_step * self.period, self.arm_amplitude, self.leg_amplitude)
+        targets = wave_targets(self.wave_time, self.arm_amplitude, self.leg_amplitude)
         # One start stamp for all four limbs: each controller starts its trajectory at that time (ROS JTC
         # semantics), so the limbs stay in phase even when the messages arrive a few cycles apart.
         stamp = self.now_msg() if self.now() > 0.0 else None
@@ -64,6 +77,7 @@ class WaveController(Node):
                 trajectory.header.stamp = stamp
             self.publishers[controller].publish(trajectory)
         self.time_step += 1
+        self.wave_time += self.period  # a new period changes the pace, not the phase reached so far
         if "left_arm_joint" in self.current_joint_positions:
             self.logger.info(f"Left arm: {self.current_joint_positions['left_arm_joint']:.2f} rad")
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any, Protocol
 
-from nodes.control.interfaces import LoanedCommandInterface, LoanedStateInterface
+from nodes.control.interfaces import JointInfo, LoanedCommandInterface, LoanedStateInterface
 from nodes.control.params import Parameters
 
 UNCONFIGURED = "unconfigured"
@@ -63,6 +63,8 @@ class Controller:
         self.command_interfaces: list[LoanedCommandInterface] = []
         self.state_interfaces: list[LoanedStateInterface] = []
         self.update_rate = 0.0  # set by the manager before on_configure
+        # The hardware's joints with their limits (URDF + <ros2_control>), set before on_configure.
+        self.joint_info: dict[str, JointInfo] = {}
 
     # --- parameters -------------------------------------------------------------------------------
     def declare_parameter(self, name: str, default: Any, **kwargs: Any) -> Any:

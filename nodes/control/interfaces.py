@@ -2,7 +2,8 @@
 
 The controller manager owns one value slot per ``joint/interface``. A controller gets *loans* for the
 interfaces it declared; a state loan can only be read, a command loan read and written. Two active
-controllers never hold a loan on the same command interface (the manager refuses the switch).
+controllers never hold a loan on the same command interface, nor on two command interfaces of one
+joint (the manager refuses the switch, naming the owner).
 """
 
 from __future__ import annotations
@@ -146,15 +147,6 @@ class HardwareInterfaces:
             slots[1].value = velocity[i] if i < n_vel else 0.0
             slots[2].value = effort[i] if i < n_eff else 0.0
         self.has_state = True
-
-    def state_value(self, joint: str, kind: str) -> float:
-        return self._state[interface_name(joint, kind)].value
-
-    def command_value(self, joint: str, kind: str) -> float:
-        return self._command[interface_name(joint, kind)].value
-
-    def reset_command(self, name: str) -> None:
-        self._command[name].value = math.nan
 
     def commands(self, only: set[str] | None = None) -> tuple[list[str], list[str], list[float]]:
         """The finite command values as ``(name[], interface[], value[])`` for ``hardware/command``.

@@ -65,6 +65,16 @@ class ControllerManager:
         self._last_update: float | None = None  # sim time of the last update()
         self._last_tick: float | None = None  # sim time of the last hardware state
         self._claimed_kinds: list[str] = []
+        # Called (under the lock) after the controller set or a state changed: the node persists it so a
+        # respawned manager restores it (nodes.control.restore).
+        self.on_change: Callable[[], None] | None = None
+
+    def _changed(self) -> None:
+        if self.on_change is not None:
+            try:
+                self.on_change()
+            except Exception as exc:  # noqa: BLE001 - persisting must never break a switch
+                self.logger.warn(f"could not save the controller state: {exc}")
 
     # --- lifecycle --------------------------------------------------------------------------------
     def set_controller_params(self, name: str, params: dict[str, Any]) -> None:
@@ -78,6 +88,7 @@ class ControllerManager:
                     raise ManagerError(f"controller '{name}': type must be 'package/Class', got {type_name!r}")
                 cfg.type = type_name
             cfg.params.update(params)
+            self._changed()
 
     def load(self, name: str) -> ControllerEntry:
         with self.lock:
@@ -105,6 +116,7 @@ class ControllerManager:
             entry = ControllerEntry(name, cfg.type, controller, context)
             self.controllers[name] = entry
             self.logger.info(f"loaded controller '{name}' ({cfg.type})")
+            self._changed()
             return entry
 
     def configure(self, name: str) -> None:
@@ -116,6 +128,7 @@ class ControllerManager:
             if entry.state == INACTIVE:  # reconfigure, as ros2_control does: cleanup first
                 self._cleanup(entry)
             controller.hardware_joints = list(self.hardware.joint_names)  # type: ignore[attr-defined]
+            controller.joint_info = dict(self.hardware.joints)  # limits, as the hardware describes them
             try:
                 controller.on_configure()
                 missing = [n for n in controller.command_interface_configuration()
@@ -131,6 +144,7 @@ class ControllerManager:
             controller.state = INACTIVE
             entry.last_error = ""
             self.logger.info(f"configured controller '{name}'")
+            self._changed()
 
     def unload(self, name: str) -> None:
         with self.lock:
@@ -142,6 +156,7 @@ class ControllerManager:
             entry.context.destroy_all()
             del self.controllers[name]
             self.logger.info(f"unloaded controller '{name}'")
+            self._changed()
 
     def switch(self, activate: list[str], deactivate: list[str], strictness: int = STRICT) -> tuple[bool, str]:
         """Deactivate then activate controllers atomically between two updates.
@@ -181,6 +196,14 @@ class ControllerManager:
             for entry in to_activate:
                 wanted = entry.controller.command_interface_configuration()
                 conflicts = [f"{iface} (claimed by '{claims[iface]}')" for iface in wanted if iface in claims]
+                # One joint takes one controller's commands (the hardware's mode-switch check in
+                # ros2_control): a velocity controller on a joint a position controller drives is refused.
+                joint_owner = {split_interface(iface)[0]: (iface, owner) for iface, owner in claims.items()}
+                for iface in wanted:
+                    joint = split_interface(iface)[0]
+                    held, owner = joint_owner.get(joint, (iface, entry.name))
+                    if iface not in claims and owner != entry.name:
+                        conflicts.append(f"{iface} (joint '{joint}' is commanded through {held} by '{owner}')")
                 if len(set(wanted)) != len(wanted):
                     conflicts.append("the controller claims an interface twice")
                 if conflicts:
@@ -209,6 +232,7 @@ class ControllerManager:
             if activated or to_deactivate:
                 self.logger.info(f"switched controllers: activated {activated}, deactivated "
                                  f"{[e.name for e in to_deactivate]}")
+                self._changed()
             return not refused, message
 
     def restart_active(self, reason: str) -> None:
@@ -224,6 +248,7 @@ class ControllerManager:
                     self.logger.error(f"controller '{entry.name}' {entry.last_error}")
             self._rebuild_active()
             self.logger.info(f"controllers restarted ({reason}): {[e.name for e in self._active]}")
+            self._changed()
 
     def _activate(self, entry: ControllerEntry) -> None:
         controller = entry.controller
@@ -324,6 +349,7 @@ class ControllerManager:
                 for entry in failed:
                     self._deactivate(entry)
                 self._rebuild_active()
+                self._changed()
 
     def command(self) -> tuple[list[str], list[str], list[float]]:
         """Finite values of claimed command interfaces, for ``hardware/command``."""

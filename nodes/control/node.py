@@ -11,15 +11,13 @@ from __future__ import annotations
 import collections
 import gc
 import json
-import math
 import sys
 import threading
 import time
 from typing import Any
 
-import msgpack
-
 import msgs
+from nodes.control import restore
 from nodes.control.config import (
     ConfigError,
     ControllerConfig,
@@ -45,6 +43,38 @@ HardwareState = msgs.get_type("zenroid_msgs/msg/HardwareState")
 HardwareCommand = msgs.get_type("zenroid_msgs/msg/HardwareCommand")
 SetParameters = msgs.get_type("zenroid_msgs/srv/SetParameters")
 Trigger = msgs.get_type("std_srvs/srv/Trigger")
+# A forward jump of sim time between two hardware states larger than this (the simulator's default
+# command_timeout: it has started holding position) restarts the controllers (see _resync).
+RESYNC_GAP_S = 0.5
+_pack_command = msgs.packer("zenroid_msgs/msg/HardwareCommand")
+
+
+class CyclePublisher:
+    """A controller's publisher. What a controller publishes during a control cycle is sent after the cycle's
+    hardware command, so the simulator never waits behind joint_states or controller state.
+
+    Against realtime hardware a message is dropped rather than wait for a stalled subscriber, as
+    ros2_controllers' RealtimePublisher skips one it cannot hand over at once; in lockstep every message is
+    delivered (the simulation waits for the controllers anyway, and recordings must be complete)."""
+
+    def __init__(self, publisher: Any, node: ControllerManagerNode) -> None:
+        self._publisher = publisher
+        self._node = node
+        self.msg_type, self.key = publisher.msg_type, publisher.key
+
+    def publish(self, msg: Any) -> None:
+        self.publish_raw(msgs.encode(msg))
+
+    def publish_raw(self, payload: bytes) -> None:
+        deferred = self._node.deferred_publications
+        if deferred is not None and threading.get_ident() == self._node.cycle_thread:
+            deferred.append((self, payload))
+        else:
+            self._publisher.publish_raw(payload, droppable=self._node.realtime_hardware)
+
+    @property
+    def has_subscribers(self) -> bool:
+        return self._publisher.has_subscribers
 
 
 class NodeControllerContext:
@@ -67,7 +97,8 @@ class NodeControllerContext:
         return self.node.control_time
 
     def create_publisher(self, msg_type: Any, topic: str) -> Any:
-        return self._keep(self.node.create_publisher(msg_type, self._resolve(topic)))
+        publisher = self._keep(self.node.create_publisher(msg_type, self._resolve(topic)))
+        return CyclePublisher(publisher, self.node)
 
     def create_subscription(self, msg_type: Any, topic: str, callback: Any) -> Any:
         # Inline: commands reach the controller without waiting for the executor (lowest latency);
@@ -115,6 +146,9 @@ class ControllerManagerNode(Node):
         except ConfigError as exc:
             raise ValueError(str(exc)) from None
         self.control_time = 0.0
+        self.deferred_publications: list[tuple[Any, bytes]] | None = None   # during a control cycle
+        self.realtime_hardware = True
+        self.cycle_thread = 0
         self.manager: ControllerManager | None = None
         self.hardware: HardwareInterfaces | None = None
         self._last_time: float | None = None
@@ -164,12 +198,13 @@ class ControllerManagerNode(Node):
             joints.append(JointInfo(j.name, kinds, list(j.state_interfaces), j.min_position, j.max_position,
                                     j.max_velocity, j.max_effort))
         self.hardware = HardwareInterfaces(joints)
+        self.realtime_hardware = info.mode == "realtime"
         self.manager = ControllerManager(self.hardware, self.config, self.update_rate, self._make_context,
                                          self.logger)
         self.logger.info(f"hardware '{info.robot_name}' ({info.mode}, {len(joints)} joints); "
                          f"update rate {self.update_rate} Hz; controllers in config: "
                          f"{sorted(self.config.controllers)}")
-        self._cmd_pub = self.create_publisher(HardwareCommand, "hardware/command", express=True)
+        self._cmd_pub = self.create_publisher(HardwareCommand, "hardware/command", express=True, reliable=False)
         self.create_subscription(HardwareState, "hardware/state", self._on_state, inline=True, raw=True)
         self.create_service(ListControllers, "~/list_controllers", self._srv_list)
         self.create_service(LoadController, "~/load_controller", self._srv_load)
@@ -180,7 +215,10 @@ class ControllerManagerNode(Node):
         self.create_service(SetParameters, "~/set_controller_parameters", self._srv_set_controller_params)
         self.create_service(Trigger, "~/statistics", self._srv_statistics)
         self.create_timer(0.25, self._watchdog, sim_time=False)
+        self._restore_controllers()
         for name in self.autostart:
+            if name in self.manager.controllers:
+                continue  # restored after a respawn
             try:
                 self.manager.load(name)
                 self.manager.configure(name)
@@ -199,6 +237,25 @@ class ControllerManagerNode(Node):
         sys.setswitchinterval(0.0005)
         self.logger.info("controller manager ready")
 
+    def _restore_controllers(self) -> None:
+        """After a respawn: the controllers the previous process had, in their states (nodes.control.restore)."""
+        path = restore.state_file(self.fully_qualified_name)
+        if path is None:
+            return
+        try:
+            entries = restore.load(path)
+        except ValueError as exc:
+            self.logger.error(f"not restoring controllers: {exc}")
+            entries = []
+        if entries:
+            active, problems = restore.restore(self.manager, entries)
+            for problem in problems:
+                self.logger.error(f"restoring controllers: {problem}")
+            self.logger.warn(f"respawned: restored {len(entries)} controller(s) from {path.name}; active {active} "
+                             "(holding the measured position)")
+        self.manager.on_change = lambda: restore.save(path, self.manager)
+        self.manager.on_change()
+
     def _make_context(self, name: str) -> NodeControllerContext:
         return NodeControllerContext(self, name)
 
@@ -206,48 +263,54 @@ class ControllerManagerNode(Node):
     def _on_state(self, payload: bytes) -> None:
         started = time.perf_counter()
         try:
-            state = msgpack.unpackb(payload, raw=False)
-            step = state["step"]
-            stamp = state["stamp"]
-            t = stamp["sec"] + stamp["nanosec"] * 1e-9
-            names, positions = state["name"], state["position"]
-            velocities, efforts = state.get("velocity") or [], state.get("effort") or []
-            if not isinstance(step, int) or not isinstance(names, list) or len(positions) != len(names):
-                raise ValueError("step must be an integer and position[] one value per name[]")
-            if len(velocities) not in (0, len(names)) or len(efforts) not in (0, len(names)):
-                raise ValueError("velocity[] / effort[] must be empty or one value per name[]")
-            for field, values in (("position", positions), ("velocity", velocities), ("effort", efforts)):
-                if not all(type(v) is float or type(v) is int for v in values):  # noqa: E721 - bool is no number here
-                    raise ValueError(f"{field}[] must hold numbers")
-            if not math.isfinite(t):
-                raise ValueError("stamp is not finite")
-        except Exception as exc:  # noqa: BLE001 - a malformed frame is dropped, the loop lives on
+            state = msgs.decode(HardwareState, payload)   # validated at the trust boundary
+        except msgs.DecodeError as exc:   # a malformed frame is dropped, the loop lives on
             self._bad_frames += 1
-            self.logger.warn_throttle(1.0, f"dropped a malformed hardware/state frame: {type(exc).__name__}: {exc}")
+            self.logger.warn_throttle(1.0, f"dropped a malformed hardware/state frame: {exc}")
             return
+        step, names, positions = state.step, state.name, state.position
+        velocities, efforts = state.velocity, state.effort
+        t = state.stamp.sec + state.stamp.nanosec * 1e-9
         manager = self.manager
         with manager.lock:
             self.hardware.read_state(names, positions, velocities, efforts)
             if self._lost:
                 self._lost = False
-                self.logger.info("hardware is back: controllers resume")
-            if self._last_time is not None and t < self._last_time:
-                # A new or reset simulation: restart the controllers so they hold the joints where they
-                # are now, instead of driving them back to the old simulation's commands.
-                self.logger.warn(f"sim time went back from {self._last_time:.3f} to {t:.3f} s (reset or a "
-                                 "new simulator)")
-                manager.restart_active("hardware reset")
-                manager.reset_clock()
+                self.logger.info("hardware is back")
+            if self._last_time is not None and not 0.0 <= t - self._last_time <= RESYNC_GAP_S:
+                self._resync(t)
             self._last_time = t
             self.control_time = t
+            self.cycle_thread = threading.get_ident()
+            self.deferred_publications = []
             manager.tick(t)
             cmd_names, cmd_kinds, cmd_values = manager.command()
             self._last_state_wall = time.monotonic()
-        self._cmd_pub.publish_raw(msgpack.packb({
-            "step": step, "update_rate": self.update_rate, "name": cmd_names, "interface": cmd_kinds,
-            "value": cmd_values}, use_bin_type=True))
+        self._cmd_pub.publish_raw(_pack_command(step=step, update_rate=self.update_rate, name=cmd_names,
+                                                interface=cmd_kinds, value=cmd_values))
+        deferred, self.deferred_publications = self.deferred_publications, None
+        for publisher, payload in deferred or ():
+            publisher._publisher.publish_raw(payload, droppable=self.realtime_hardware)
         self._cycles += 1
         self._cycle_us.append((time.perf_counter() - started) * 1e6)
+
+    def _resync(self, t: float) -> None:
+        """Sim time jumped: restart the controllers so they hold the joints where they are measured now.
+
+        Back in time: a reset or a new simulator (its old commands mean nothing). Forward by more than
+        RESYNC_GAP_S: states were lost (a network partition, a stalled link) while the simulator held
+        position; a trajectory controller would otherwise jump to where its old trajectory has got to, or
+        replay points meant for the time it missed. New trajectories resume from the measured position."""
+        if t < self._last_time:
+            self.logger.warn(f"sim time went back from {self._last_time:.3f} to {t:.3f} s (reset or a new "
+                             "simulator)")
+            reason = "hardware reset"
+        else:
+            self.logger.warn(f"missed {t - self._last_time:.3f} s of sim time (lost hardware/state frames): "
+                             "holding the measured position")
+            reason = "hardware states missed"
+        self.manager.restart_active(reason)
+        self.manager.reset_clock()
 
     def _watchdog(self) -> None:
         silent = time.monotonic() - self._last_state_wall
@@ -328,6 +391,7 @@ class ControllerManagerNode(Node):
         manager = self.manager
         if manager is None:
             return
+        manager.on_change = None  # the saved set stays what was running: a respawn restores it
         active = [name for name, e in manager.controllers.items() if e.state == ACTIVE]
         if active:
             manager.switch([], active, BEST_EFFORT)  # ends running goals (aborted) before the session closes

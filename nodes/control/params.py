@@ -132,9 +132,6 @@ class Parameters:
         return sorted(n for n in self._overrides
                       if n not in self.specs and not n.startswith(prefixes) and n != "type")
 
-    def overrides_under(self, prefix: str) -> dict[str, Any]:
-        return {n: v for n, v in self._overrides.items() if n.startswith(prefix)}
-
 
 def builtin_type(value: Any) -> type:
     if isinstance(value, bool):

@@ -3,6 +3,11 @@
 Pure logic (no Zenoh, no messages beyond duck-typed ``JointTrajectory``-shaped objects), so it is unit
 tested directly. Interpolation follows the fields each pair of points carries: positions only ->
 linear, positions + velocities -> cubic, positions + velocities + accelerations -> quintic.
+
+Beyond ros2_controllers' checks, a trajectory is refused when a position is outside the joint's limits,
+when it has more than ``max_points`` points, when a time is beyond ``max_duration`` or a stamp is
+negative or that far in the future. A trajectory that asks a joint to move faster than its velocity
+limit is slowed down in time as a whole (``Trajectory.slow_down``), never refused.
 """
 
 from __future__ import annotations
@@ -13,6 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 LINEAR, CUBIC, QUINTIC = 1, 3, 5
+MAX_POINTS = 100_000  # points per trajectory (the Atlas playback has 1,500)
+MAX_DURATION = 3600.0  # s: time_from_start of any point, and how far in the future a stamp may start
 
 
 class TrajectoryError(ValueError):
@@ -28,6 +35,36 @@ def duration_to_sec(value) -> float:
 
 def _field(obj, name: str):
     return obj.get(name) if isinstance(obj, dict) else getattr(obj, name, None)
+
+
+@dataclass(frozen=True)
+class JointLimits:
+    """Position and velocity limits of a controller's joints, in its joint order (inf: no limit)."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+    velocity: np.ndarray
+
+    @classmethod
+    def unlimited(cls, count: int) -> JointLimits:
+        return cls(np.full(count, -math.inf), np.full(count, math.inf), np.full(count, math.inf))
+
+    @classmethod
+    def from_hardware(cls, joints: list[str], infos: dict) -> JointLimits:
+        """From the hardware's joint descriptions (``JointInfo``-like; unknown joints are unlimited).
+
+        ``hardware/info`` says "no limit" with 0: min = max = 0 for positions, <= 0 for velocity."""
+        limits = cls.unlimited(len(joints))
+        for i, name in enumerate(joints):
+            info = infos.get(name)
+            if info is None:
+                continue
+            lo, hi = float(info.min_position), float(info.max_position)
+            if not (lo == 0.0 and hi == 0.0) and lo <= hi:
+                limits.lower[i], limits.upper[i] = lo, hi
+            if math.isfinite(info.max_velocity) and info.max_velocity > 0.0:
+                limits.velocity[i] = float(info.max_velocity)
+        return limits
 
 
 @dataclass
@@ -68,6 +105,40 @@ class Trajectory:
         self.start_velocities = np.asarray(velocities, dtype=float)
         self.start_accelerations = (np.zeros_like(self.start_positions) if accelerations is None
                                     else np.asarray(accelerations, dtype=float))
+
+    def speed_ratio(self, max_velocity: np.ndarray) -> tuple[float, int, float]:
+        """How much faster than its velocity limit the trajectory asks a joint to move.
+
+        Returns ``(ratio, joint, speed)``: the largest ``speed / limit`` over the explicit ``velocities``
+        and the average speed of every segment, the first one starting from the start state (a first
+        point at time 0 is a jump no timing can slow: the controller's output limiter handles it), with
+        the position in ``joint_names`` and the speed (rad/s) of the worst joint."""
+        limits = np.asarray(max_velocity, dtype=float)[self.joint_indices]
+        if not np.isfinite(limits).any():
+            return 0.0, 0, 0.0
+        positions, times = self.positions, self.times
+        if self.start_positions is not None and times[0] > 0.0:
+            positions = np.vstack([self.start_positions, positions])
+            times = np.concatenate([[0.0], times])
+        speeds = [np.zeros(len(limits))]
+        if len(times) > 1:
+            with np.errstate(invalid="ignore"):
+                segment = np.abs(np.diff(positions, axis=0)) / np.diff(times)[:, None]
+            speeds.append(np.nanmax(np.where(np.isfinite(segment), segment, 0.0), axis=0))
+        if self.velocities is not None:
+            speeds.append(np.max(np.abs(self.velocities), axis=0))
+        speed = np.max(speeds, axis=0)
+        ratio = np.where(np.isfinite(limits), speed / np.where(limits > 0, limits, 1.0), 0.0)
+        worst = int(np.argmax(ratio))
+        return float(ratio[worst]), worst, float(speed[worst])
+
+    def scale_time(self, factor: float) -> None:
+        """Stretch the timing by ``factor`` (> 1 slows down): times x f, velocities / f, accelerations / f²."""
+        self.times = self.times * factor
+        if self.velocities is not None:
+            self.velocities = self.velocities / factor
+        if self.accelerations is not None:
+            self.accelerations = self.accelerations / (factor * factor)
 
     def sample(self, t: float, interpolate_points: bool = True) -> Sample:
         """Desired positions/velocities/accelerations at absolute time ``t``.
@@ -178,14 +249,24 @@ def _float_list(values, where: str, expected: int) -> list[float] | None:
 
 def validate_trajectory(msg, controller_joints: list[str], *, now: float,
                         allow_partial_joints_goal: bool = False,
-                        require_positions: bool = True) -> Trajectory:
+                        require_positions: bool = True,
+                        limits: JointLimits | None = None,
+                        max_points: int = MAX_POINTS,
+                        max_duration: float = MAX_DURATION) -> Trajectory:
     """Turn a JointTrajectory into a ``Trajectory`` or raise TrajectoryError with the reason.
 
     Checks as ros2_controllers does: joint names known, not duplicated and (unless partial goals are
     allowed) complete; at least one point; each point's arrays the right length and finite; strictly
-    increasing ``time_from_start``; a trajectory with a start stamp must not end in the past."""
+    increasing ``time_from_start``; a trajectory with a start stamp must not end in the past. And more:
+    at most ``max_points`` points (checked before anything else is looked at), no ``time_from_start``
+    beyond ``max_duration``, no negative stamp or one more than ``max_duration`` ahead of ``now``, every
+    position inside the joint's ``limits``."""
     joint_names = list(_field(msg, "joint_names") or [])
-    points = list(_field(msg, "points") or [])
+    points = _field(msg, "points") or []
+    if len(points) > max_points:
+        raise TrajectoryError(f"points: {len(points)} points, more than the {max_points} allowed "
+                              "(max_trajectory_points)")
+    points = list(points)
     if not joint_names:
         raise TrajectoryError("joint_names is empty")
     if not points:
@@ -213,6 +294,9 @@ def validate_trajectory(msg, controller_joints: list[str], *, now: float,
         tfs = duration_to_sec(tfs_raw) if tfs_raw is not None else 0.0
         if not math.isfinite(tfs) or tfs < 0.0:
             raise TrajectoryError(f"{where}.time_from_start is negative or not finite ({tfs})")
+        if tfs > max_duration:
+            raise TrajectoryError(f"{where}.time_from_start {tfs:.6g} s is longer than the {max_duration:g} s "
+                                  "allowed (max_trajectory_duration)")
         if times and tfs <= times[-1]:
             raise TrajectoryError(f"{where}.time_from_start ({tfs:.6g} s) is not after the previous point's "
                                   f"({times[-1]:.6g} s): time_from_start must increase strictly")
@@ -230,8 +314,16 @@ def validate_trajectory(msg, controller_joints: list[str], *, now: float,
         positions.append(pos)
         velocities.append(vel)
         accelerations.append(acc)
+    joint_indices = [index_of[name] for name in joint_names]
+    if limits is not None:
+        _check_position_limits(np.array(positions, dtype=float), joint_names, joint_indices, limits)
     header = _field(msg, "header")
     stamp = duration_to_sec(_field(header, "stamp")) if header is not None and _field(header, "stamp") is not None else 0.0
+    if stamp < 0.0 or not math.isfinite(stamp):
+        raise TrajectoryError(f"header.stamp is negative ({stamp:.9g} s)")
+    if stamp > now + max_duration:
+        raise TrajectoryError(f"header.stamp {stamp:.6g} s starts more than {max_duration:g} s after now "
+                              f"({now:.3f} s) (max_trajectory_duration)")
     start_time = stamp if stamp > 0.0 else now
     if stamp > 0.0 and start_time + times[-1] < now:
         raise TrajectoryError(f"header.stamp {stamp:.3f} s + last time_from_start {times[-1]:.3f} s ends in the "
@@ -243,7 +335,7 @@ def validate_trajectory(msg, controller_joints: list[str], *, now: float,
     acc_arr = np.array([a if a is not None else zeros for a in accelerations]) if any(has_acc) else None
     return Trajectory(
         joint_names=joint_names,
-        joint_indices=[index_of[name] for name in joint_names],
+        joint_indices=joint_indices,
         times=np.array(times, dtype=float),
         positions=np.array(positions, dtype=float),
         velocities=vel_arr,
@@ -253,3 +345,18 @@ def validate_trajectory(msg, controller_joints: list[str], *, now: float,
         start_time=start_time,
         starts_on_receipt=stamp <= 0.0,
     )
+
+
+def _check_position_limits(positions: np.ndarray, joint_names: list[str], joint_indices: list[int],
+                           limits: JointLimits) -> None:
+    """Refuse the first position outside its joint's [lower, upper] (NaN = velocity-only: not checked)."""
+    lower, upper = limits.lower[joint_indices], limits.upper[joint_indices]
+    with np.errstate(invalid="ignore"):
+        outside = (positions < lower) | (positions > upper)
+    if not outside.any():
+        return
+    i, k = (int(v) for v in np.argwhere(outside)[0])
+    value = positions[i, k]
+    bound = f"lower limit {lower[k]:g}" if value < lower[k] else f"upper limit {upper[k]:g}"
+    raise TrajectoryError(f"points[{i}].positions[{k}]: joint '{joint_names[k]}' {value:g} rad is outside its "
+                          f"{bound} rad (limits [{lower[k]:g}, {upper[k]:g}])")

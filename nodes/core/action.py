@@ -115,6 +115,7 @@ class ActionServer:
             s.declare_queryable(f"{key}/get_result", self._on_get_result, complete=True),
         ]
         self._token = node._graph_token("act", key, action_type._type)
+        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     # -- zenoh side: decode, then hand the work to the node's executor
     def _decode(self, query: zenoh.Query, cls: Any) -> Any | None:
@@ -123,12 +124,12 @@ class ActionServer:
     def _on_send_goal(self, query: zenoh.Query) -> None:
         request = self._decode(query, self.action_type.SendGoalRequest)
         if request is not None:
-            self.node._enqueue(lambda: self._handle_goal(query, request), where=f"action '{self.key}' goal")
+            self.node.executor.dispatch(self._handle_goal, query, request, where=f"action '{self.key}' goal")
 
     def _on_cancel_goal(self, query: zenoh.Query) -> None:
         request = self._decode(query, _CancelGoal.Request)
         if request is not None:
-            self.node._enqueue(lambda: self._handle_cancel(query, request), where=f"action '{self.key}' cancel")
+            self.node.executor.dispatch(self._handle_cancel, query, request, where=f"action '{self.key}' cancel")
 
     def _on_get_result(self, query: zenoh.Query) -> None:
         request = self._decode(query, self.action_type.GetResultRequest)
@@ -171,7 +172,7 @@ class ActionServer:
         if self.single_goal:
             for old in [h for h in self.goals.values() if h.is_active]:
                 if self.preempt_callback is not None:
-                    self.node._run_callback(self.preempt_callback, old, where="preempt callback")
+                    self.node.executor.run_callback(self.preempt_callback, old, where="preempt callback")
                 old.abort()
         with self._lock:
             self.goals[goal_id] = handle
@@ -179,7 +180,7 @@ class ActionServer:
         self._reply(query, response)
         self._publish_status()
         if self.accepted_callback is not None:
-            self.node._run_callback(self.accepted_callback, handle, where="accepted callback")
+            self.node.executor.run_callback(self.accepted_callback, handle, where="accepted callback")
         elif self.execute_callback is not None:
             handle.execute()
             threading.Thread(target=self._run_execute, args=(handle,), daemon=True,
@@ -266,6 +267,8 @@ class ActionServer:
         self._feedback.destroy()
         self._status.destroy()
         self._token.undeclare()
+        if self._mirror is not None:
+            self._mirror.close()
 
 
 class ClientGoalHandle:
@@ -300,6 +303,7 @@ class ActionClient:
         self._feedback_callbacks: dict[bytes, Callable[[Any], None]] = {}
         self._feedback_sub = node.session.declare_subscriber(f"{key}/feedback", self._on_feedback)
         self._token = node._graph_token("actc", key, action_type._type)
+        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     def _on_feedback(self, sample: zenoh.Sample) -> None:
         try:
@@ -309,7 +313,7 @@ class ActionClient:
             return
         callback = self._feedback_callbacks.get(bytes(msg.goal_id.uuid))
         if callback is not None:
-            self.node._run_callback(callback, msg.feedback, where="feedback callback")
+            self.node.executor.run_callback(callback, msg.feedback, where="feedback callback")
 
     def wait_for_server(self, timeout: float = 5.0) -> bool:
         from nodes.core import graph
@@ -340,3 +344,5 @@ class ActionClient:
     def destroy(self) -> None:
         self._feedback_sub.undeclare()
         self._token.undeclare()
+        if self._mirror is not None:
+            self._mirror.close()

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import concurrent.futures
+import itertools
 import os
 import struct
 import threading
@@ -44,25 +44,35 @@ class ServiceError(RuntimeError):
 
 class Publisher:
     def __init__(self, node: Node, msg_type: Any, key: str, *, reliable: bool = True,
-                 priority: zenoh.Priority | None = None, express: bool = False) -> None:
+                 priority: zenoh.Priority | None = None, express: bool = False, latched: bool = False) -> None:
         self.node = node
         self.msg_type = msg_type
         self.key = key
+        self.reliable, self.latched = reliable, latched
+        self._priority, self._express = priority, express
         self._pub = node.session.declare_publisher(
             key, encoding=encoding_for(msg_type._type),
             congestion_control=zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP,
             priority=priority, express=express,
         )
         self._source = os.urandom(16)
-        self._seq = 0
-        self._lock = threading.Lock()
+        self._seq = itertools.count(1)   # next() on a count is atomic under the GIL: no lock per message
         self._token = node._graph_token("pub", key, msg_type._type)
+        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     def publish(self, msg: Any) -> None:
         """Encode and send ``msg`` (a ``msg_type`` instance)."""
         if getattr(msg, "_type", None) != self.msg_type._type:
             raise TypeError(f"publisher on '{self.key}' sends {self.msg_type._type}, got {type(msg).__name__}")
         self.publish_raw(msgs.encode(msg))
+
+    def _droppable_twin(self) -> Any:
+        twin = self.__dict__.get("_drop_pub")
+        if twin is None:
+            twin = self._drop_pub = self.node.session.declare_publisher(
+                self.key, encoding=encoding_for(self.msg_type._type), congestion_control=zenoh.CongestionControl.DROP,
+                priority=self._priority, express=self._express)
+        return twin
 
     @property
     def has_subscribers(self) -> bool:
@@ -72,22 +82,39 @@ class Publisher:
         except Exception:  # noqa: BLE001 - undeclared or closed: nobody to send to
             return False
 
-    def publish_raw(self, payload: bytes) -> None:
+    def publish_raw(self, payload: bytes, *, droppable: bool = False) -> None:
+        """Send an encoded message. ``droppable=True``: drop it rather than wait when the link is congested
+        (a periodic stream whose next message supersedes this one), whatever the publisher's reliability."""
         if self.node._closed:
             return  # a callback still running while the node shuts down: nothing to send to
-        with self._lock:
-            self._seq += 1
-            seq = self._seq
-        self._pub.put(payload, attachment=_ATTACHMENT.pack(seq, self._source))
+        pub = self._pub
+        if droppable and self.reliable:
+            pub = self._droppable_twin()
+        pub.put(payload, attachment=_ATTACHMENT.pack(next(self._seq), self._source))
+        mirror = self._mirror
+        if mirror is not None and mirror.active:  # a ROS 2 subscriber exists: CDR twin on rmw_zenoh's key
+            mirror.send(payload)
 
     def destroy(self) -> None:
         self._token.undeclare()
+        if self._mirror is not None:
+            self._mirror.close()
         self._pub.undeclare()
+        if self.__dict__.get("_drop_pub") is not None:
+            self._drop_pub.undeclare()
 
 
 class Subscription:
+    """Messages of ``key`` decoded into ``msg_type`` and handed to ``callback``.
+
+    ``max_rate`` (Hz): wake at most that often and take every message that arrived meanwhile at once.
+    Zenoh keeps them in its own ring buffer (the newest ``backlog``), so a fast topic such as a 1 kHz
+    ``joint_states`` costs a consumer that only needs 50 updates a second 50 wake-ups, not 1000.
+    """
+
     def __init__(self, node: Node, msg_type: Any, key: str, callback: Callable[[Any], None] | None, *,
-                 inline: bool = False, raw: bool = False, with_key: bool = False) -> None:
+                 inline: bool = False, raw: bool = False, with_key: bool = False,
+                 max_rate: float | None = None, backlog: int = 256) -> None:
         self.node = node
         self.msg_type = msg_type
         self.key = key
@@ -95,8 +122,29 @@ class Subscription:
         self.raw = raw
         self.inline = inline
         self.with_key = with_key  # callback(msg, key): for wildcard keys ("*/joint_states")
-        self._sub = node.session.declare_subscriber(key, self._on_sample)
+        if max_rate is not None and not max_rate > 0:
+            raise ValueError(f"max_rate must be > 0 Hz, got {max_rate}")
+        if max_rate is None:
+            self._sub = node.session.declare_subscriber(key, self._on_sample)
+        else:
+            self._sub = node.session.declare_subscriber(key, zenoh.handlers.RingChannel(backlog))
+            threading.Thread(target=self._drain, args=(1.0 / max_rate,), daemon=True,
+                             name=f"sub:{key}").start()
         self._token = node._graph_token("sub", key, msg_type._type if msg_type else "*")
+        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
+
+    def _drain(self, period: float) -> None:
+        try:
+            while True:
+                batch = [self._sub.recv()]          # blocks (without the GIL) until something arrives
+                while (sample := self._sub.try_recv()) is not None:
+                    batch.append(sample)
+                with self.node.executor.lock:       # the batch in one go: work queued meanwhile sees all of it
+                    for sample in batch:
+                        self._on_sample(sample)
+                time.sleep(period)
+        except Exception:  # noqa: BLE001 - the subscriber was undeclared: the channel is closed
+            return
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         payload = sample.payload.to_bytes()
@@ -111,16 +159,18 @@ class Subscription:
                 return
         topic = str(sample.key_expr)
         if self.callback is None:
-            self.node._deliver_event(topic, msg)
-        elif self.inline:
-            args = (msg, topic) if self.with_key else (msg,)
-            self.node._run_callback(self.callback, *args, where=f"subscription '{self.key}'")
+            self.node.deliver_event(topic, msg)
+            return
+        args = (msg, topic) if self.with_key else (msg,)
+        if self.inline:
+            self.node.executor.run_callback(self.callback, *args, where=f"subscription '{self.key}'")
         else:
-            args = (msg, topic) if self.with_key else (msg,)
-            self.node._enqueue(lambda: self.callback(*args), where=f"subscription '{self.key}'")
+            self.node.executor.dispatch(self.callback, *args, where=f"subscription '{self.key}'")
 
     def destroy(self) -> None:
         self._token.undeclare()
+        if self._mirror is not None:
+            self._mirror.close()
         self._sub.undeclare()
 
 
@@ -156,6 +206,7 @@ class ServiceServer:
         self._encoding = encoding_for(srv_type.Response._type)
         self._queryable = node.session.declare_queryable(key, self._on_query, complete=True)
         self._token = node._graph_token("srv", key, srv_type._type)
+        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     def _on_query(self, query: zenoh.Query) -> None:
         request = decode_request(self.node, query, self.srv_type.Request, f"service '{self.key}'")
@@ -164,7 +215,7 @@ class ServiceServer:
         if self.inline:
             self._serve(query, request)
         else:
-            self.node._enqueue(lambda: self._serve(query, request), where=f"service '{self.key}'")
+            self.node.executor.dispatch(self._serve, query, request, where=f"service '{self.key}'")
 
     def _serve(self, query: zenoh.Query, request: Any) -> None:
         try:
@@ -181,6 +232,8 @@ class ServiceServer:
 
     def destroy(self) -> None:
         self._token.undeclare()
+        if self._mirror is not None:
+            self._mirror.close()
         self._queryable.undeclare()
 
 
@@ -217,6 +270,7 @@ class Client:
         self.srv_type = srv_type
         self.key = key
         self._token = node._graph_token("cli", key, srv_type._type)
+        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     def call(self, request: Any | None = None, timeout: float = 2.0) -> Any:
         """Send ``request`` (default: an empty Request) and return the decoded Response."""
@@ -226,18 +280,6 @@ class Client:
             return msgs.decode(self.srv_type.Response, data)
         except DecodeError as exc:
             raise ServiceError(f"service '{self.key}' sent a bad response: {exc}") from None
-
-    def call_async(self, request: Any | None = None, timeout: float = 2.0) -> concurrent.futures.Future:
-        future: concurrent.futures.Future = concurrent.futures.Future()
-
-        def worker() -> None:
-            try:
-                future.set_result(self.call(request, timeout))
-            except Exception as exc:  # noqa: BLE001 - handed to the future's owner
-                future.set_exception(exc)
-
-        threading.Thread(target=worker, daemon=True, name=f"call:{self.key}").start()
-        return future
 
     def service_is_ready(self) -> bool:
         replies = self.node.session.liveliness().get("@graph/srv/**", timeout=0.5)
@@ -260,3 +302,5 @@ class Client:
 
     def destroy(self) -> None:
         self._token.undeclare()
+        if self._mirror is not None:
+            self._mirror.close()

@@ -6,9 +6,11 @@ are percent-encoded (``/`` → ``%2F``) so each is one key chunk. Kinds: node, p
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from urllib.parse import quote, unquote
 
+import msgpack
 import zenoh
 
 ROOT = "@graph"
@@ -43,6 +45,7 @@ class GraphEntry:
 
 
 def parse_key(key: str) -> GraphEntry | None:
+    """The entry a graph token stands for, None for a key that is not one (the only parser of this layout)."""
     parts = str(key).split("/")
     if len(parts) < 4 or parts[0] != ROOT or parts[1] not in KINDS:
         return None
@@ -78,3 +81,38 @@ def snapshot(session: zenoh.Session, timeout: float = 1.0) -> list[GraphEntry]:
 
 def node_names(session: zenoh.Session, timeout: float = 1.0) -> list[str]:
     return sorted({e.node for e in snapshot(session, timeout) if e.kind == "node"})
+
+
+class NodeWatch:
+    """Calls ``on_change(node, alive)`` for every node token that appears (``alive`` True) or goes away,
+    tokens already live when the watch starts included (liveliness history). ``node`` is the name as the
+    node announced it (``/ns/name``)."""
+
+    def __init__(self, session: zenoh.Session, on_change: Callable[[str, bool], None]) -> None:
+        self._on_change = on_change
+        self._subscriber = session.liveliness().declare_subscriber(f"{ROOT}/node/**", self._on_sample, history=True)
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        entry = parse_key(str(sample.key_expr))
+        if entry is not None and entry.kind == "node":
+            self._on_change(entry.node, sample.kind == zenoh.SampleKind.PUT)
+
+    def close(self) -> None:
+        try:
+            self._subscriber.undeclare()
+        except Exception:  # noqa: BLE001 - the session may already be closing; nothing to clean up then
+            pass
+
+
+_PROBE_PAYLOAD = msgpack.packb({"names": []})
+
+
+def probe_node(session: zenoh.Session, node: str, on_answer: Callable[[], None], timeout: float) -> None:
+    """Ask ``node`` (``ns/name``) whether it serves, without waiting: ``on_answer()`` runs on a Zenoh thread
+    when any reply comes back, even an error one. Every node serves ``<node>/get_parameters`` from its
+    executor, so an answer means its callbacks run, which a liveliness token alone does not say.
+    Raises when the session is closed."""
+    def on_reply(_reply: zenoh.Reply) -> None:
+        on_answer()
+
+    session.get(f"{node}/get_parameters", on_reply, payload=_PROBE_PAYLOAD, timeout=timeout)

@@ -25,16 +25,12 @@ class LatchedPublisher:
         self.node = node
         self.msg_type = msg_type
         self.key = node.resolve(topic)
-        self._publisher = Publisher(node, msg_type, self.key)
+        self._publisher = Publisher(node, msg_type, self.key, latched=True)
         self._encoding = encoding_for(msg_type._type)
         self._last: bytes | None = None
         self._lock = threading.Lock()
         self._queryable = node.session.declare_queryable(self.key, self._on_query, complete=True)
         node._entities.append(self)
-
-    @property
-    def has_message(self) -> bool:
-        return self._last is not None
 
     def publish(self, msg: Any) -> None:
         if getattr(msg, "_type", None) != self.msg_type._type:
@@ -64,15 +60,30 @@ def fetch_latched(session: zenoh.Session, msg_type: Any, key: str, timeout: floa
 
     Retries until the deadline: a session that has just opened may not know the queryable yet (declarations
     propagate asynchronously), and a query that matches nothing returns at once with no reply.
-    Raises ``msgs.DecodeError`` when the answer does not decode as ``msg_type``.
+    Raises ``msgs.DecodeError`` when the answer does not decode as ``msg_type``; returns None once the session
+    is closed.
     """
     deadline = time.monotonic() + timeout
     while True:
         remaining = deadline - time.monotonic()
         if remaining <= 0:
             return None
-        replies = session.get(key, timeout=min(remaining, 1.0), target=zenoh.QueryTarget.BEST_MATCHING)
+        try:
+            replies = session.get(key, timeout=min(remaining, 1.0), target=zenoh.QueryTarget.BEST_MATCHING)
+        except zenoh.ZError:
+            if session.is_closed():
+                return None  # the node is shutting down (Ctrl-C) while a helper thread still asks
+            raise
         for reply in replies:
             if reply.ok is not None:
                 return msgs.decode(msg_type, reply.ok.payload.to_bytes())
         time.sleep(min(0.05, max(0.0, deadline - time.monotonic())))
+
+
+def latest_sample(session: zenoh.Session, key: str, timeout: float = 1.0) -> Any | None:
+    """The first answer of a queryable on ``key`` as a raw sample (a latched topic's last message, with its
+    key and encoding), or None when nobody answers within ``timeout`` s."""
+    for reply in session.get(key, timeout=timeout, target=zenoh.QueryTarget.BEST_MATCHING):
+        if reply.ok is not None:
+            return reply.ok
+    return None

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import re
 
+import zenoh
+
 _VALID = re.compile(r"^[A-Za-z0-9_~/\-.@]+$")
 
 
@@ -54,3 +56,19 @@ def parse_assignment(text: str) -> tuple[str, str]:
     if not name.strip():
         raise ValueError(f"empty name in {text!r}")
     return name.strip(), value
+
+
+def check_key(key: str) -> None:
+    """Raise ValueError naming what is wrong when ``key`` is not a valid Zenoh key expression."""
+    try:
+        zenoh.KeyExpr(key)
+    except Exception as exc:  # noqa: BLE001 - zenoh raises a plain ZError that names the fault
+        raise ValueError(str(exc).split(" at ")[0]) from None
+
+
+def keys_intersect(pattern: str, key: str) -> bool:
+    """Does some key match both ``pattern`` (which may hold wildcards) and ``key``? False when either is invalid."""
+    try:
+        return zenoh.KeyExpr(pattern).intersects(zenoh.KeyExpr(key))
+    except Exception:  # noqa: BLE001 - a name that is no valid key matches nothing
+        return False

@@ -1,18 +1,15 @@
 """``Node``: a named participant with parameters, endpoints, timers, a clock, a logger and a graph presence.
 
-Callbacks run one at a time on the thread that calls ``spin()`` (rclpy's single-threaded executor);
-``inline=True`` endpoints run on Zenoh's thread instead.
+Callbacks run one at a time, as under rclpy's single-threaded executor (``nodes/core/executor.py``:
+on the delivering Zenoh thread under the node's executor lock, or all on the spinning thread for nodes
+that ask for it); ``inline=True`` endpoints run on Zenoh's thread without the lock.
 """
 
 from __future__ import annotations
 
 import functools
-import heapq
-import itertools
 import queue
-import threading
 import time
-import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -20,8 +17,9 @@ from typing import Any
 import zenoh
 
 import msgs
-from nodes.core import graph, names
+from nodes.core import graph, names, ros2
 from nodes.core.endpoints import Client, Publisher, ServiceServer, Subscription
+from nodes.core.executor import Executor, Timer
 from nodes.core.log import Logger
 from nodes.core.params import ParameterDescriptor, ParameterError, coerce
 from nodes.core.session import open_peer
@@ -31,6 +29,10 @@ _Clock = msgs.get_type("rosgraph_msgs/msg/Clock")
 _Header = msgs.get_type("std_msgs/msg/Header")
 _GetParameters = msgs.get_type("zenroid_msgs/srv/GetParameters")
 _SetParameters = msgs.get_type("zenroid_msgs/srv/SetParameters")
+_GetLoggerLevels = msgs.get_type("rcl_interfaces/srv/GetLoggerLevels")
+_SetLoggerLevels = msgs.get_type("rcl_interfaces/srv/SetLoggerLevels")
+_LoggerLevel = msgs.get_type("rcl_interfaces/msg/LoggerLevel")
+_SetLoggerLevelsResult = msgs.get_type("rcl_interfaces/msg/SetLoggerLevelsResult")
 
 
 @dataclass
@@ -42,25 +44,11 @@ class Event:
     msg: Any = None
 
 
-class Timer:
-    def __init__(self, node: Node, period: float, callback: Callable[[], None], sim_time: bool) -> None:
-        if not period > 0:
-            raise ValueError(f"timer period must be > 0, got {period}")
-        self.node = node
-        self.period = float(period)
-        self.callback = callback
-        self.sim_time = sim_time
-        self.next_due = (node.now() if sim_time else time.monotonic()) + self.period
-        self.cancelled = False
-
-    def cancel(self) -> None:
-        self.cancelled = True
-
-    def reset(self) -> None:
-        self.next_due = (self.node.now() if self.sim_time else time.monotonic()) + self.period
-
-
 class Node:
+    # True: every callback runs on the thread that spins (the simulator: DART from one thread only);
+    # False: on the Zenoh thread that delivers it, under the executor lock (no hand-off; see executor.py).
+    callbacks_on_spin_thread = False
+
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """Every subclass constructor that raises after ``Node.__init__`` opened the session destroys the
         node on the way out: an open Zenoh session would keep the process from exiting and reporting."""
@@ -71,12 +59,18 @@ class Node:
 
         @functools.wraps(init)
         def guarded_init(self: Node, *args: Any, **kw: Any) -> None:
+            depth = self.__dict__.get("_init_depth", 0)
+            self.__dict__["_init_depth"] = depth + 1
             try:
                 init(self, *args, **kw)
             except BaseException:
                 if getattr(self, "_closed", True) is False:
                     self.destroy()
                 raise
+            finally:
+                self.__dict__["_init_depth"] = depth
+                if depth == 0:
+                    self._constructed()
 
         cls.__init__ = guarded_init  # type: ignore[method-assign]
 
@@ -91,14 +85,25 @@ class Node:
         self.fully_qualified_name = "/" + "/".join(p for p in (self.namespace, name) if p)
         self.logger = Logger(self.fully_qualified_name.lstrip("/"), log_level)
         self._owns_session = session is None
+        self.executor = Executor(self.logger.error, on_spin_thread=self.callbacks_on_spin_thread)
+        self.executor.lock.acquire()   # released once the whole constructor ran (no callback sees half a node)
+        self._constructing = True
         self.session = session if session is not None else open_peer(connect)
         try:
             self._init_runtime(params, remap)
         except BaseException:
             self._closed = True
+            self._constructed()
             if self._owns_session:
                 self.session.close()  # an open session would keep the process from exiting
             raise
+        if not self.__dict__.get("_init_depth"):
+            self._constructed()   # a plain Node, not a subclass
+
+    def _constructed(self) -> None:
+        if self.__dict__.get("_constructing"):
+            self._constructing = False
+            self.executor.lock.release()
 
     def _init_runtime(self, params: dict[str, Any] | None, remap: dict[str, str] | None) -> None:
         self.session_id = str(self.session.info.zid())
@@ -107,27 +112,26 @@ class Node:
         self._params: dict[str, Any] = {}
         self._descriptors: dict[str, ParameterDescriptor] = {}
         self._param_callbacks: list[Callable[[str, Any], str | None]] = []
-        self._queue: queue.SimpleQueue = queue.SimpleQueue()
         self._events: queue.SimpleQueue = queue.SimpleQueue()
-        self._timers: list[tuple[float, int, Timer]] = []
-        self._sim_timers: list[Timer] = []
-        self._timer_seq = itertools.count()
-        self._timer_lock = threading.Lock()
-        self._stop = threading.Event()
         self._closed = False
         self._entities: list[Any] = []
         self._tokens: list[Any] = [self.session.liveliness().declare_token(
             graph.node_key(self.session_id, self.fully_qualified_name))]
+        self._ros2 = ros2.attach(self)  # the ROS 2 wire (rmw_zenoh) presence, None when off
         self._sim_now = 0.0
         self._have_clock = False
         self.use_sim_time = bool(self.declare_parameter(
-            "use_sim_time", False, description="follow sim/clock instead of the wall clock"))
+            "use_sim_time", False, description="follow sim/clock instead of the wall clock",
+            read_only="the clock is chosen at start-up: restart the node with --param use_sim_time:=..."))
         self._rosout = Publisher(self, _Log, "rosout")
         self.logger.set_sink(self._publish_log)
         if self.use_sim_time:
             self.create_subscription(_Clock, "/sim/clock", self._on_clock, inline=True)
         self.create_service(_GetParameters, "~/get_parameters", self._srv_get_parameters)
         self.create_service(_SetParameters, "~/set_parameters", self._srv_set_parameters)
+        # rclpy's logger services (ROS 2 Iron+): `zenroid log level NODE debug` changes the level at run time
+        self.create_service(_GetLoggerLevels, "~/get_logger_levels", self._srv_get_logger_levels)
+        self.create_service(_SetLoggerLevels, "~/set_logger_levels", self._srv_set_logger_levels)
 
     # ------------------------------------------------------------ names, graph, logging
     def resolve(self, name: str, *, wildcards: bool = False) -> str:
@@ -140,6 +144,10 @@ class Node:
         self._tokens.append(token)
         return token
 
+    def _mirror(self, endpoint: Any) -> Any | None:
+        """The endpoint's twin on the ROS 2 wire (an object with ``close()``), None when not mirrored."""
+        return self._ros2.mirror(endpoint) if self._ros2 is not None else None
+
     def _publish_log(self, level: int, name: str, text: str, wall: float) -> None:
         if self._closed:
             return
@@ -151,8 +159,11 @@ class Node:
                           min_value: float | None = None, max_value: float | None = None,
                           choices: list[Any] | tuple[Any, ...] | None = None,
                           validator: Callable[[Any], str | None] | None = None,
-                          read_only: bool = False) -> Any:
-        """Declare a typed parameter and return its value (override from launch/CLI, else default)."""
+                          read_only: bool | str = False) -> Any:
+        """Declare a typed parameter and return its value (override from launch/CLI, else default).
+
+        ``read_only`` (True, or the reason as text) refuses changes at run time: use it for every parameter
+        the node only reads at start-up, so ``zenroid param set`` says so instead of pretending."""
         if name in self._descriptors:
             raise ParameterError(f"parameter '{name}' declared twice")
         ptype = type if type is not None else (builtins_type(default) if default is not None else None)
@@ -181,7 +192,8 @@ class Node:
         if desc is None:
             raise ParameterError(f"parameter '{name}' is not declared")
         if desc.read_only:
-            raise ParameterError(f"parameter '{name}' is read-only")
+            why = desc.read_only if isinstance(desc.read_only, str) else "fixed at start-up: restart the node to change it"
+            raise ParameterError(f"parameter '{name}' is read-only ({why})")
         value = coerce(desc, value)
         for callback in self._param_callbacks:
             problem = callback(name, value)
@@ -194,16 +206,35 @@ class Node:
         """``callback(name, value)`` may veto a change by returning a reason."""
         self._param_callbacks.append(callback)
 
-    def describe_parameters(self) -> list[ParameterDescriptor]:
-        return list(self._descriptors.values())
-
     def _srv_get_parameters(self, request: Any) -> Any:
-        import yaml
+        from nodes.core.params import dump_value
 
         wanted = request.names or sorted(self._params)
         found = [n for n in wanted if n in self._params]
-        return _GetParameters.Response(
-            names=found, values_yaml=[yaml.safe_dump(self._params[n], default_flow_style=True).strip() for n in found])
+        return _GetParameters.Response(names=found, values_yaml=[dump_value(self._params[n]) for n in found])
+
+    def _srv_get_logger_levels(self, request: Any) -> Any:
+        names = request.names or [self.logger.name]
+        return _GetLoggerLevels.Response(levels=[
+            _LoggerLevel(name=n, level=self.logger.level if n == self.logger.name else 0) for n in names])
+
+    def _srv_set_logger_levels(self, request: Any) -> Any:
+        from nodes.core.log import parse_level
+
+        results = []
+        for item in request.levels:
+            if item.name not in (self.logger.name, self.name, self.fully_qualified_name):
+                results.append(_SetLoggerLevelsResult(successful=False, reason=f"no logger '{item.name}' in this "
+                                                      f"node (its logger is '{self.logger.name}')"))
+                continue
+            try:
+                self.logger.set_level(parse_level(int(item.level)))
+            except ValueError as exc:
+                results.append(_SetLoggerLevelsResult(successful=False, reason=str(exc)))
+                continue
+            self.logger.info(f"log level set to {self.logger.level_name}")
+            results.append(_SetLoggerLevelsResult(successful=True))
+        return _SetLoggerLevels.Response(results=results)
 
     def _srv_set_parameters(self, request: Any) -> Any:
         from nodes.core.params import parse_value
@@ -242,9 +273,12 @@ class Node:
         return fetch_latched(self.session, msg_type, self.resolve(topic), timeout)
 
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], None] | None = None, *,
-                            inline: bool = False, raw: bool = False, with_key: bool = False) -> Subscription:
-        """``with_key=True`` calls ``callback(msg, key)`` (useful with wildcards like ``"/*/joint_states"``)."""
-        sub = Subscription(self, msg_type, self.resolve(topic, wildcards=True), callback, inline=inline, raw=raw, with_key=with_key)
+                            inline: bool = False, raw: bool = False, with_key: bool = False,
+                            max_rate: float | None = None) -> Subscription:
+        """``with_key=True`` calls ``callback(msg, key)`` (useful with wildcards like ``"/*/joint_states"``);
+        ``max_rate`` (Hz) batches a fast topic: every message still arrives, at most that many wake-ups a second."""
+        sub = Subscription(self, msg_type, self.resolve(topic, wildcards=True), callback, inline=inline, raw=raw,
+                           with_key=with_key, max_rate=max_rate)
         self._entities.append(sub)
         return sub
 
@@ -276,13 +310,8 @@ class Node:
     def create_timer(self, period: float, callback: Callable[[], None], *, sim_time: bool | None = None) -> Timer:
         """Call ``callback`` every ``period`` s on the node clock (sim time when ``use_sim_time``)."""
         use_sim = self.use_sim_time if sim_time is None else sim_time
-        timer = Timer(self, period, callback, use_sim)
-        with self._timer_lock:
-            if use_sim:
-                self._sim_timers.append(timer)
-            else:
-                heapq.heappush(self._timers, (timer.next_due, next(self._timer_seq), timer))
-        self._enqueue(lambda: None)  # wake the executor so it sees the new deadline
+        timer = Timer(period, callback, use_sim, self.now if use_sim else time.monotonic)
+        self.executor.add_timer(timer)
         return timer
 
     # ------------------------------------------------------------ clock
@@ -290,21 +319,11 @@ class Node:
         t = msg.clock.sec + msg.clock.nanosec * 1e-9
         if t < self._sim_now - 1e-9:
             self.logger.info(f"sim time jumped back from {self._sim_now:.3f} to {t:.3f} s (reset): timers restart")
-            with self._timer_lock:
-                for timer in self._sim_timers:
-                    timer.next_due = t + timer.period
+            self.executor.restart_sim_timers(t)
         self._sim_now = t
         self._have_clock = True
-        self._enqueue(lambda: self._run_sim_timers(t))  # each clock message checks timers at its own time
-
-    def _run_sim_timers(self, now: float) -> None:
-        with self._timer_lock:
-            self._sim_timers = [t for t in self._sim_timers if not t.cancelled]
-            due = [t for t in self._sim_timers if t.next_due <= now + 1e-12]
-        for timer in due:
-            # Catch up without bursts: one call, next deadline after now.
-            timer.next_due += timer.period * max(1, int((now - timer.next_due) // timer.period) + 1)
-            self._run_callback(timer.callback, where="timer")
+        # each clock message checks the sim timers at its own time, on the spinning thread
+        self.executor.call_soon(self.executor.run_sim_timers, t, where="sim timers")
 
     def now(self) -> float:
         """Seconds on the node clock: sim time when ``use_sim_time`` (0 before the first clock), else wall."""
@@ -318,8 +337,8 @@ class Node:
 
     # ------------------------------------------------------------ executor
     def call_soon(self, fn: Callable[[], None], where: str = "callback") -> None:
-        """Run ``fn`` on the executor thread (from any thread), after what is already queued."""
-        self._enqueue(fn, where)
+        """Run ``fn`` on the spinning thread (from any thread), after what is already queued."""
+        self.executor.call_soon(fn, where=where)
 
     def destroy_entity(self, entity: Any) -> None:
         """Undeclare one publisher/subscription/service/client/action endpoint of this node."""
@@ -329,62 +348,18 @@ class Node:
             if entity in self._entities:
                 self._entities.remove(entity)
 
-    def _enqueue(self, fn: Callable[[], None], where: str = "callback") -> None:
-        self._queue.put((fn, where))
-
-    def _deliver_event(self, topic: str, msg: Any) -> None:
+    def deliver_event(self, topic: str, msg: Any) -> None:
+        """A message for ``events()`` (subscriptions created without a callback)."""
         self._events.put(Event("input", topic, msg))
-
-    def _run_callback(self, fn: Callable[..., None], *args: Any, where: str = "callback") -> None:
-        try:
-            fn(*args)
-        except Exception as exc:  # noqa: BLE001 - a failing callback is reported, the node keeps running
-            tb = traceback.extract_tb(exc.__traceback__)
-            at = f" at {tb[-1].filename}:{tb[-1].lineno}" if tb else ""
-            self.logger.error(f"exception in {where}: {type(exc).__name__}: {exc}{at}")
-
-    def _next_wall_deadline(self) -> float | None:
-        with self._timer_lock:
-            while self._timers and self._timers[0][2].cancelled:
-                heapq.heappop(self._timers)
-            return self._timers[0][0] if self._timers else None
-
-    def _run_wall_timers(self) -> None:
-        now = time.monotonic()
-        due: list[Timer] = []
-        with self._timer_lock:
-            while self._timers and self._timers[0][0] <= now:
-                _, _, timer = heapq.heappop(self._timers)
-                if timer.cancelled:
-                    continue
-                due.append(timer)
-                timer.next_due += timer.period
-                if timer.next_due < now:  # fell behind: skip missed ticks instead of bursting
-                    timer.next_due = now + timer.period
-                heapq.heappush(self._timers, (timer.next_due, next(self._timer_seq), timer))
-        for timer in due:
-            self._run_callback(timer.callback, where="timer")
 
     def spin_once(self, timeout: float | None = None) -> bool:
         """Run due timers and at most one queued callback, waiting up to ``timeout`` s. True if work ran."""
-        self._run_wall_timers()
-        deadline = self._next_wall_deadline()
-        wait = timeout
-        if deadline is not None:
-            until_timer = max(0.0, deadline - time.monotonic())
-            wait = until_timer if wait is None else min(wait, until_timer)
-        try:
-            fn, where = self._queue.get(timeout=wait) if wait is None or wait > 0 else self._queue.get_nowait()
-        except queue.Empty:
-            self._run_wall_timers()
-            return False
-        self._run_callback(fn, where=where)
-        return True
+        return self.executor.spin_once(timeout)
 
     def spin(self) -> None:
         """Process callbacks until ``shutdown()`` / SIGINT / SIGTERM."""
-        while not self._stop.is_set():
-            self.spin_once(0.1)
+        while not self.executor.stopped:
+            self.executor.spin_once(0.1)
 
     def events(self, timeout: float | None = None) -> Iterator[Event]:
         """Yield messages of subscriptions created without a callback (dora-rs style) until stop.
@@ -393,7 +368,7 @@ class Node:
         after that many seconds without an event.
         """
         last = time.monotonic()
-        while not self._stop.is_set():
+        while not self.executor.stopped:
             self.spin_once(0.0)
             try:
                 event = self._events.get(timeout=0.01)
@@ -407,12 +382,11 @@ class Node:
 
     def request_shutdown(self) -> None:
         """Ask ``spin()`` to return (safe from signal handlers and other threads)."""
-        self._stop.set()
-        self._queue.put((lambda: None, "wake"))
+        self.executor.request_stop()
 
     @property
     def ok(self) -> bool:
-        return not self._stop.is_set()
+        return not self.executor.stopped
 
     def destroy(self) -> None:
         """Undeclare everything and close the session (if this node opened it)."""
@@ -426,6 +400,8 @@ class Node:
                 entity.destroy()
             except Exception:  # noqa: BLE001 - best effort on the way out
                 pass
+        if self._ros2 is not None:
+            self._ros2.close()
         for token in self._tokens:
             try:
                 token.undeclare()

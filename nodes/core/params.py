@@ -25,7 +25,7 @@ class ParameterDescriptor:
     max_value: float | None = None
     choices: tuple[Any, ...] | None = None
     validator: Callable[[Any], str | None] | None = None
-    read_only: bool = False
+    read_only: bool | str = False  # a string says why (shown when a change is refused)
 
 
 def parse_value(text: str) -> Any:
@@ -34,6 +34,16 @@ def parse_value(text: str) -> Any:
         return yaml.safe_load(text)
     except yaml.YAMLError:
         return text
+
+
+def dump_value(value: Any) -> str:
+    """A parameter value as one line of YAML that ``parse_value`` reads back (no ``...`` end marker)."""
+    text = yaml.safe_dump(value, default_flow_style=True, width=1 << 30).strip()
+    if text.endswith("\n..."):
+        text = text[: -len("\n...")].rstrip()
+    elif text == "...":  # None
+        text = "null"
+    return text
 
 
 def load_params_file(path: str | Path, node_name: str, namespace: str = "") -> dict[str, Any]:

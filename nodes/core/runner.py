@@ -89,7 +89,7 @@ def run_node(factory: Callable[..., Any], argv: list[str] | None = None, *,
     finally:
         on_shutdown = getattr(node, "on_process_exit", None)
         if callable(on_shutdown):
-            node._run_callback(on_shutdown, where="on_process_exit")
+            node.executor.run_callback(on_shutdown, where="on_process_exit")
         node.destroy()
     return 0
 

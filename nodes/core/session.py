@@ -6,14 +6,13 @@ import ipaddress
 import json
 import os
 import socket
-from collections.abc import Iterator
-from contextlib import contextmanager
 
 import zenoh
 
 DEFAULT_PORT = 7447
 ENV_CONNECT = "ZENOH_CONNECT"
 ENV_CONFIG = "ZENOH_CONFIG"
+RECONNECT = {"period_init_ms": 250, "period_max_ms": 1000, "period_increase_factor": 2}
 
 
 def loopback_endpoint(port: int) -> str:
@@ -85,6 +84,11 @@ def peer_config(connect: list[str] | None = None) -> zenoh.Config:
     # and, when the router is on another host, on the one local address that faces it, so peers on other
     # hosts can reach them; never on every interface (zenoh's default).
     config.insert_json5("listen/endpoints", json.dumps(["tcp/127.0.0.1:0", *_local_addresses_toward(endpoints)]))
+    # A link lost for longer than the lease (10 s) closes the session's transport; keep redialling the
+    # router every second at most (zenoh's default backs off to 4 s) and never give up, so a node heals
+    # within a second of the network returning.
+    config.insert_json5("connect/exit_on_failure", "false")
+    config.insert_json5("connect/retry", json.dumps(RECONNECT))
     return config
 
 
@@ -107,19 +111,6 @@ def open_router(port: int = DEFAULT_PORT, listen: list[str] | None = None) -> ze
     return zenoh.open(router_config(port, listen))
 
 
-@contextmanager
-def peer_session(connect: list[str] | None = None) -> Iterator[zenoh.Session]:
-    session = open_peer(connect)
-    try:
-        yield session
-    finally:
-        session.close()
-
-
-@contextmanager
-def router_session(port: int = DEFAULT_PORT) -> Iterator[zenoh.Session]:
-    session = open_router(port)
-    try:
-        yield session
-    finally:
-        session.close()
+def is_connected(session: zenoh.Session) -> bool:
+    """True when the session reaches a router or another peer (a session with neither talks to nobody)."""
+    return bool(list(session.info.routers_zid()) or list(session.info.peers_zid()))

@@ -12,7 +12,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from nodes.core.paths import CONFIG_DIR
+from nodes.share import CONFIG_DIR
 from nodes.sim.robot_files import ConfigError
 
 DEFAULT_CONFIG = CONFIG_DIR / "sim.yaml"

@@ -2,8 +2,9 @@
 
 Position commands are tracked with DART's implicit joint springs (stiffness = kp, damping = kd, rest
 position = target): integrated implicitly they stay stable at gains where an explicit PD diverged
-(FACTS). The spring torque is kept inside the URDF effort limit by moving the rest position no further
-than effort/kp from the current position. Velocity commands use DART's SERVO actuator (a velocity
+(FACTS). When the spring-damper torque would exceed the URDF effort limit, the joint gets exactly the
+limit as a plain force for that step instead (a saturated motor), so no torque beyond the limit is
+applied or reported. Velocity commands use DART's SERVO actuator (a velocity
 constraint bounded by the effort limit), effort commands a clamped FORCE. Velocity limits are enforced
 after each step, position limits by DART's joint limit constraint.
 """
@@ -22,6 +23,11 @@ from nodes.sim.urdf_info import INTERFACES
 
 # Stand-in for an infinite effort limit where DART needs a number (SERVO force bounds).
 UNLIMITED_EFFORT = 1e6
+
+
+def _magnitude(bounds: tuple[float, float]) -> float:
+    """The symmetric limit inside a (low, high) range."""
+    return max(0.0, min(-bounds[0], bounds[1]))
 
 
 class CommandError(ValueError):
@@ -44,8 +50,9 @@ class HardwareInterface:
         self._warn_once = warn_once or (lambda message: None)
         self._warned: set[str] = set()
         n = len(self.names)
-        self.max_velocity = np.array([j.max_velocity for j in self.joints])
-        self.max_effort = np.array([j.max_effort for j in self.joints])
+        # URDF <limit> narrowed by <ros2_control> min/max of a velocity / effort command interface
+        self.max_velocity = np.array([_magnitude(j.bounds("velocity")) for j in self.joints])
+        self.max_effort = np.array([_magnitude(j.bounds("effort")) for j in self.joints])
         self.kp = np.array([g.kp for g in self.gains])
         self.kd = np.array([g.kd for g in self.gains])
         self.position_bounds = np.array([j.bounds("position") for j in self.joints]).reshape(n, 2)
@@ -53,8 +60,11 @@ class HardwareInterface:
         self.target = np.zeros(n)          # command value per joint, in its active interface's unit
         self._rest = np.full(n, np.nan)    # rest positions last given to DART (skip redundant calls)
         self.last_effort = np.zeros(n)
-        with np.errstate(divide="ignore"):
-            self._reach = np.where(self.kp > 0, self.max_effort / np.where(self.kp > 0, self.kp, 1.0), np.inf)
+        self._saturated = np.zeros(n, dtype=bool)  # position joints at their effort limit this step
+        self._any_saturated = False
+        self._low_effort = -self.max_effort
+        self._dt = math.nan
+        self._lead = self.kd.copy()                # kp * dt + kd: DART's spring term on the velocity
         self._position_mask = np.ones(n, dtype=bool)
         self._velocity_joints: list[int] = []
         self._effort_joints: list[int] = []
@@ -190,6 +200,8 @@ class HardwareInterface:
             joint.setSpringStiffness(0, 0.0)
             joint.setDampingCoefficient(0, 0.0)
         self._rest[i] = np.nan
+        self._saturated[i] = False
+        self._any_saturated = bool(self._saturated.any())
         self.mode[i] = interface
         self._position_mask = np.array([m == "position" for m in self.mode], dtype=bool)
         self._velocity_joints = [k for k, m in enumerate(self.mode) if m == "velocity"]
@@ -197,17 +209,40 @@ class HardwareInterface:
 
     # -- physics-rate servo -----------------------------------------------------------------------------
     def before_step(self) -> None:
-        """Feed the current commands to DART (forces and servo commands are cleared by every step)."""
+        """Feed the current commands to DART (forces and servo commands are cleared by every step).
+
+        A position joint's spring-damper torque, as DART evaluates it at the start of the step
+        (kp * (target - q - dt * qd) - kd * qd), is kept within the URDF effort limit: while it is inside,
+        the implicit spring tracks the target; when it would exceed the limit, the spring is switched off
+        for that step and the joint gets exactly the saturated torque as a plain force. The reported
+        effort is that torque, so neither what is applied nor what is reported exceeds the limit."""
         q = self.positions()
         qd = self.velocities()
-        # position joints: keep |kp * (rest - q)| within the effort limit (DART does not clamp springs)
-        rest = np.minimum(np.maximum(self.target, q - self._reach), q + self._reach)
-        changed = self._position_mask & (rest != self._rest)
+        dt = self.skeleton.getTimeStep()
+        if dt != self._dt:  # the time step can change at run time (set_physics_properties)
+            self._dt, self._lead = dt, self.kp * dt + self.kd
+        torque = self.kp * (self.target - q) - self._lead * qd
+        effort = np.minimum(np.maximum(torque, self._low_effort), self.max_effort)
+        saturated = (effort != torque) & self._position_mask
+        any_saturated = saturated.any()
+        if any_saturated or self._any_saturated:
+            switched = saturated != self._saturated
+            for i in np.nonzero(switched)[0]:
+                on = 0.0 if saturated[i] else 1.0
+                self.dart_joints[i].setSpringStiffness(0, on * float(self.kp[i]))
+                self.dart_joints[i].setDampingCoefficient(0, on * float(self.kd[i]))
+            self._saturated, self._any_saturated = saturated, bool(any_saturated)
+            changed = (self.target != self._rest) & self._position_mask & ~saturated
+        else:
+            changed = (self.target != self._rest) & self._position_mask
         if changed.any():
             for i in np.nonzero(changed)[0]:
-                self.dart_joints[i].setRestPosition(0, float(rest[i]))
-            self._rest[changed] = rest[changed]
-        self.last_effort = np.where(self._position_mask, self.kp * (rest - q) - self.kd * qd, 0.0)
+                self.dart_joints[i].setRestPosition(0, float(self.target[i]))
+            self._rest[changed] = self.target[changed]
+        self.last_effort = np.where(self._position_mask, effort, 0.0)
+        if any_saturated:
+            for i in np.nonzero(saturated)[0]:
+                self.skeleton.setForce(int(self.dofs[i]), float(effort[i]))
         for i in self._velocity_joints:
             self.skeleton.setCommand(int(self.dofs[i]), float(self.target[i]))
         for i in self._effort_joints:
@@ -244,14 +279,14 @@ class HardwareInterface:
     def joint_table(self) -> list[dict]:
         """The ``hardware/info`` joint list (infinite limits as ±inf are replaced by 0 = "none")."""
         rows = []
-        for joint in self.joints:
+        for joint, velocity, effort in zip(self.joints, self.max_velocity, self.max_effort, strict=True):
             rows.append({
                 "name": joint.name,
                 "command_interfaces": list(joint.command_interfaces),
                 "state_interfaces": list(joint.state_interfaces),
                 "min_position": joint.bounds("position")[0] if math.isfinite(joint.lower) else 0.0,
                 "max_position": joint.bounds("position")[1] if math.isfinite(joint.upper) else 0.0,
-                "max_velocity": joint.max_velocity if math.isfinite(joint.max_velocity) else 0.0,
-                "max_effort": joint.max_effort if math.isfinite(joint.max_effort) else 0.0,
+                "max_velocity": velocity if math.isfinite(velocity) else 0.0,
+                "max_effort": effort if math.isfinite(effort) else 0.0,
             })
         return rows

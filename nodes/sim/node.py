@@ -14,8 +14,6 @@ import time
 from collections import deque
 from typing import Any
 
-import msgpack
-
 import msgs
 from nodes.core import Node
 from nodes.core.endpoints import ServiceError
@@ -35,13 +33,20 @@ from nodes.sim.interfaces import (
     String,
 )
 from nodes.sim.robot_files import ConfigError, fetch_robot_description, read_robot_xml, resolve_robot_file
-from nodes.sim.robot_link import RobotLink, time_map
+from nodes.sim.robot_link import RobotLink
 from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import Pacer
 from nodes.sim.urdf_info import UrdfError
 from nodes.sim.world import COLLISION_DETECTORS, PhysicsWorld
 
 _Vector3 = msgs.get_type("geometry_msgs/msg/Vector3")
+_pack_clock = msgs.packer("rosgraph_msgs/msg/Clock")
+_pack_model_states = msgs.packer("gazebo_msgs/msg/ModelStates")
+_pose = msgs.builder("geometry_msgs/msg/Pose")
+_point = msgs.builder("geometry_msgs/msg/Point")
+_quaternion = msgs.builder("geometry_msgs/msg/Quaternion")
+_twist = msgs.builder("geometry_msgs/msg/Twist")
+_vector3 = msgs.builder("geometry_msgs/msg/Vector3")
 
 MAX_STEP_REQUEST = 1_000_000
 STARTUP_SPAWN_RETRY_S = 0.5
@@ -59,6 +64,7 @@ class SimulatorNode(Node):
     """DART simulator: worlds, spawning, hardware interface, sim time, lockstep/realtime/kinematic modes."""
 
     default_name = "simulator"
+    callbacks_on_spin_thread = True   # DART is only touched from the stepping loop, which serves requests
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__("simulator", **kwargs)
@@ -87,10 +93,15 @@ class SimulatorNode(Node):
                             min_value=0.1, max_value=10000.0)
         self.default_update_rate = p("update_rate", 1000.0, description="control rate (Hz) until a controller "
                                      "manager says its own", min_value=1.0, max_value=100000.0)
-        self.pacer = Pacer(p("real_time_factor", 1.0, description="realtime-mode target", min_value=0.01,
+        self.pacer = Pacer(p("real_time_factor", 1.0, description="realtime and kinematic pacing target "
+                             "(0: as fast as possible)", min_value=0.0,
                              max_value=1000.0))
         self.lockstep_timeout = p("lockstep_timeout", 1.0, description="wall s to wait for a command before "
                                   "holding position", min_value=0.01)
+        self.lockstep_delay = int(p("lockstep_delay", 1, type=int, min_value=0, max_value=4,
+                                    description="lockstep: control periods between a state and the period its "
+                                    "command acts in; 0: the same period (Gazebo), 1+: the controllers compute "
+                                    "while the physics steps"))
         self.command_timeout = p("command_timeout", 0.5, description="realtime: hold position after this many "
                                  "wall s without commands", min_value=0.01)
         self.paused = p("paused", False, description="start paused")
@@ -118,8 +129,9 @@ class SimulatorNode(Node):
         self._next_startup_try = 0.0
         self._next_drain = 0.0
 
-        self.clock_pub = self.create_publisher(Clock, "/sim/clock", express=True)
-        self.model_states_pub = self.create_publisher(ModelStates, "/sim/model_states")
+        # drop, never block the physics loop on a stalled subscriber (see robot_link)
+        self.clock_pub = self.create_publisher(Clock, "/sim/clock", express=True, reliable=False)
+        self.model_states_pub = self.create_publisher(ModelStates, "/sim/model_states", reliable=False)
         self.diagnostics_pub = self.create_publisher(String, "/sim/diagnostics")
         self.create_service(SpawnEntity, "/sim/spawn_entity", self._srv_spawn)
         self.create_service(DeleteEntity, "/sim/delete_entity", self._srv_delete)
@@ -227,6 +239,7 @@ class SimulatorNode(Node):
     def _after_reset(self) -> None:
         for link in self.robots.values():
             link.inbox.clear()
+            link.answer_due.clear()
             link.holding = True
         self.pacer.restart()
         self._next_clock = self._next_state = self.world.time
@@ -315,25 +328,26 @@ class SimulatorNode(Node):
         t = self.world.time
         eps = 1e-9
         if force or t + eps >= self._next_clock:
-            self.clock_pub.publish_raw(msgs_packb({"clock": time_map(t)}))
+            self.clock_pub.publish_raw(_pack_clock(clock=msgs.time_map(t)))
             self._next_clock = _next_due(self._next_clock, t, 1.0 / self.clock_rate)
         if force or t + eps >= self._next_state:
             self._publish_model_states()
             for link in self.robots.values():
-                link.publish_humanoid_state(t)
+                if link.humanoid_pub.has_subscribers:   # CoM, contacts and ZMP cost ~0.15 ms: only when read
+                    link.publish_humanoid_state(t)
             self._next_state = _next_due(self._next_state, t, 1.0 / self.state_rate)
 
     def _publish_model_states(self) -> None:
-        # packed directly as the gazebo_msgs/ModelStates map: building dataclasses costs more than the physics
         names, poses, twists = [], [], []
         for name, pose, linear, angular in self.sim.model_states():
             names.append(name)
             px, py, pz = pose.position
             qx, qy, qz, qw = pose.orientation
-            poses.append({"position": {"x": px, "y": py, "z": pz}, "orientation": {"x": qx, "y": qy, "z": qz, "w": qw}})
-            twists.append({"linear": dict(zip("xyz", map(float, linear), strict=True)),
-                           "angular": dict(zip("xyz", map(float, angular), strict=True))})
-        self.model_states_pub.publish_raw(msgs_packb({"name": names, "pose": poses, "twist": twists}))
+            poses.append(_pose(position=_point(x=px, y=py, z=pz), orientation=_quaternion(x=qx, y=qy, z=qz, w=qw)))
+            lx, ly, lz = linear.tolist()
+            ax, ay, az = angular.tolist()
+            twists.append(_twist(linear=_vector3(x=lx, y=ly, z=lz), angular=_vector3(x=ax, y=ay, z=az)))
+        self.model_states_pub.publish_raw(_pack_model_states(name=names, pose=poses, twist=twists))
 
     def _publish_diagnostics(self) -> None:
         now = time.monotonic()
@@ -360,7 +374,7 @@ class SimulatorNode(Node):
 
     def _drain(self) -> None:
         """Run every queued service/timer callback (bounded, so a request flood cannot stall physics)."""
-        if self._queue.empty() and time.monotonic() < self._next_drain:
+        if self.executor.idle and time.monotonic() < self._next_drain:
             return   # nothing queued: skip the executor's bookkeeping (this runs every control period)
         self._next_drain = time.monotonic() + 0.01
         for _ in range(100):
@@ -382,12 +396,22 @@ class SimulatorNode(Node):
         self._publish_outputs()
         waited = False
         for link in self.robots.values():
+            if lockstep and not link.inbox.connected and not link.gave_up and link.state_pub.has_subscribers:
+                link.inbox.connected = True   # a controller manager listens: lockstep from this very period
             if lockstep and link.inbox.connected:
+                # pipelined (lockstep_delay periods): this period applies the answer to an earlier state, and
+                # the controller manager computes the answer to this one while the physics runs
+                link.answer_due.append(step)
+                if len(link.answer_due) <= self.lockstep_delay:
+                    continue   # the first pipelined periods: the last command stays in effect
+                due = link.answer_due.popleft()
                 waited = True
-                command = link.inbox.wait_for_step(step, self.lockstep_timeout)
+                command = link.inbox.wait_for_step(due, self.lockstep_timeout)
                 if command is None:
                     link.inbox.connected = False
-                    link.hold(f"no hardware/command for step {step} within {self.lockstep_timeout:g} s "
+                    link.gave_up = True        # until its next command: a mere listener must not stall us
+                    link.answer_due.clear()
+                    link.hold(f"no hardware/command for step {due} within {self.lockstep_timeout:g} s "
                               "(controller manager gone?)")
                     continue
                 link.apply(command)
@@ -396,11 +420,15 @@ class SimulatorNode(Node):
             if command is not None:
                 link.apply(command)
                 link.inbox.connected = lockstep
+                link.gave_up = False
+                link.answer_due.clear()
+                if lockstep:
+                    link.answer_due.append(step)
             elif (not lockstep and not link.holding
                   and time.monotonic() - link.inbox.last_wall > self.command_timeout):
                 link.hold(f"no hardware/command for {self.command_timeout:g} s")
-        if waited or not pace:
-            self.pacer.restart()   # lockstep: as fast as the controller manager answers
+        if (waited and not self.sim.kinematic) or not pace:
+            self.pacer.restart()   # lockstep: as fast as the controller manager answers (kinematic: paced)
         else:
             self._lateness.append(self.pacer.wait_until_due(t, self._idle))
             if self.paused or self.sim.step_count != step:
@@ -449,7 +477,3 @@ def _next_due(previous_due: float, now: float, period: float) -> float:
     if due <= now:
         due = previous_due + period * (math.floor((now - previous_due) / period) + 1)
     return due
-
-
-def msgs_packb(obj: dict) -> bytes:
-    return msgpack.packb(obj, use_bin_type=True)

@@ -10,7 +10,7 @@ from pathlib import Path
 import msgs
 from nodes.core import Node
 from nodes.core.endpoints import ServiceError, call_raw
-from nodes.core.paths import ROBOTS_DIR
+from nodes.share import robot_file
 
 String = msgs.get_type("std_msgs/msg/String")
 
@@ -21,13 +21,10 @@ class ConfigError(ValueError):
 
 def resolve_robot_file(file: str) -> Path:
     """A path as given, else a robot name from ``robots/`` (``humanoid`` → robots/humanoid.urdf)."""
-    path = Path(file).expanduser()
-    if path.is_file():
-        return path.resolve()
-    for candidate in (ROBOTS_DIR / file, ROBOTS_DIR / f"{file}.urdf", ROBOTS_DIR / f"{file}.urdf.xacro"):
-        if candidate.is_file():
-            return candidate
-    raise ConfigError(f"robot file {file!r} not found (neither a path nor a robot in {ROBOTS_DIR})")
+    try:
+        return robot_file(file)
+    except FileNotFoundError as exc:
+        raise ConfigError(str(exc)) from None
 
 
 def read_robot_xml(path: Path) -> str:

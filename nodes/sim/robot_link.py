@@ -2,11 +2,8 @@
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass
+from collections import deque
 from typing import TYPE_CHECKING, Any
-
-import msgpack
 
 import msgs
 from nodes.sim.hardware import CommandError, HardwareInterface
@@ -19,59 +16,23 @@ if TYPE_CHECKING:
 _HardwareJoint = msgs.get_type("zenroid_msgs/msg/HardwareJoint")
 
 
-COMMAND_FIELDS = ("step", "update_rate", "name", "interface", "value")
+# NaN passes the decoder: it is rejected per joint (and logged) when applied, so one bad joint does not
+# cost the others their command.
+_COMMAND_LIMITS = msgs.Limits(allow_nonfinite=True)
+_pack_state = msgs.packer("zenroid_msgs/msg/HardwareState")
+_pack_humanoid_state = msgs.packer("humanoid_msgs/msg/HumanoidState")
+_header = msgs.builder("std_msgs/msg/Header")
+_point = msgs.builder("geometry_msgs/msg/Point")
+
+Command = HardwareCommand   # a decoded zenroid_msgs/HardwareCommand
 
 
-@dataclass(slots=True)
-class Command:
-    """A decoded zenroid_msgs/HardwareCommand (values checked for finiteness when applied)."""
-
-    step: int
-    update_rate: int
-    name: list[str]
-    interface: list[str]
-    value: list[float]
-
-
-def parse_command(payload: bytes) -> Command:
-    """Decode a HardwareCommand without the generic codec (this runs once per control period).
-
-    Raises CommandError naming the field; NaN values pass here and are rejected per joint when applied.
-    """
+def parse_command(payload: bytes) -> Any:
+    """Decode a HardwareCommand (once per control period); raises CommandError naming the field."""
     try:
-        obj = msgpack.unpackb(payload, raw=False)
-    except Exception as exc:  # msgpack raises several types for garbage
-        raise CommandError(f"not a msgpack payload ({type(exc).__name__})") from None
-    if not isinstance(obj, dict):
-        raise CommandError(f"expected a map, got {type(obj).__name__}")
-    for key in obj:
-        if key not in COMMAND_FIELDS:
-            raise CommandError(f"unknown field {key!r}")
-    fields: dict[str, Any] = {}
-    for key in ("step", "update_rate"):
-        value = obj.get(key, 0)
-        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-            raise CommandError(f"{key}: expected a non-negative integer, got {value!r}")
-        fields[key] = value
-    for key in ("name", "interface"):
-        value = obj.get(key, [])
-        if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
-            raise CommandError(f"{key}: expected a list of strings")
-        fields[key] = value
-    value = obj.get("value", [])
-    if not isinstance(value, list) or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
-        raise CommandError("value: expected a list of numbers")
-    fields["value"] = value
-    return Command(**fields)
-
-
-def time_map(t: float) -> dict[str, int]:
-    """builtin_interfaces/Time as a plain map (hot path: no dataclass round trip)."""
-    sec = math.floor(t)
-    nanosec = int(round((t - sec) * 1e9))
-    if nanosec >= 1_000_000_000:
-        sec, nanosec = sec + 1, nanosec - 1_000_000_000
-    return {"sec": int(sec), "nanosec": nanosec}
+        return msgs.decode(HardwareCommand, payload, _COMMAND_LIMITS)
+    except msgs.DecodeError as exc:
+        raise CommandError(str(exc)) from None
 
 
 class RobotLink:
@@ -82,9 +43,16 @@ class RobotLink:
         self.inbox = CommandInbox()
         self.update_rate = 0.0          # learned from the controller manager's commands
         self.holding = True             # no controller commands in effect
+        self._last_state_step: int | None = None  # step of the last hardware/state sent (stale commands)
+        self.answer_due: deque[int] = deque()   # lockstep: published steps whose commands are still to apply
+        self.gave_up = False            # lockstep timed out: free-run until a command arrives again
         ns = "/" + self.namespace
+        # A subscriber behind a stalled link must never stall physics (Zenoh's BLOCK would, for seconds,
+        # through the router): periodic streams drop instead, and so do hardware frames in realtime mode,
+        # where the next frame supersedes a lost one. In lockstep every frame counts (a lost one costs a
+        # lockstep_timeout), and the simulator waits for the controller manager anyway.
         self.state_pub = node.create_publisher(HardwareState, f"{ns}/hardware/state", express=True)
-        self.humanoid_pub = node.create_publisher(HumanoidState, f"{ns}/humanoid_state")
+        self.humanoid_pub = node.create_publisher(HumanoidState, f"{ns}/humanoid_state", reliable=False)
         # inline: commands go straight into the inbox from Zenoh's thread; the physics thread picks them up
         self.command_sub = node.create_subscription(HardwareCommand, f"{ns}/hardware/command", self._on_command,
                                                     inline=True, raw=True)
@@ -105,17 +73,24 @@ class RobotLink:
             self.node.logger.warn_throttle(1.0, f"{self.namespace}/hardware/command: dropped a malformed "
                                            f"message: {exc}", key=f"cmdparse:{self.namespace}")
             return
+        last = self._last_state_step
+        if last is not None and 0 <= command.step < last - self.node.command_timeout * self.node.world.physics_rate:
+            # Buffered in a network that was cut, or from a controller manager that fell far behind: its
+            # controllers computed it from a state older than command_timeout (the simulator has been
+            # holding position meanwhile). Applying it would replay stale trajectory points.
+            self.node.logger.warn_throttle(1.0, f"{self.namespace}/hardware/command: ignored a stale command "
+                                           f"for step {command.step} (now at step {last})",
+                                           key=f"stale:{self.namespace}")
+            return
         self.inbox.put(command)
 
     # -- hardware frames --------------------------------------------------------------------------------
     def publish_state(self, step: int, sim_time: float) -> None:
         hw = self.hardware
-        payload = msgpack.packb({
-            "step": step, "stamp": time_map(sim_time), "name": hw.names,
-            "position": hw.positions().tolist(), "velocity": hw.velocities().tolist(),
-            "effort": hw.efforts().tolist(),
-        }, use_bin_type=True)
-        self.state_pub.publish_raw(payload)
+        self.state_pub.publish_raw(_pack_state(
+            step=step, stamp=msgs.time_map(sim_time), name=hw.names, position=hw.positions().tolist(),
+            velocity=hw.velocities().tolist(), effort=hw.efforts().tolist()), droppable=self.node.sim.mode == "realtime")
+        self._last_state_step = step
 
     def apply(self, command) -> None:
         try:
@@ -136,20 +111,17 @@ class RobotLink:
 
     # -- outputs ----------------------------------------------------------------------------------------
     def publish_humanoid_state(self, sim_time: float) -> None:
-        """humanoid_msgs/HumanoidState, packed directly (same map the codec would produce)."""
+        """humanoid_msgs/HumanoidState."""
         hw = self.hardware
         balance = self.node.sim.balance(self.namespace)
         com = balance.center_of_mass
-        self.humanoid_pub.publish_raw(msgpack.packb({
-            "header": {"stamp": time_map(sim_time), "frame_id": "world"},
-            "joint_names": hw.names,
-            "joint_positions": hw.positions().tolist(),
-            "joint_velocities": hw.velocities().tolist(),
-            "joint_efforts": hw.efforts().tolist(),
-            "center_of_mass": {"x": com[0], "y": com[1], "z": com[2]},
-            "support_polygon": [{"x": x, "y": y, "z": z} for x, y, z in balance.support_polygon],
-            "zmp_x": balance.zmp[0], "zmp_y": balance.zmp[1], "is_balanced": balance.is_balanced,
-        }, use_bin_type=True))
+        self.humanoid_pub.publish_raw(_pack_humanoid_state(
+            header=_header(stamp=msgs.time_map(sim_time), frame_id="world"),
+            joint_names=hw.names, joint_positions=hw.positions().tolist(),
+            joint_velocities=hw.velocities().tolist(), joint_efforts=hw.efforts().tolist(),
+            center_of_mass=_point(x=float(com[0]), y=float(com[1]), z=float(com[2])),
+            support_polygon=[_point(x=float(x), y=float(y), z=float(z)) for x, y, z in balance.support_polygon],
+            zmp_x=float(balance.zmp[0]), zmp_y=float(balance.zmp[1]), is_balanced=bool(balance.is_balanced)))
 
     def _on_info(self, _request) -> object:
         return GetHardwareInfo.Response(

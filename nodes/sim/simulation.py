@@ -16,6 +16,8 @@ from nodes.sim.humanoid_state import BalanceState, balance_state, robot_contacts
 from nodes.sim.interfaces import MODES
 from nodes.sim.world import GROUND_NAME, PhysicsWorld
 
+SUPPORT_WINDOW = 0.015  # s of contacts the support polygon spans (1.5 periods of the 100 Hz humanoid_state)
+
 
 class Simulation:
     def __init__(self, world: PhysicsWorld, gains_for: Callable[[str], Gains],
@@ -29,6 +31,8 @@ class Simulation:
         self.entities: dict[str, Entity] = {}
         self.hardware: dict[str, HardwareInterface] = {}   # by robot namespace
         self.step_count = 0                                  # physics steps since start / reset_simulation
+        self._com_velocity: dict[str, tuple[float, np.ndarray]] = {}  # namespace -> (time, CoM velocity)
+        self._recent_contacts: dict[str, list[tuple[float, list]]] = {}  # namespace -> [(time, contacts)]
 
     @property
     def kinematic(self) -> bool:
@@ -62,6 +66,8 @@ class Simulation:
         if entity is None:
             return False
         self.hardware.pop(entity.namespace, None)
+        self._com_velocity.pop(entity.namespace, None)
+        self._recent_contacts.pop(entity.namespace, None)
         self.world.remove_skeleton(entity.skeleton)
         return True
 
@@ -95,6 +101,8 @@ class Simulation:
 
     def reset_world(self) -> None:
         """Robots back to their spawn poses and joint positions, at rest, holding position (time kept)."""
+        self._com_velocity.clear()
+        self._recent_contacts.clear()
         for entity in self.entities.values():
             entity.reset()
         self.world.reset_collision()
@@ -119,6 +127,23 @@ class Simulation:
 
     def balance(self, namespace: str) -> BalanceState:
         skeleton = self.hardware[namespace].skeleton
+        now = self.world.time
         contacts = [] if self.kinematic else robot_contacts(self.world.contacts(), skeleton.getName())
-        return balance_state(np.asarray(skeleton.getCOM()), np.asarray(skeleton.getCOMLinearAcceleration()),
-                             self.world.gravity[2], contacts)
+        # The support polygon spans the contacts of the last SUPPORT_WINDOW s: a box foot flat on the ground
+        # is sometimes reported by the collision detector as touching along one edge only for a step,
+        # which alone would shrink the polygon to a line under a robot that stands still.
+        recent = [(t, c) for t, c in self._recent_contacts.get(namespace, []) if 0.0 <= now - t <= SUPPORT_WINDOW]
+        recent.append((now, contacts))
+        self._recent_contacts[namespace] = recent
+        contacts = [c for _, batch in recent for c in batch]
+        # The ZMP needs the CoM acceleration averaged since the last sample, not DART's value of the last
+        # step alone: when the set of contact points changes, one step's contact impulse swings that value
+        # (and the ZMP by tens of cm) for a millisecond, though nothing tips.
+        velocity = np.asarray(skeleton.getCOMLinearVelocity())
+        previous = self._com_velocity.get(namespace)
+        self._com_velocity[namespace] = (now, velocity)
+        if previous is not None and 0.0 < now - previous[0] <= 0.05:
+            acceleration = (velocity - previous[1]) / (now - previous[0])
+        else:
+            acceleration = np.asarray(skeleton.getCOMLinearAcceleration())
+        return balance_state(np.asarray(skeleton.getCOM()), acceleration, self.world.gravity[2], contacts)

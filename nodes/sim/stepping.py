@@ -62,40 +62,49 @@ class Pacer:
 
 
 class CommandInbox:
-    """The latest ``hardware/command`` of one robot and its controller manager's connection state."""
+    """The recent ``hardware/command`` messages of one robot and its controller manager's connection state.
+
+    Pipelined lockstep waits for the answer to the *previous* state while the answer to the newest one may
+    already be in, so the last few commands are kept by step.
+    """
+
+    KEEP = 8
 
     def __init__(self) -> None:
         self._cond = threading.Condition()
-        self._latest: Any = None
-        self._fresh = False
+        self._by_step: dict[int, Any] = {}   # insertion order = arrival order
         self.connected = False           # set by the physics thread when a command is taken
         self.last_wall = 0.0              # monotonic time of the last command received
 
     def put(self, command: Any) -> None:
         """From the subscription (Zenoh thread)."""
         with self._cond:
-            self._latest = command
-            self._fresh = True
+            self._by_step.pop(command.step, None)
+            self._by_step[command.step] = command
+            if len(self._by_step) > self.KEEP:
+                del self._by_step[next(iter(self._by_step))]
             self.last_wall = time.monotonic()
             self._cond.notify_all()
 
     def take(self) -> Any:
-        """The newest unread command, or None."""
+        """The newest unread command, or None (realtime: whatever arrived last wins)."""
         with self._cond:
-            if not self._fresh:
+            if not self._by_step:
                 return None
-            self._fresh = False
-            return self._latest
+            newest = self._by_step[next(reversed(self._by_step))]
+            self._by_step.clear()
+            return newest
 
     def wait_for_step(self, step: int, timeout: float) -> Any:
         """The command answering ``step`` (lockstep), or None after ``timeout`` s."""
         deadline = time.monotonic() + timeout
         with self._cond:
             while True:
-                latest = self._latest
-                if self._fresh and latest is not None and latest.step == step:
-                    self._fresh = False
-                    return latest
+                command = self._by_step.pop(step, None)
+                if command is not None:
+                    for older in [s for s in self._by_step if s < step]:
+                        del self._by_step[older]
+                    return command
                 remaining = deadline - time.monotonic()
                 if remaining <= 0:
                     return None
@@ -103,4 +112,4 @@ class CommandInbox:
 
     def clear(self) -> None:
         with self._cond:
-            self._latest, self._fresh = None, False
+            self._by_step.clear()

@@ -3,26 +3,35 @@
 from __future__ import annotations
 
 import argparse
-import sys
+import threading
+from typing import Any
 
 import msgs
 from nodes.core import ServiceError
 from nodes.core.action import STATUS_NAMES, ActionClient
-from nodes.tools.cli import UsageError
 from nodes.tools.common import (
     add_common,
+    add_list_verb,
     cli_node,
+    interface_type,
     key_of,
     message_from_yaml,
+    offered,
     print_endpoints,
-    resolve_type,
+    snapshot,
+    snapshot_until,
+    suggest,
     to_yaml,
+    write_line,
 )
+from nodes.tools.errors import Failed
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("list", help="action servers")
+    add_list_verb(sub, "action servers")
+    p = sub.add_parser("info", help="an action's servers and clients")
+    p.add_argument("key")
     p.add_argument("-t", "--show-types", action="store_true")
     add_common(p)
     p = sub.add_parser("send_goal", help="send a goal given as YAML and wait for the result")
@@ -37,26 +46,73 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.cmd == "list":
         return print_endpoints(args, "act", "action")
-    action = resolve_type(args.type)
-    if not isinstance(action, msgs.Action):
-        raise UsageError(f"'{args.type}' is not an action type")
+    if args.cmd == "info":
+        return _info(args)
+    action = interface_type(args.type, msgs.Action)
     goal = message_from_yaml(action.Goal, args.values)
     node = cli_node(args, "action")
+    finished = threading.Event()
+    outcome: dict[str, Any] = {}
+
+    def on_feedback(feedback: Any) -> None:  # on a Zenoh thread: a closed pipe is handed to the main thread
+        try:
+            write_line("Feedback:\n" + to_yaml(msgs.to_dict(feedback)))
+        except BrokenPipeError as exc:
+            outcome.setdefault("error", exc)
+            finished.set()
+
     try:
         client = ActionClient(node, action, key_of(args.key))
-        on_feedback = (lambda fb: print("Feedback:\n" + to_yaml(msgs.to_dict(fb)), flush=True)) if args.feedback else None
-        print("Waiting for an action server to become available...", flush=True)
-        handle = client.send_goal(goal, feedback_callback=on_feedback, timeout=5.0)
+        write_line("Waiting for an action server to become available...")
+        handle = client.send_goal(goal, feedback_callback=on_feedback if args.feedback else None, timeout=5.0)
         if not handle.accepted:
-            print("Goal was rejected.")
+            write_line("Goal was rejected.")
             return 1
-        print(f"Goal accepted with ID: {handle.goal_id.hex()}", flush=True)
-        status, result = handle.get_result(timeout=args.timeout)
+        write_line(f"Goal accepted with ID: {handle.goal_id.hex()}")
+
+        def wait_for_result() -> None:
+            try:
+                outcome.setdefault("result", handle.get_result(timeout=args.timeout))
+            except Exception as exc:  # noqa: BLE001 - handed to the main thread
+                outcome.setdefault("error", exc)
+            finally:
+                finished.set()
+
+        threading.Thread(target=wait_for_result, daemon=True, name="get_result").start()
+        while not finished.wait(0.1):
+            pass
+        if "result" not in outcome:
+            raise outcome["error"]
+        status, result = outcome["result"]
     except ServiceError as exc:
-        print(f"zenroid action send_goal: {exc}", file=sys.stderr)
-        return 1
+        servers = offered(snapshot(node), "act")
+        key = key_of(args.key)
+        if key not in servers:
+            raise Failed(f"no action server for '{key}'{suggest(key, servers)}") from None
+        raise Failed(str(exc)) from None
     finally:
         node.destroy()
-    print("Result:\n" + to_yaml(msgs.to_dict(result)))
-    print(f"Goal finished with status: {STATUS_NAMES.get(status, status)}")
+    write_line("Result:\n" + to_yaml(msgs.to_dict(result)))
+    write_line(f"Goal finished with status: {STATUS_NAMES.get(status, status)}")
     return 0 if status == 4 else 1
+
+
+def _info(args: argparse.Namespace) -> int:
+    """``ros2 action info``: who serves the action and who uses it."""
+    key = key_of(args.key)
+    node = cli_node(args, "action")
+    try:
+        entries = snapshot_until(node, lambda es: any(e.kind in ("act", "actc") and e.name == key for e in es))
+    finally:
+        node.destroy()
+    mine = [e for e in entries if e.kind in ("act", "actc") and e.name == key]
+    if not mine:
+        servers = {e.name for e in entries if e.kind == "act"}
+        raise Failed(f"no action server or client for '{key}'{suggest(key, servers)}")
+    write_line(f"Action: /{key}")
+    for kind, title in (("actc", "Action clients"), ("act", "Action servers")):
+        found = sorted({(e.node, e.type_name) for e in mine if e.kind == kind})
+        write_line(f"{title}: {len(found)}")
+        for name, type_name in found:
+            write_line(f"    {name} [{type_name}]" if args.show_types else f"    {name}")
+    return 0

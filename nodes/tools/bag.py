@@ -1,37 +1,41 @@
-"""``zenroid bag``: record, play and info — MCAP bags with ROS 2 encoding (``ros2 bag`` compatible)."""
+"""``zenroid bag``: record, play and info — rosbag2 bags (``ros2 bag`` and rosbags open ours, we open theirs)."""
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import signal
 import sys
 import threading
 import time
 from typing import Any
 
 import msgs
-from nodes.bag.mcap_file import BagError, BagWriter, bag_info, read_bag
+from nodes.bag.reader import Bag, BagError, open_bag
+from nodes.bag.rosbag2 import is_latched
+from nodes.bag.writer import BagWriter
 from nodes.tools.cli import UsageError
 from nodes.tools.common import add_common, cli_node, key_of
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("record", help="record keys into an MCAP bag")
+    p = sub.add_parser("record", help="record keys into a rosbag2 bag (metadata.yaml + MCAP)")
     p.add_argument("keys", nargs="*", help="keys (wildcards allowed, e.g. 'humanoid/**')")
     p.add_argument("-a", "--all", action="store_true", help="record every key")
     p.add_argument("-o", "--output", default="", help="bag directory (or FILE.mcap); default rosbag2_<date>")
     p.add_argument("-d", "--duration", type=float, default=0.0, help="stop after S seconds")
     p.add_argument("--max-messages", type=int, default=0, help="stop after N messages")
+    p.add_argument("--quiet", action="store_true", help="no live progress display")
     add_common(p)
     p = sub.add_parser("play", help="publish a bag's messages with their original timing")
-    p.add_argument("bag")
+    p.add_argument("bag", help="bag directory (rosbag2: metadata.yaml + .mcap/.db3) or .mcap/.db3 file")
     p.add_argument("-r", "--rate", type=float, default=1.0, help="playback speed factor")
     p.add_argument("-l", "--loop", action="store_true")
-    p.add_argument("--topics", nargs="*", default=None, help="only these keys")
+    p.add_argument("--topics", nargs="*", default=None, help="only these topics/keys")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_common(p)
-    p = sub.add_parser("info", help="duration, message counts and types")
+    p = sub.add_parser("info", help="files, duration, message counts and types (like ros2 bag info)")
     p.add_argument("bag")
 
 
@@ -42,19 +46,38 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
 
 
+def _stamp(ns: int) -> str:
+    """``Nov 22 2026 10:00:00.123456789 (1795...123456789)`` as ros2 bag info prints times (local time)."""
+    sec, frac = divmod(ns, 1_000_000_000)
+    local = datetime.datetime.fromtimestamp(sec)
+    return f"{local.strftime('%b %e %Y %H:%M:%S')}.{frac:09d} ({sec}.{frac:09d})"
+
+
+def _size(n: int) -> str:
+    size, unit = float(n), 0
+    units = ("B", "KiB", "MiB", "GiB", "TiB")
+    while size >= 1024 and unit < len(units) - 1:
+        size, unit = size / 1024, unit + 1
+    return f"{size:.0f} B" if unit == 0 else f"{size:.1f} {units[unit]}"
+
+
 def _info(args: argparse.Namespace) -> int:
-    info = bag_info(args.bag)
-    start = datetime.datetime.fromtimestamp(info["start_ns"] / 1e9) if info["messages"] else None
-    print(f"Files:             {info['path']}")
-    print(f"Bag size:          {info['size_bytes'] / 1024:.1f} KiB")
-    print("Storage id:        mcap")
-    print(f"Duration:          {info['duration_s']:.3f}s")
-    print(f"Start:             {start}")
+    info = open_bag(args.bag).info()
+    sep = "\n" + " " * 19  # continuation lines line up under the first value, as in ros2 bag info
+    print(f"Files:             {sep.join(info['files'])}")
+    print(f"Bag size:          {_size(info['size_bytes'])}")
+    print(f"Storage id:        {info['storage']}")
+    print(f"ROS Distro:        {info['ros_distro'] or 'unknown'}")
+    if info["compression"]:
+        print(f"Compression:       {info['compression']}")
+    duration_ns = info["end_ns"] - info["start_ns"]
+    print(f"Duration:          {duration_ns // 1_000_000_000}.{duration_ns % 1_000_000_000:09d}s")
+    print(f"Start:             {_stamp(info['start_ns'])}")
+    print(f"End:               {_stamp(info['end_ns'])}")
     print(f"Messages:          {info['messages']}")
-    print("Topic information:")
-    for t in info["topics"]:
-        print(f"  Topic: {t['topic']} | Type: {t['type']} | Count: {t['count']} | Serialization Format: "
-              f"{t['serialization']}")
+    lines = [f"Topic: {t['topic']} | Type: {t['type']} | Count: {t['count']} | Serialization Format: "
+             f"{t['serialization']}" for t in info["topics"]]
+    print(f"Topic information: {sep.join(lines)}")
     return 0
 
 
@@ -68,11 +91,15 @@ def _record(args: argparse.Namespace) -> int:
     if not keys:
         raise UsageError("name keys to record, or -a for all")
     output = args.output or datetime.datetime.now().strftime("rosbag2_%Y_%m_%d-%H_%M_%S")
+    node = cli_node(args, "bag_record")  # first: no router, no empty bag left behind
     try:
         writer = BagWriter(output)
     except FileExistsError:
+        node.destroy()
         raise UsageError(f"output '{output}' already exists") from None
-    node = cli_node(args, "bag_record")
+    except BaseException:
+        node.destroy()
+        raise
     lock = threading.Lock()
     done = threading.Event()
     skipped: dict[str, str] = {}
@@ -93,18 +120,13 @@ def _record(args: argparse.Namespace) -> int:
             if args.max_messages and writer.count >= args.max_messages:
                 done.set()
 
+    # SIGTERM (a launcher or `kill` stopping us) ends the recording cleanly, like Ctrl-C: the bag is
+    # only complete (MCAP summary, metadata.yaml) once the writer is closed.
+    previous = signal.signal(signal.SIGTERM, lambda *_: done.set())
     subs = [node.session.declare_subscriber(k, on_sample) for k in keys]
     print(f"Recording {', '.join('/' + k for k in keys)} to {writer.path} (Ctrl-C to stop)", flush=True)
-    start = time.monotonic()
-    last_report = start
     try:
-        while not done.wait(0.1):
-            now = time.monotonic()
-            if args.duration and now - start >= args.duration:
-                break
-            if now - last_report >= 2.0:
-                last_report = now
-                print(f"  {writer.count} messages, {now - start:.0f} s", flush=True)
+        _wait_recording(args, writer, lock, done)
     except KeyboardInterrupt:
         pass
     finally:
@@ -114,24 +136,73 @@ def _record(args: argparse.Namespace) -> int:
         with lock:
             writer.close()
         node.destroy()
+        signal.signal(signal.SIGTERM, previous)
     for key, reason in sorted(skipped.items()):
         print(f"  not recorded: /{key} ({reason})", file=sys.stderr)
     print(f"Recorded {writer.count} messages to {writer.path}")
     return 0
 
 
+def _wait_recording(args: argparse.Namespace, writer: BagWriter, lock: threading.Lock,
+                    done: threading.Event) -> None:
+    """Until done, the duration or Ctrl-C: a live table on a terminal, a line every 2 s otherwise."""
+    start = time.monotonic()
+    if args.quiet or not sys.stdout.isatty():
+        last_report = start
+        while not done.wait(0.1):
+            now = time.monotonic()
+            if args.duration and now - start >= args.duration:
+                return
+            if not args.quiet and now - last_report >= 2.0:
+                last_report = now
+                print(f"  {writer.count} messages, {now - start:.0f} s", flush=True)
+        return
+    from rich.live import Live
+
+    with Live(_progress_table(writer, lock, 0.0, {}), refresh_per_second=4, transient=False) as live:
+        rates: dict[str, tuple[float, int]] = {}
+        while not done.wait(0.25):
+            elapsed = time.monotonic() - start
+            if args.duration and elapsed >= args.duration:
+                break
+            live.update(_progress_table(writer, lock, elapsed, rates))
+        live.update(_progress_table(writer, lock, time.monotonic() - start, rates))
+
+
+def _progress_table(writer: BagWriter, lock: threading.Lock, elapsed: float,
+                    rates: dict[str, tuple[float, int]]) -> Any:
+    """Per topic: count and rate (over the last ~second); totals with size and elapsed time in the title."""
+    from rich.table import Table
+
+    with lock:
+        counts = writer.topic_counts()
+        total, size = writer.count, writer.bytes
+    table = Table(title=f"{total} messages, {size / 1024:.1f} KiB payload, {elapsed:.1f} s", title_justify="left")
+    table.add_column("topic")
+    table.add_column("count", justify="right")
+    table.add_column("Hz", justify="right")
+    now = time.monotonic()
+    for topic, count in sorted(counts.items()):
+        t0, c0 = rates.get(topic, (now, count))
+        hz = (count - c0) / (now - t0) if now - t0 > 0 else 0.0
+        if now - t0 >= 1.0 or topic not in rates:
+            rates[topic] = (now, count)
+        table.add_row(topic, str(count), f"{hz:.1f}" if now - t0 > 0 else "")
+    return table
+
+
 def _play(args: argparse.Namespace) -> int:
     if not args.rate > 0:
         raise UsageError(f"--rate must be positive, got {args.rate}")
-    info = bag_info(args.bag)  # fails early, with a clear message, on a bad bag
-    total = sum(t["count"] for t in info["topics"]
-                if args.topics is None or t["topic"].lstrip("/") in {k.strip("/") for k in args.topics})
+    bag = open_bag(args.bag)  # fails early, with a clear message, on a bad bag
+    wanted = {"/" + k.strip("/") for k in args.topics} if args.topics is not None else None
+    total = sum(t.count for t in bag.meta.topics if wanted is None or t.name in wanted)
     node = cli_node(args, "bag_play")
     publishers: dict[str, Any] = {}
     try:
         time.sleep(0.5)  # let subscribers' routes form before the first message
         while True:
-            played = _play_once(args, node, publishers, total)
+            played = _play_once(args, bag, node, publishers, total)
             if not args.loop or played == 0:
                 break
     except KeyboardInterrupt:
@@ -141,7 +212,11 @@ def _play(args: argparse.Namespace) -> int:
     return 0
 
 
-def _play_once(args: argparse.Namespace, node: Any, publishers: dict[str, Any], total: int) -> int:
+def _report_unknown(topic: str, reason: str) -> None:
+    print(f"  not played: {topic} ({reason})", file=sys.stderr, flush=True)
+
+
+def _play_once(args: argparse.Namespace, bag: Bag, node: Any, publishers: dict[str, Any], total: int) -> int:
     from rich.progress import Progress
 
     played = 0
@@ -149,7 +224,7 @@ def _play_once(args: argparse.Namespace, node: Any, publishers: dict[str, Any], 
     bag_start: int | None = None
     with Progress(disable=args.quiet or not sys.stdout.isatty()) as progress:
         task = progress.add_task("playing", total=total)
-        for item in read_bag(args.bag, args.topics):
+        for item in bag.messages(args.topics, on_unknown=_report_unknown):
             if bag_start is None:
                 bag_start = item.log_time_ns
             due = wall_start + (item.log_time_ns - bag_start) / 1e9 / args.rate
@@ -158,10 +233,17 @@ def _play_once(args: argparse.Namespace, node: Any, publishers: dict[str, Any], 
                 time.sleep(delay)
             pub = publishers.get(item.key)
             if pub is None:
-                pub = publishers[item.key] = node.create_publisher(type(item.msg), "/" + item.key)
+                pub = publishers[item.key] = node.create_publisher(
+                    type(item.msg), "/" + item.key, latched=_latched(bag, "/" + item.key))
             pub.publish(item.msg)
             played += 1
             progress.update(task, advance=1)
     if args.quiet or not sys.stdout.isatty():
         print(f"Played {played} messages", flush=True)
     return played
+
+
+def _latched(bag: Bag, topic: str) -> bool:
+    """Transient-local topics (tf_static, robot_description) are republished latched, as ros2 bag play does."""
+    info = bag.topic(topic)
+    return info.durability == "transient_local" if info and info.qos else is_latched(topic)

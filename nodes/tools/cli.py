@@ -10,26 +10,30 @@ import argparse
 import importlib
 import sys
 
-from nodes.tools.errors import UsageError
+from nodes.tools.errors import Failed, UsageError
 
 # verb -> (module, one-line help)
 VERBS: dict[str, tuple[str, str]] = {
-    "launch": ("launch.cli", "run a YAML launch file"),
+    "launch": ("nodes.tools.launch_cmd", "run a YAML launch file"),
     "topic": ("nodes.tools.topic", "list/echo/pub/hz/bw/info/type topics"),
     "node": ("nodes.tools.node_cmd", "list/info nodes"),
-    "service": ("nodes.tools.service", "list/call services"),
-    "action": ("nodes.tools.action", "list actions, send goals"),
+    "service": ("nodes.tools.service", "list/type/call services"),
+    "action": ("nodes.tools.action", "list/info actions, send goals"),
     "control": ("nodes.tools.control", "controller manager commands and the spawner"),
-    "lifecycle": ("nodes.tools.lifecycle", "get/set lifecycle node states"),
-    "param": ("nodes.tools.param", "list/get/set node parameters"),
+    "lifecycle": ("nodes.tools.lifecycle", "nodes/get/list/set of lifecycle nodes"),
+    "param": ("nodes.tools.param", "list/get/set/dump/load node parameters"),
+    "log": ("nodes.tools.log_cmd", "print or change a running node's log level"),
     "spawn": ("nodes.tools.spawn", "spawn an entity in the simulator (spawn_entity.py)"),
     "sim": ("nodes.tools.sim", "pause/unpause/reset/step/gravity"),
     "check_urdf": ("nodes.tools.check_urdf", "validate a URDF and print its tree"),
     "xacro": ("nodes.tools.xacro_cmd", "expand a xacro file to URDF"),
+    "urdf_to_graphviz": ("nodes.tools.urdf_graph", "draw a URDF's link/joint tree (.gv, and .pdf with Graphviz)"),
+    "urdf_to_graphiz": ("nodes.tools.urdf_graph", "the same (ROS's older spelling)"),
     "graph": ("nodes.tools.graph", "print the node graph"),
     "doctor": ("nodes.tools.doctor", "check the installation and the network"),
     "router": ("nodes.tools.router", "run a standalone Zenoh router (zenohd stand-in)"),
     "bag": ("nodes.tools.bag", "record/play/info bags"),
+    "teleop": ("nodes.tools.teleop", "nudge a trajectory controller's joints from the keyboard"),
 }
 
 
@@ -67,6 +71,9 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         print(f"zenroid {verb}: {exc}", file=sys.stderr)
         return 2
+    except Failed as exc:
+        print(f"zenroid {verb}: {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         return 130
     except BrokenPipeError:
@@ -77,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
 
-__all__ = ["VERBS", "UsageError", "main"]
+__all__ = ["VERBS", "Failed", "UsageError", "main"]
 
 if __name__ == "__main__":
     sys.exit(main())

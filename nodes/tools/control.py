@@ -25,7 +25,7 @@ import msgs
 from nodes.core import ServiceError
 from nodes.core.endpoints import Client
 from nodes.tools.cli import UsageError
-from nodes.tools.common import add_common, cli_node
+from nodes.tools.common import ROUTER_WAIT, add_common, cli_node, snapshot
 
 _SRV = {
     "list_controllers": "controller_manager_msgs/srv/ListControllers",
@@ -85,7 +85,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 class ManagerClient:
     def __init__(self, args: argparse.Namespace) -> None:
-        self.node = cli_node(args, "control")
+        # the spawner may start before the router (docker-compose): it waits as long as for the manager
+        self.node = cli_node(args, "control", router_wait=getattr(args, "controller_manager_timeout", ROUTER_WAIT))
         self.prefix = "/".join(p for p in (args.namespace.strip("/"), args.controller_manager.strip("/")) if p)
         self.timeout = args.timeout
         self._clients: dict[str, Client] = {}
@@ -208,6 +209,20 @@ def _spawner(client: ManagerClient, args: argparse.Namespace) -> None:
         print(f"Configured and activated {name}")
 
 
+def _namespace_hint(client: ManagerClient) -> str:
+    """"; controller managers running: /simple_robot/controller_manager (--ns simple_robot)" when the asked one
+    is not there (the default namespace is humanoid)."""
+    try:
+        managers = sorted({e.node for e in snapshot(client.node) if e.kind == "node"
+                           and e.node.rsplit("/", 1)[-1] == client.prefix.rsplit("/", 1)[-1]})
+    except Exception:  # noqa: BLE001 - only a hint
+        return ""
+    if not managers or "/" + client.prefix in managers:
+        return ""
+    shown = ", ".join(f"{m} (--ns {m.strip('/').rpartition('/')[0] or '/'})" for m in managers)
+    return f"; controller managers running: {shown}"
+
+
 def run(args: argparse.Namespace) -> int:
     if args.cmd == "set_controller_state" and args.state not in ("inactive", "active"):
         raise UsageError(f"state must be 'inactive' or 'active', got '{args.state}'")
@@ -245,7 +260,7 @@ def run(args: argparse.Namespace) -> int:
         elif args.cmd == "spawner":
             _spawner(client, args)
     except Failed as exc:
-        print(f"zenroid control {args.cmd}: {exc}", file=sys.stderr)
+        print(f"zenroid control {args.cmd}: {exc}{_namespace_hint(client)}", file=sys.stderr)
         return 1
     finally:
         client.close()

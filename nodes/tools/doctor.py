@@ -32,9 +32,9 @@ def run(args: argparse.Namespace) -> int:
         except Exception as exc:  # noqa: BLE001 - report every broken import, keep checking
             problems += 1
             print(f"[FAIL] {name}: {type(exc).__name__}: {exc}")
-    from nodes.core.paths import ROBOTS_DIR
+    from nodes.share import ROBOTS_DIR, robot_names
 
-    robots = sorted(p.name for p in ROBOTS_DIR.glob("*.urdf*"))
+    robots = robot_names()
     print(f"[{'ok' if robots else 'FAIL'}]   robots in {ROBOTS_DIR}: {', '.join(robots) or 'none'}")
     problems += not robots
     endpoints = connect_from_args(args) or default_endpoints()

@@ -1,16 +1,15 @@
-"""``zenroid lifecycle``: get and set the state of a managed node."""
+"""``zenroid lifecycle``: nodes, get, list (available transitions) and set of managed nodes (``ros2 lifecycle``)."""
 
 from __future__ import annotations
 
 import argparse
-import sys
 
 import msgs
 from nodes.core import ServiceError
 from nodes.core.endpoints import Client
-from nodes.core.lifecycle import TRANSITIONS
-from nodes.tools.cli import UsageError
-from nodes.tools.common import add_common, cli_node
+from nodes.core.lifecycle import STATE_LABELS, TRANSITIONS
+from nodes.tools.common import add_common, cli_node, require_node, snapshot, write_line
+from nodes.tools.errors import Failed, UsageError
 
 _GetState = msgs.get_type("lifecycle_msgs/srv/GetState")
 _ChangeState = msgs.get_type("lifecycle_msgs/srv/ChangeState")
@@ -19,31 +18,52 @@ _Transition = msgs.get_type("lifecycle_msgs/msg/Transition")
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("get")
+    p = sub.add_parser("nodes", help="the lifecycle (managed) nodes that are running")
+    add_common(p)
+    p = sub.add_parser("get", help="a node's current state")
     p.add_argument("node")
     add_common(p)
-    p = sub.add_parser("set")
+    p = sub.add_parser("list", help="the transitions available from the node's current state")
+    p.add_argument("node")
+    add_common(p)
+    p = sub.add_parser("set", help="trigger a transition")
     p.add_argument("node")
     p.add_argument("transition", help="configure, activate, deactivate, cleanup, shutdown")
     add_common(p)
 
 
 def run(args: argparse.Namespace) -> int:
-    base = args.node.strip("/")
     if args.cmd == "set" and args.transition not in {t[0] for t in TRANSITIONS.values()}:
-        raise UsageError(f"unknown transition '{args.transition}'")
+        raise UsageError(f"unknown transition '{args.transition}' (choose from "
+                         f"{', '.join(sorted({t[0] for t in TRANSITIONS.values()}))})")
     node = cli_node(args, "lifecycle")
     try:
-        if args.cmd == "get":
-            state = Client(node, _GetState, f"{base}/get_state").call().current_state
-            print(f"{state.label} [{state.id}]")
+        if args.cmd == "nodes":
+            managed = sorted({e.node for e in snapshot(node) if e.kind == "srv" and e.name.endswith("/get_state")
+                              and e.type_name == "lifecycle_msgs/srv/GetState"})
+            for name in managed:
+                write_line(name)
             return 0
-        ok = Client(node, _ChangeState, f"{base}/change_state").call(
-            _ChangeState.Request(transition=_Transition(label=args.transition))).success
-    except ServiceError as exc:
-        print(f"zenroid lifecycle: {exc}", file=sys.stderr)
-        return 1
+        target = require_node(node, args.node)
+        base = target.lstrip("/")
+        try:
+            if args.cmd in ("get", "list"):
+                state = Client(node, _GetState, f"{base}/get_state").call().current_state
+                if args.cmd == "get":
+                    write_line(f"{state.label} [{state.id}]")
+                    return 0
+                for tid, (label, sources, _, goal) in TRANSITIONS.items():
+                    if state.id in sources:
+                        write_line(f"- {label} [{tid}]\n\tStart: {state.label}\n\tGoal: {STATE_LABELS[goal]}")
+                return 0
+            ok = Client(node, _ChangeState, f"{base}/change_state").call(
+                _ChangeState.Request(transition=_Transition(label=args.transition))).success
+        except ServiceError as exc:
+            raise Failed(f"{target} is not a lifecycle node or does not answer: {exc}") from None
     finally:
         node.destroy()
-    print("Transitioning successful" if ok else "Transitioning failed")
-    return 0 if ok else 1
+    if not ok:
+        raise Failed(f"Transitioning failed: '{args.transition}' is not possible from the current state of {target} "
+                     f"(see `zenroid lifecycle list {target}`) or the node refused it (see its log)")
+    write_line("Transitioning successful")
+    return 0

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from nodes.tools.common import add_common, graph_entries
+from nodes.tools.common import add_common, graph_entries, is_cli_node, suggest, write_line
+from nodes.tools.errors import Failed
 
 _SECTIONS = (("pub", "Publishers"), ("sub", "Subscribers"), ("srv", "Service Servers"), ("cli", "Service Clients"),
              ("act", "Action Servers"), ("actc", "Action Clients"))
@@ -25,17 +26,18 @@ def run(args: argparse.Namespace) -> int:
     if args.cmd == "list":
         names = sorted({e.node for e in entries if e.kind == "node"})
         for name in names:
-            if args.all or not name.lstrip("/").startswith("zenroid_"):
-                print(name)
+            if args.all or not is_cli_node(name):
+                write_line(name)
         return 0
     target = "/" + args.node.strip("/")
     mine = [e for e in entries if e.node == target]
     if not mine:
-        print(f"zenroid node info: no node '{target}' (see `zenroid node list`)")
-        return 1
-    print(target)
+        others = [e.node for e in entries if e.kind == "node" and not is_cli_node(e.node)]
+        hint = suggest(target, others, prefix="/")
+        raise Failed(f"no node '{target}' is running{hint or ' (see `zenroid node list`)'}")
+    write_line(target)
     for kind, title in _SECTIONS:
-        print(f"  {title}:")
+        write_line(f"  {title}:")
         for e in sorted({(e.name, e.type_name) for e in mine if e.kind == kind}):
-            print(f"    /{e[0]}: {e[1]}")
+            write_line(f"    /{e[0]}: {e[1]}")
     return 0

@@ -3,27 +3,33 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
 import msgs
 from nodes.core import ServiceError
 from nodes.core.endpoints import Client
-from nodes.tools.cli import UsageError
 from nodes.tools.common import (
     add_common,
+    add_list_verb,
     cli_node,
+    interface_type,
     key_of,
     message_from_yaml,
+    offered,
     print_endpoints,
-    resolve_type,
+    snapshot,
+    snapshot_until,
+    suggest,
     to_yaml,
+    write_line,
 )
+from nodes.tools.errors import Failed
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("list", help="services offered by running nodes")
-    p.add_argument("-t", "--show-types", action="store_true")
+    add_list_verb(sub, "services offered by running nodes")
+    p = sub.add_parser("type", help="the type of a service")
+    p.add_argument("key")
     add_common(p)
     p = sub.add_parser("call", help="call a service with a YAML request")
     p.add_argument("key")
@@ -36,19 +42,35 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if args.cmd == "list":
         return print_endpoints(args, "srv", "service")
-    srv = resolve_type(args.type)
-    if not isinstance(srv, msgs.Service):
-        raise UsageError(f"'{args.type}' is not a service type")
+    if args.cmd == "type":
+        return _type(args)
+    srv = interface_type(args.type, msgs.Service)
     request = message_from_yaml(srv.Request, args.values)
     node = cli_node(args, "service")
     try:
         print(f"requester: making request: {request}", flush=True)
         response = Client(node, srv, key_of(args.key)).call(request, timeout=args.timeout)
     except ServiceError as exc:
-        print(f"zenroid service call: {exc}", file=sys.stderr)
-        return 1
+        servers = offered(snapshot(node), "srv")
+        if key_of(args.key) not in servers:
+            raise Failed(f"no service '{key_of(args.key)}' is offered{suggest(key_of(args.key), servers)}") from None
+        raise Failed(str(exc)) from None
     finally:
         node.destroy()
-    print("response:")
-    print(to_yaml(msgs.to_dict(response)))
+    write_line("response:")
+    write_line(to_yaml(msgs.to_dict(response)))
+    return 0
+
+
+def _type(args: argparse.Namespace) -> int:
+    key = key_of(args.key)
+    node = cli_node(args, "service")
+    try:
+        entries = snapshot_until(node, lambda es: any(e.kind == "srv" and e.name == key for e in es))
+        servers = {e.name: e.type_name for e in entries if e.kind == "srv"}
+    finally:
+        node.destroy()
+    if key not in servers:
+        raise Failed(f"no service '{key}' is offered{suggest(key, servers)}")
+    write_line(servers[key])
     return 0

@@ -1,4 +1,10 @@
-"""``zenroid topic``: list, echo, pub, hz, bw, info, type."""
+"""``zenroid topic``: list, echo, pub, hz, bw, info, type.
+
+Nothing waits silently: a key nobody publishes gets "waiting for a publisher..." on stderr, a hint when the
+name exists under a namespace (``/joint_states`` → ``humanoid/joint_states``), and exit status 1 after
+``--wait`` seconds. A latched topic (``robot_description``) echoes its last message at once. A closed
+pipe (``| head``) ends every streaming verb quietly.
+"""
 
 from __future__ import annotations
 
@@ -15,21 +21,39 @@ import msgpack
 import msgs
 from nodes.core import graph
 from nodes.core.endpoints import parse_attachment
-from nodes.tools.cli import UsageError
-from nodes.tools.common import add_common, cli_node, key_of, message_from_yaml, resolve_type, to_yaml
+from nodes.core.latched import latest_sample
+from nodes.core.names import check_key, keys_intersect
+from nodes.tools.common import (
+    add_common,
+    add_list_verb,
+    cli_node,
+    is_cli_node,
+    key_of,
+    message_from_yaml,
+    require_nodes,
+    resolve_type,
+    snapshot,
+    snapshot_until,
+    suggest,
+    to_yaml,
+    write_line,
+)
+from nodes.tools.errors import Failed, UsageError
+
+PUBLISHER_WAIT = 5.0  # s echo/hz/bw wait for a publisher to exist before giving up (--wait)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("list", help="topics with publishers or subscribers")
-    p.add_argument("-t", "--show-types", action="store_true")
-    add_common(p)
+    add_list_verb(sub, "topics with publishers or subscribers")
     p = sub.add_parser("echo", help="print messages on a key (decoded by their schema)")
     p.add_argument("key")
     p.add_argument("--once", action="store_true", help="print one message and exit")
     p.add_argument("-n", "--count", type=int, default=0, help="exit after N messages")
-    p.add_argument("--timeout", type=float, default=0.0, help="give up after S seconds without a message")
-    p.add_argument("--field", default="", help="print only this field (dotted path)")
+    p.add_argument("--timeout", type=float, default=0.0,
+                   help="give up after S seconds without a message (default: wait while a publisher exists)")
+    _wait_argument(p)
+    p.add_argument("--field", default="", help="print only this field (dotted path, e.g. position or position.0)")
     p.add_argument("--json", action="store_true", help="one JSON object per line instead of YAML")
     add_common(p)
     p = sub.add_parser("pub", help="publish a message given as YAML")
@@ -39,13 +63,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument("--once", "-1", action="store_true", help="publish once and exit")
     p.add_argument("-r", "--rate", type=float, default=1.0, help="Hz (default 1)")
     p.add_argument("-t", "--times", type=int, default=0, help="publish N times and exit")
-    p.add_argument("--wait", type=float, default=0.5, help="seconds to wait for subscribers before sending")
+    p.add_argument("--wait", type=float, default=2.0,
+                   help="seconds to wait for a subscriber before sending (default 2; sends as soon as one matches)")
     add_common(p)
     for name, help_text in (("hz", "publishing rate"), ("bw", "bandwidth")):
         p = sub.add_parser(name, help=help_text)
         p.add_argument("key")
         p.add_argument("--window", type=float, default=2.0, help="report every S seconds")
         p.add_argument("--duration", type=float, default=0.0, help="stop after S seconds (0: until Ctrl-C)")
+        _wait_argument(p)
         add_common(p)
     p = sub.add_parser("info", help="type, publishers and subscribers of a topic")
     p.add_argument("key")
@@ -55,25 +81,52 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_common(p)
 
 
+def _wait_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--wait", type=float, default=PUBLISHER_WAIT,
+                   help=f"seconds to wait for a publisher to appear (default {PUBLISHER_WAIT:g}; 0: forever)")
+
+
 def run(args: argparse.Namespace) -> int:
-    return {"list": _list, "echo": _echo, "pub": _pub, "hz": _hz, "bw": _hz, "info": _info, "type": _type}[args.cmd](args)
+    key = key_of(args.key) if hasattr(args, "key") else ""
+    if hasattr(args, "key"):
+        try:
+            check_key(key)
+        except ValueError as exc:
+            raise UsageError(f"invalid key '{args.key}': {exc}") from None
+    return {"list": _list, "echo": _echo, "pub": _pub, "hz": _hz, "bw": _hz, "info": _info,
+            "type": _type}[args.cmd](args)
 
 
-def _endpoints(node: Any) -> list[graph.GraphEntry]:
-    return [e for e in graph.snapshot(node.session) if e.kind in ("pub", "sub")]
+def _topics(entries: list[graph.GraphEntry]) -> list[graph.GraphEntry]:
+    return [e for e in entries if e.kind in ("pub", "sub")]
+
+
+def _matches(key: str, name: str) -> bool:
+    """Does the graph name ``name`` fall under ``key`` (which may hold wildcards)?"""
+    if key == name:
+        return True
+    if "*" not in key and "$" not in key:
+        return False
+    return keys_intersect(key, name)
+
+
+def _hint(key: str, entries: list[graph.GraphEntry], kinds: tuple[str, ...] = ("pub", "sub")) -> str:
+    return suggest(key, [e.name for e in entries if e.kind in kinds and not is_cli_node(e.node)])
 
 
 def _list(args: argparse.Namespace) -> int:
     node = cli_node(args, "topic")
     try:
-        topics: dict[str, str] = {}
-        for e in _endpoints(node):
-            if e.name not in topics or topics[e.name] == "*":
-                topics[e.name] = e.type_name
-        for name in sorted(topics):
-            print(f"/{name} [{topics[name]}]" if args.show_types else f"/{name}")
+        entries = snapshot_until(node, lambda es: any(e.kind == "node" and not is_cli_node(e.node) for e in es))
     finally:
         node.destroy()
+    require_nodes(entries, args)
+    topics: dict[str, str] = {}
+    for e in _topics(entries):
+        if e.name not in topics or topics[e.name] == "*":
+            topics[e.name] = e.type_name
+    for name in sorted(topics):
+        write_line(f"/{name} [{topics[name]}]" if args.show_types else f"/{name}")
     return 0
 
 
@@ -92,7 +145,7 @@ def _decode_any(sample: Any) -> tuple[str, Any]:
     if type_name:
         try:
             return type_name, msgs.to_dict(msgs.decode(msgs.get_type(type_name), payload))
-        except (KeyError, msgs.DecodeError):
+        except (KeyError, msgs.DecodeError, msgs.DefinitionError):
             pass
     try:
         return type_name or "?", msgpack.unpackb(payload, raw=False)
@@ -111,17 +164,67 @@ def _pick(data: Any, path: str) -> Any:
     return data
 
 
+class _Waiter:
+    """Says what a streaming verb is waiting for and decides when to give up on a key nobody publishes."""
+
+    def __init__(self, node: Any, key: str, verb: str, wait: float) -> None:
+        self.node, self.key, self.verb, self.wait = node, key, verb, wait
+        self.start = time.monotonic()
+        self.entries = snapshot_until(node, lambda es: bool(self._publishers(es)), timeout=1.0)
+        self.publishers = self._publishers()
+        self.announced = False
+        self.last_check = self.start
+
+    def _publishers(self, entries: list[graph.GraphEntry] | None = None) -> list[str]:
+        return sorted({e.node for e in (self.entries if entries is None else entries)
+                       if e.kind == "pub" and _matches(self.key, e.name)})
+
+    def hint(self) -> str:
+        return _hint(self.key, self.entries, ("pub",))
+
+    def announce(self) -> None:
+        if not self.publishers and not self.announced:
+            self.announced = True
+            limit = f"up to {self.wait:g} s" if self.wait > 0 else "until Ctrl-C"
+            print(f"zenroid topic {self.verb}: no publisher on '{self.key}' yet{self.hint()}\n"
+                  f"waiting for a publisher on '{self.key}' ({limit}; --wait S to change)...",
+                  file=sys.stderr, flush=True)
+
+    def give_up(self, received: int) -> bool:
+        """Call every ~0.1 s: True once nobody has published within ``wait`` s (re-reads the graph each s)."""
+        if received or self.publishers or self.wait <= 0:
+            return False
+        now = time.monotonic()
+        if now - self.last_check >= 1.0:
+            self.last_check = now
+            self.entries = snapshot(self.node)
+            self.publishers = self._publishers()
+            if self.publishers:
+                return False
+        if now - self.start < self.wait:
+            return False
+        raise Failed(f"no publisher on '{self.key}' within {self.wait:g} s{self.hint()}")
+
+    def latched_source(self) -> bool:
+        """A latched topic answers a get on its key; services are queryables too, so only ask when the key is
+        a published topic and no service of that name exists (a get must never call a service)."""
+        if "*" in self.key or "$" in self.key or not self.publishers:
+            return False
+        return not any(e.kind == "srv" and e.name == self.key for e in self.entries)
+
+
 def _echo(args: argparse.Namespace) -> int:
     import json
 
+    key = key_of(args.key)
     node = cli_node(args, "echo")
     limit = 1 if args.once else args.count
     done = threading.Event()
     count = 0
     lock = threading.Lock()
-    errors: list[str] = []
+    problems: list[BaseException] = []
 
-    def on_sample(sample: Any) -> None:
+    def show(sample: Any) -> None:
         nonlocal count
         with lock:
             if done.is_set():
@@ -130,37 +233,69 @@ def _echo(args: argparse.Namespace) -> int:
             try:
                 if args.field:
                     data = _pick(data, args.field)
-            except UsageError as exc:
-                errors.append(str(exc))
+                if args.json:
+                    write_line(json.dumps(data, default=lambda b: list(b)))
+                elif args.field and isinstance(data, str):
+                    write_line(data + "\n---")  # a text field as itself (no YAML quoting)
+                else:
+                    write_line(to_yaml(data) + "\n---")
+            except (UsageError, BrokenPipeError) as exc:  # a Zenoh thread: hand it to the main thread
+                problems.append(exc)
                 done.set()
                 return
-            if args.json:
-                print(json.dumps(data, default=lambda b: list(b)), flush=True)
-            else:
-                print(to_yaml(data) + "\n---", flush=True)
             count += 1
             if limit and count >= limit:
                 done.set()
 
-    sub = node.session.declare_subscriber(key_of(args.key), on_sample)
     try:
-        last_count, last_change = 0, time.monotonic()
-        while not done.wait(0.05):
-            if args.timeout:
+        waiter = _Waiter(node, key, "echo", args.wait)
+        sub = node.session.declare_subscriber(key, show)
+        try:
+            # A latched topic is asked for its last message for a few seconds (a fresh session may not
+            # know the queryable's route yet: an unanswered get is repeated, as fetch_latched does).
+            latched_until: float | None = None
+            waiter.announce()
+            last_count, last_change, quiet_noted = 0, time.monotonic(), False
+            while not done.is_set():
+                if not count and waiter.latched_source():
+                    latched_until = latched_until or time.monotonic() + 3.0
+                    if time.monotonic() < latched_until:
+                        sample = latest_sample(node.session, key, timeout=1.0)
+                        if sample is not None:
+                            show(sample)
+                if done.wait(0.1):
+                    break
+                waiter.give_up(count)
+                now = time.monotonic()
                 if count != last_count:
-                    last_count, last_change = count, time.monotonic()
-                elif time.monotonic() - last_change > args.timeout:
-                    print(f"zenroid topic echo: no message on '{key_of(args.key)}' within {args.timeout:g} s",
-                          file=sys.stderr)
-                    return 1
-    except KeyboardInterrupt:
-        pass
+                    last_count, last_change = count, now
+                elif args.timeout and now - last_change > args.timeout:
+                    raise Failed(f"no message on '{key}' within {args.timeout:g} s")
+                elif waiter.publishers and not count and not quiet_noted and now - last_change > 3.0:
+                    quiet_noted = True
+                    print(f"zenroid topic echo: no message on '{key}' yet from {', '.join(waiter.publishers)}; "
+                          "waiting (Ctrl-C to stop, --timeout S to give up)", file=sys.stderr, flush=True)
+        except KeyboardInterrupt:
+            pass
+        finally:
+            sub.undeclare()
     finally:
-        sub.undeclare()
         node.destroy()
-    if errors:
-        raise UsageError(errors[0])
+    if problems:
+        raise problems[0]
     return 0
+
+
+def _wait_for_subscriber(node: Any, pub: Any, key: str, wait: float) -> bool:
+    """True once someone subscribes to ``key`` (Zenoh matching, which also sees non-zenroid subscribers)."""
+    deadline = time.monotonic() + max(0.0, wait)
+    while True:
+        if pub.has_subscribers:
+            time.sleep(0.05)  # the route is known; give the subscriber's side a moment to settle
+            return True
+        if time.monotonic() >= deadline:
+            return any(e.kind == "sub" and _matches(e.name, key) for e in snapshot(node))
+        time.sleep(0.02)
 
 
 def _pub(args: argparse.Namespace) -> int:
@@ -170,13 +305,18 @@ def _pub(args: argparse.Namespace) -> int:
     msg = message_from_yaml(cls, args.values)
     if not args.rate > 0 or not math.isfinite(args.rate):
         raise UsageError(f"--rate must be a positive number, got {args.rate}")
+    key = key_of(args.key)
+    times = 1 if args.once else args.times
     node = cli_node(args, "pub")
+    heard = True
     try:
-        pub = node.create_publisher(cls, "/" + key_of(args.key))
-        time.sleep(max(0.0, args.wait))  # let subscribers' routes form, as `ros2 topic pub` waits for matching
-        times = 1 if args.once else args.times
+        pub = node.create_publisher(cls, "/" + key)
+        heard = _wait_for_subscriber(node, pub, key, args.wait)
+        if not heard:
+            hint = _hint(key, snapshot(node), ("sub",))
+            print(f"zenroid topic pub: nobody subscribes to '{key}'{hint}", file=sys.stderr, flush=True)
         sent = 0
-        print(f"publishing #{sent + 1} on /{key_of(args.key)}: {cls._type}", flush=True)
+        write_line(f"publishing #{sent + 1} on /{key}: {cls._type}")
         while True:
             pub.publish(msg)
             sent += 1
@@ -188,15 +328,20 @@ def _pub(args: argparse.Namespace) -> int:
         pass
     finally:
         node.destroy()
+    if times and not heard:
+        raise Failed(f"published {times} message(s) on '{key}' but nobody subscribes to it")
     return 0
 
 
 def _hz(args: argparse.Namespace) -> int:
+    if not args.window > 0:
+        raise UsageError(f"--window must be positive, got {args.window}")
+    key = key_of(args.key)
     node = cli_node(args, args.cmd)
     stamps: list[float] = []
     sizes: list[int] = []
     last_seq: dict[bytes, int] = {}
-    lost = defaultdict(int)
+    lost: defaultdict[bytes, int] = defaultdict(int)
     lock = threading.Lock()
 
     def on_sample(sample: Any) -> None:
@@ -205,6 +350,8 @@ def _hz(args: argparse.Namespace) -> int:
         with lock:
             stamps.append(now)
             sizes.append(len(sample.payload.to_bytes()))
+            if len(stamps) > 200_000:  # bounded memory on a fast topic left running for hours
+                del stamps[:100_000], sizes[:100_000]
             if att:
                 seq, src = att
                 prev = last_seq.get(src)
@@ -212,31 +359,42 @@ def _hz(args: argparse.Namespace) -> int:
                     lost[src] += seq - prev - 1
                 last_seq[src] = seq
 
-    sub = node.session.declare_subscriber(key_of(args.key), on_sample)
-    start = time.monotonic()
     try:
-        while not args.duration or time.monotonic() - start < args.duration:
-            time.sleep(min(args.window, args.duration or args.window))
-            with lock:
-                window = [t for t in stamps if t >= time.monotonic() - args.window]
-                nbytes = sum(sizes[-len(window):]) if window else 0
-                total_lost = sum(lost.values())
-            if len(window) < 2:
-                print("no new messages", flush=True)
-                continue
-            span = window[-1] - window[0]
-            rate = (len(window) - 1) / span if span > 0 else float("inf")
-            if args.cmd == "hz":
-                gaps = [b - a for a, b in zip(window, window[1:])]
-                print(f"average rate: {rate:.3f}\n\tmin: {min(gaps):.4f}s max: {max(gaps):.4f}s "
-                      f"window: {len(window)} lost: {total_lost}", flush=True)
-            else:
-                print(f"{nbytes / args.window / 1024:.2f} KB/s from {len(window)} messages "
-                      f"(mean {nbytes / len(window):.0f} B)", flush=True)
-    except KeyboardInterrupt:
-        pass
+        waiter = _Waiter(node, key, args.cmd, args.wait)
+        sub = node.session.declare_subscriber(key, on_sample)
+        try:
+            waiter.announce()
+            start = time.monotonic()
+            next_report = start + min(args.window, args.duration or args.window)
+            while not args.duration or time.monotonic() - start < args.duration:
+                time.sleep(0.1)
+                with lock:
+                    received = len(stamps)
+                waiter.give_up(received)
+                if time.monotonic() < next_report:
+                    continue
+                next_report += args.window
+                with lock:
+                    window = [t for t in stamps if t >= time.monotonic() - args.window]
+                    nbytes = sum(sizes[-len(window):]) if window else 0
+                    total_lost = sum(lost.values())
+                if len(window) < 2:
+                    write_line("no new messages")
+                    continue
+                span = window[-1] - window[0]
+                rate = (len(window) - 1) / span if span > 0 else float("inf")
+                if args.cmd == "hz":
+                    gaps = [b - a for a, b in zip(window, window[1:])]
+                    write_line(f"average rate: {rate:.3f}\n\tmin: {min(gaps):.4f}s max: {max(gaps):.4f}s "
+                               f"window: {len(window)} lost: {total_lost}")
+                else:
+                    write_line(f"{nbytes / args.window / 1024:.2f} KB/s from {len(window)} messages "
+                               f"(mean {nbytes / len(window):.0f} B)")
+        except KeyboardInterrupt:
+            pass
+        finally:
+            sub.undeclare()
     finally:
-        sub.undeclare()
         node.destroy()
     return 0
 
@@ -245,19 +403,22 @@ def _info(args: argparse.Namespace) -> int:
     node = cli_node(args, "topic")
     key = key_of(args.key)
     try:
-        entries = [e for e in _endpoints(node) if e.name == key]
+        everything = snapshot_until(node, lambda es: any(e.name == key for e in _topics(es)))
     finally:
         node.destroy()
+    entries = [e for e in _topics(everything) if e.name == key]
+    if not entries:
+        raise Failed(f"no publisher or subscriber on '{key}'{_hint(key, everything)}")
     types = sorted({e.type_name for e in entries if e.type_name != "*"})
     pubs = sorted(e.node for e in entries if e.kind == "pub")
     subs = sorted(e.node for e in entries if e.kind == "sub")
-    print(f"Type: {', '.join(types) or 'unknown'}")
-    print(f"Publisher count: {len(pubs)}")
+    write_line(f"Type: {', '.join(types) or '(any: raw subscribers only)'}")
+    write_line(f"Publisher count: {len(pubs)}")
     for n in pubs:
-        print(f"  {n}")
-    print(f"Subscription count: {len(subs)}")
+        write_line(f"  {n}")
+    write_line(f"Subscription count: {len(subs)}")
     for n in subs:
-        print(f"  {n}")
+        write_line(f"  {n}")
     return 0
 
 
@@ -265,11 +426,11 @@ def _type(args: argparse.Namespace) -> int:
     node = cli_node(args, "topic")
     key = key_of(args.key)
     try:
-        types = sorted({e.type_name for e in _endpoints(node) if e.name == key and e.type_name != "*"})
+        everything = snapshot_until(node, lambda es: any(e.name == key for e in _topics(es)))
     finally:
         node.destroy()
+    types = sorted({e.type_name for e in _topics(everything) if e.name == key and e.type_name != "*"})
     if not types:
-        print(f"zenroid topic type: no publisher or subscriber on '/{key}'", file=sys.stderr)
-        return 1
-    print("\n".join(types))
+        raise Failed(f"no publisher or subscriber on '{key}'{_hint(key, everything)}")
+    write_line("\n".join(types))
     return 0

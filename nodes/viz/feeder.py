@@ -16,17 +16,16 @@ import time
 from typing import Any
 
 import msgs
+from msgs.control_msgs import JointTrajectoryControllerState as ControllerState
+from msgs.gazebo_msgs import ModelStates
+from msgs.humanoid_msgs import HumanoidState
+from msgs.rosgraph_msgs import Clock
+from msgs.sensor_msgs import JointState
+from msgs.std_msgs import Header
+from msgs.trajectory_msgs import JointTrajectory
 from nodes.core import Node, run_node
-from nodes.core.paths import robot_path
+from nodes.share import robot_file
 from nodes.urdf.model import parse_urdf
-
-JointState = msgs.get_type("sensor_msgs/msg/JointState")
-Clock = msgs.get_type("rosgraph_msgs/msg/Clock")
-ModelStates = msgs.get_type("gazebo_msgs/msg/ModelStates")
-ControllerState = msgs.get_type("control_msgs/msg/JointTrajectoryControllerState")
-JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
-HumanoidState = msgs.get_type("humanoid_msgs/msg/HumanoidState")
-Header = msgs.get_type("std_msgs/msg/Header")
 
 PELVIS_HEIGHT = 0.91
 
@@ -52,7 +51,7 @@ class Feeder(Node):
     def __init__(self, **kwargs: Any) -> None:
         super().__init__("viz_feeder", **kwargs)
         self.robots = [r for r in self.declare_parameter("robots", ["humanoid"]) if r]
-        model = parse_urdf(robot_path(self.declare_parameter("robot_file", "humanoid")).read_text())
+        model = parse_urdf(robot_file(self.declare_parameter("robot_file", "humanoid")).read_text())
         self.joints = [j.name for j in model.movable_joints()]
         self.rate = self.declare_parameter("rate", 100.0, min_value=1.0, max_value=2000.0)
         self.period = self.declare_parameter("period", 2.0, min_value=0.1)

@@ -311,9 +311,9 @@ class Visualiser(Node):
         scene = robot.scene
         if scene is None:
             return
-        # Humble fills reference/feedback, older controllers desired/actual: take whichever is set.
-        commanded = msg.reference.positions or msg.desired.positions
-        actual = msg.feedback.positions or msg.actual.positions
+        # control_msgs (Jazzy) JointTrajectoryControllerState: reference (commanded) and feedback (measured).
+        commanded = msg.reference.positions
+        actual = msg.feedback.positions
         n = len(msg.joint_names)
         if len(commanded) != n or len(actual) != n:
             self.logger.warn_throttle(5.0, f"{robot.namespace}/{controller}/controller_state: {n} joints but "

@@ -22,9 +22,9 @@ from html import escape
 from pathlib import Path
 
 from nodes.core.session import loopback_endpoint, open_router
+from nodes.share import robot_file
 from nodes.viz.sink import free_port
 
-ROOT = Path(__file__).resolve().parents[2]
 BROWSERS = ("chromium", "chromium-browser", "google-chrome")
 
 
@@ -68,12 +68,12 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800", source
         return 3
     zenoh_port, web_port, grpc_port = free_port(), free_port(), free_port()
     router = open_router(zenoh_port)
-    env = dict(os.environ, ZENOH_CONNECT=loopback_endpoint(zenoh_port), PYTHONPATH=str(ROOT))
+    env = dict(os.environ, ZENOH_CONNECT=loopback_endpoint(zenoh_port))
     env.pop("ZENOH_CONFIG", None)
     procs: list[subprocess.Popen] = []
 
     def start(*argv: str) -> subprocess.Popen:
-        proc = subprocess.Popen([sys.executable, "-m", *argv], cwd=ROOT, env=env, stdout=subprocess.PIPE,
+        proc = subprocess.Popen([sys.executable, "-m", *argv], env=env, stdout=subprocess.PIPE,
                                 stderr=subprocess.STDOUT, text=True)
         procs.append(proc)
         return proc
@@ -88,7 +88,7 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800", source
             time.sleep(8.0)
         else:
             start("nodes.state_publisher", "--ns", "humanoid",
-                  "--param", f"robot_description_file:={ROOT / 'robots' / 'humanoid.urdf'}")
+                  "--param", f"robot_description_file:={robot_file('humanoid')}")
         viz = start("nodes.viz", "--serve", "--web-port", str(web_port), "--grpc-port", str(grpc_port))
         viewer_url = ""
         deadline = time.monotonic() + 60
@@ -138,7 +138,7 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800", source
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m nodes.viz.screenshot", description=__doc__.split("\n")[0])
-    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "viz.png")
+    parser.add_argument("--out", type=Path, default=Path("docs/viz.png"), help="where the picture goes (default: docs/viz.png under the current directory)")
     parser.add_argument("--settle", type=float, default=5.0, help="s of motion before the screenshot")
     parser.add_argument("--render", type=float, default=30.0, help="s the viewer gets to load and draw")
     parser.add_argument("--source", choices=("feeder", "humanoid"), default="feeder",

@@ -206,7 +206,7 @@ def test_invalid_trajectories_are_rejected_and_the_command_is_kept(lab):
                                                                 "name": ["joint1"], "position": [0.0]}))
     lab.node.session.put(f"{NS}/hardware/state", msgpack.packb({"step": 7, "stamp": {"sec": 0, "nanosec": 0},
                                                                 "name": ["joint1"], "position": ["up"]}))
-    wait_until(lambda: "position[] must hold numbers" in lab.log(), timeout=20, message="non-numeric state report")
+    wait_until(lambda: "position[0]: expected a number" in lab.log(), timeout=20, message="non-numeric state report")
     wait_until(lambda: "dropped a malformed hardware/state frame" in lab.log(), timeout=20,
                message="malformed frame report")
     lab.wait_sim(1.0)
@@ -320,10 +320,10 @@ def test_crashing_controller_is_deactivated_while_the_others_run(processes, rout
 controller_manager:
   ros__parameters:
     crasher:
-      type: nodes.control.testing:CrashingController
+      type: tests.support.control:CrashingController
 crasher:
   ros__parameters:
-    joints: [joint1]
+    joints: []  # claims nothing: joint1 belongs to the JTC (one joint, one controller)
     crash_after: 0.5
 """)
     lab = Lab(processes, router, activate=("joint_state_broadcaster", "joint_trajectory_controller", "crasher"),

@@ -62,6 +62,7 @@ class Scenario:
     def _collector(self, key: str) -> Callable[[zenoh.Sample], None]:
         def on_sample(sample: zenoh.Sample) -> None:
             msg = msgpack.unpackb(sample.payload.to_bytes())
+            msg["_received"] = time.monotonic()  # wall arrival time (pacing checks)
             with self.lock:
                 self.samples[key].append(msg)
         return on_sample
@@ -167,7 +168,7 @@ def test_controller_lab_joint1_reaches_1_57(tmp_path: Path, zenoh_port: int) -> 
 def test_joint_animation_atlas_follows_playback_without_gravity(tmp_path: Path, zenoh_port: int) -> None:
     scenario = Scenario(tmp_path, zenoh_port, "joint_animation.yaml")
     try:
-        scenario.connect("atlas/joint_states", "sim/model_states")
+        scenario.connect("atlas/joint_states", "sim/model_states", "sim/clock")
 
         def moved_through_the_wave() -> bool:
             q = positions(scenario.snapshot("atlas/joint_states"), "back_mby")
@@ -193,6 +194,12 @@ def test_joint_animation_atlas_follows_playback_without_gravity(tmp_path: Path, 
              if "atlas" in m["name"]]
         assert z and all(abs(v - 1.0) < 0.01 for v in z), "without gravity the pelvis stays where it was spawned"
         assert "ground_plane" not in {n for m in scenario.snapshot("sim/model_states") for n in m["name"]}
+        # kinematic playback is paced at real_time_factor 1 like the tutorial (unpaced it ran ~10x)
+        clock = scenario.snapshot("sim/clock")
+        sim_span = (clock[-1]["clock"]["sec"] + clock[-1]["clock"]["nanosec"] * 1e-9
+                    - clock[0]["clock"]["sec"] - clock[0]["clock"]["nanosec"] * 1e-9)
+        wall_span = clock[-1]["_received"] - clock[0]["_received"]
+        assert wall_span > 5 and sim_span / wall_span < 1.5, (sim_span, wall_span)
     finally:
         scenario.close()
 

@@ -181,11 +181,12 @@ def test_kinematic_playback_without_gravity_and_ground_moves_joints_exactly(proc
     with lock:
         sent = dict(commanded)
     checked = 0
-    # skip the hand-over: the first commands arrive while the simulator still free-runs (not yet lockstep)
+    # Pipelined lockstep: the answer to the state of step s acts during the period after s + 1, so the
+    # joints reported at step s + 2 are exactly it. (The first 100 states are the hand-over.)
     for step, _, positions in recorded[100:]:
-        previous = sent.get(step - 1)
-        if previous is not None and step - 1 in sent and step > 0:
-            assert positions == previous, f"step {step}: joints differ from the command of step {step - 1}"
+        previous = sent.get(step - 2)
+        if previous is not None and step > 1:
+            assert positions == previous, f"step {step}: joints differ from the command of step {step - 2}"
             checked += 1
     assert checked > 1000
     assert len({tuple(p) for _, _, p in recorded[-500:]}) > 100      # it really moved

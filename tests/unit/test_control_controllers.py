@@ -20,7 +20,7 @@ from nodes.control.controllers.joint_trajectory_controller import (
     SUCCESSFUL,
 )
 from nodes.control.manager import BEST_EFFORT, STRICT, ControllerManager, ManagerError
-from nodes.control.testing import FakeContext, FirstOrderPlant, ListLogger, make_hardware
+from tests.support.control import FakeContext, FirstOrderPlant, ListLogger, make_hardware
 
 ROOT = Path(__file__).resolve().parents[2]
 JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
@@ -35,8 +35,8 @@ class Rig:
     """Manager + fake contexts + first-order plant, stepped on a simulated clock."""
 
     def __init__(self, config_text: str, joints: list[str], command_interfaces=("position",), rate: int = 100,
-                 tau: float = 0.02) -> None:
-        self.hw = make_hardware(joints, command_interfaces)
+                 tau: float = 0.02, limits: dict | None = None) -> None:
+        self.hw = make_hardware(joints, command_interfaces, limits)
         self.contexts: dict[str, FakeContext] = {}
         self.logger = ListLogger()
         self.manager = ControllerManager(self.hw, parse_config(yaml.safe_load(config_text)), rate,
@@ -401,6 +401,26 @@ def test_interface_conflict_is_refused_with_the_reason():
     assert rig.manager.claims["joint1/position"] == "joint_group_position_controller"
 
 
+def test_two_controllers_cannot_command_one_joint_through_different_interfaces():
+    """ros2_control's mode-switch check: joint1 commanded by position AND velocity is refused, owner named."""
+    rig = lab_rig()  # the JTC holds joint1/position
+    rig.spawn("pid_controller", activate=False)  # velocity out on joint1
+    for strictness in (STRICT, BEST_EFFORT):
+        ok, message = rig.manager.switch(["pid_controller"], [], strictness)
+        assert not ok, message
+        assert "joint1/velocity" in message and "joint1/position" in message
+        assert "'joint_trajectory_controller'" in message
+    assert rig.manager.controllers["pid_controller"].state == "inactive"
+    assert rig.manager.claims == {"joint1/position": "joint_trajectory_controller"}
+    assert "interface conflict" in rig.logger.text("warn")
+    rig.step(0.1)
+    assert rig.sent[-1][1] == ["position"]  # the velocity controller never reached the hardware
+    # Handing the joint over in one switch is allowed, as in ros2_control.
+    ok, message = rig.manager.switch(["pid_controller"], ["joint_trajectory_controller"], STRICT)
+    assert ok, message
+    assert rig.manager.claims == {"joint1/velocity": "pid_controller"}
+
+
 def test_crashing_controller_is_deactivated_while_others_keep_running():
     class Crashing(Controller):
         type_name = "test/Crashing"
@@ -533,3 +553,83 @@ jtc: {ros__parameters: {joints: [a], command_interfaces: [effort], gains: {a: {p
     rig.manager.load("jtc")
     with pytest.raises(ManagerError, match="need gains"):
         rig.manager.configure("jtc")
+
+
+# --- joint limits (from the hardware: URDF + <ros2_control>) -------------------------------------------
+JOINT1_LIMITS = {"joint1": {"min_position": -1.0, "max_position": 1.0, "max_velocity": 2.0, "max_effort": 50.0}}
+
+
+def limited_rig(**kwargs) -> Rig:
+    rig = Rig(LAB_YAML, ["joint1"], ("position", "velocity"), limits=JOINT1_LIMITS, **kwargs)
+    rig.spawn("joint_state_broadcaster", "joint_trajectory_controller")
+    return rig
+
+
+def test_jtc_refuses_a_position_outside_the_joint_limits_naming_joint_value_and_limit():
+    rig = limited_rig()
+    rig.step(0.1)
+    before = rig.sent[-1]
+    ok, why, _ = rig.send_goal("joint_trajectory_controller",
+                               {"trajectory": trajectory(["joint1"], [(1.0, [0.5]), (2.0, [1.5])])})
+    assert not ok
+    assert "joint 'joint1' 1.5 rad is outside its upper limit 1" in why and "points[1]" in why
+    rig.publish("joint_trajectory_controller/joint_trajectory",
+                msgs.from_dict(JointTrajectory, trajectory(["joint1"], [(1.0, [-1.2])])))
+    assert "joint 'joint1' -1.2 rad is outside its lower limit -1" in rig.logger.text("error")
+    rig.step(0.5)
+    assert rig.sent[-1] == before                     # nothing was sent for either
+
+
+@pytest.mark.parametrize("traj, reason", [
+    (trajectory(["joint1"], [(2**31 - 1, [0.5])]), "longer than the 3600 s allowed"),
+    (trajectory(["joint1"], [(1.0, [0.5])], stamp=68 * 365 * 86400.0), "starts more than 3600 s after now"),
+    ({**trajectory(["joint1"], [(1.0, [0.5])]), "header": {"stamp": {"sec": -5, "nanosec": 0}}},
+     "header.stamp is negative"),
+])
+def test_jtc_refuses_absurd_durations_and_stamps(traj, reason):
+    rig = limited_rig()
+    rig.step(0.1)
+    ok, why, _ = rig.send_goal("joint_trajectory_controller", {"trajectory": traj})
+    assert not ok and reason in why
+
+
+def test_jtc_refuses_too_many_points_before_looking_at_them():
+    rig = limited_rig()
+    rig.controller("joint_trajectory_controller").max_points = 1000
+    ok, why, _ = rig.send_goal("joint_trajectory_controller",
+                               {"trajectory": trajectory(["joint1"], [(0.01 * (i + 1), [0.0]) for i in range(1001)])})
+    assert not ok and "1001 points, more than the 1000 allowed" in why
+    from nodes.control.trajectory import validate_trajectory
+    junk = [{"positions": ["not even a number"]}] * 100_001      # refused on the count, never inspected
+    with pytest.raises(ValueError, match="100001 points, more than the 100000 allowed"):
+        validate_trajectory({"joint_names": ["joint1"], "points": junk}, ["joint1"], now=0.0)
+
+
+def test_jtc_slows_a_too_fast_trajectory_down_to_the_velocity_limit():
+    rig = limited_rig(tau=0.005)
+    rig.step(0.1)
+    ok, why, handle = rig.send_goal("joint_trajectory_controller",
+                                    {"trajectory": trajectory(["joint1"], [(0.1, [0.8])])})   # 8 rad/s asked
+    assert ok, why
+    rig.step(0.2)
+    assert "slowed down 4x: joint 'joint1' would need 8 rad/s, its velocity limit is 2 rad/s" in rig.logger.text("warn")
+    rig.step(0.5)
+    assert handle.status == SUCCEEDED
+    commands = [c[2][0] for c in rig.sent if c[0]]
+    steps = [abs(b - a) / rig.dt for a, b in zip(commands, commands[1:])]
+    assert max(steps) <= 2.0 + 1e-9                   # never commanded faster than the limit
+    assert commands[-1] == pytest.approx(0.8)
+
+
+def test_jtc_output_limiter_slows_a_jump_that_no_timing_can_slow():
+    rig = limited_rig(tau=0.005)
+    rig.step(0.1)
+    # a first point at time 0 is a jump: the limiter moves the command at the velocity limit instead
+    rig.publish("joint_trajectory_controller/joint_trajectory",
+                msgs.from_dict(JointTrajectory, trajectory(["joint1"], [(0.0, [0.6])])))
+    rig.step(0.15)
+    commands = [c[2][0] for c in rig.sent if c[0]]
+    assert max(abs(b - a) / rig.dt for a, b in zip(commands, commands[1:])) <= 2.0 + 1e-9
+    assert commands[-1] == pytest.approx(0.3, abs=0.03)
+    rig.step(0.3)
+    assert rig.sent[-1][2][0] == pytest.approx(0.6)

@@ -148,3 +148,36 @@ def test_interpolation_passes_through_every_point_and_is_continuous(with_velocit
                 assert np.allclose(left.velocities, right.velocities, atol=1e-2)  # and velocity
 
     check()
+
+
+# --- limits -----------------------------------------------------------------------------------------------
+def test_speed_ratio_counts_the_start_segment_every_segment_and_explicit_velocities():
+    from nodes.control.trajectory import JointLimits
+    limits = JointLimits(np.array([-1.0, -1.0]), np.array([1.0, 1.0]), np.array([2.0, np.inf]))
+    t = validate_trajectory(traj([point(0.1, [0.8, 5.0])]), JOINTS, now=0.0)
+    t.set_start_state(np.zeros(2), np.zeros(2))
+    ratio, worst, speed = t.speed_ratio(limits.velocity)
+    assert (ratio, worst, speed) == (pytest.approx(4.0), 0, pytest.approx(8.0))    # b has no limit
+    t.scale_time(ratio)
+    assert t.speed_ratio(limits.velocity)[0] == pytest.approx(1.0)
+    assert t.sample(t.start_time + 0.4).positions[0] == pytest.approx(0.8)
+    fast_velocity = validate_trajectory(traj([point(1.0, [0.1, 0.0], [3.0, 0.0])]), JOINTS, now=0.0)
+    fast_velocity.set_start_state(np.zeros(2), np.zeros(2))
+    assert fast_velocity.speed_ratio(limits.velocity)[0] == pytest.approx(1.5)
+    # a first point at time 0 is a jump (the controller's output limiter handles it), not a segment
+    jump = validate_trajectory(traj([point(0.0, [0.9, 0.0]), point(1.0, [1.0, 0.0])]), JOINTS, now=0.0)
+    jump.set_start_state(np.zeros(2), np.zeros(2))
+    assert jump.speed_ratio(limits.velocity)[0] == pytest.approx(0.05)
+
+
+def test_position_limits_and_hardware_zero_meaning_none():
+    from nodes.control.interfaces import JointInfo
+    from nodes.control.trajectory import JointLimits
+    limits = JointLimits.from_hardware(JOINTS, {"a": JointInfo("a", min_position=-0.5, max_position=0.5,
+                                                               max_velocity=0.0),
+                                                "b": JointInfo("b", min_position=0.0, max_position=0.0)})
+    assert list(limits.upper) == [0.5, math.inf] and list(limits.velocity) == [math.inf, math.inf]
+    validate_trajectory(traj([point(1.0, [0.5, 99.0])]), JOINTS, now=0.0, limits=limits)   # at the limit: fine
+    with pytest.raises(TrajectoryError, match=r"points\[0\]\.positions\[0\]: joint 'a' -0.6 rad is outside its "
+                                              r"lower limit -0.5 rad"):
+        validate_trajectory(traj([point(1.0, [-0.6, 0.0])]), JOINTS, now=0.0, limits=limits)

@@ -35,20 +35,20 @@ launch:
   - arg: {name: gui, default: "false"}
   - node:
       name: talker
-      module: launch.dummy_node
+      module: tests.support.dummy_node
       namespace: humanoid
       params: {x: $(var x), mode: $(var mode), gains: [1, "$(var x)"], label: "x=$(var x)"}
       remap: {joint_states: /other/joint_states}
       args: [--exit-after, "1"]
   - arg: {name: commander, default: joint_commander}
-  - node: {name: viewer, module: launch.dummy_node, if: $(var gui)}
-  - node: {name: commander, module: launch.dummy_node, unless: "$(var commander) == none"}
-  - node: {name: tool, exec: python, args: [-m, launch.dummy_node], if: "$(var commander) != joint_commander"}
-  - node: {name: headless, module: launch.dummy_node, unless: $(var gui)}
+  - node: {name: viewer, module: tests.support.dummy_node, if: $(var gui)}
+  - node: {name: commander, module: tests.support.dummy_node, unless: "$(var commander) == none"}
+  - node: {name: tool, exec: python, args: [-m, tests.support.dummy_node], if: "$(var commander) != joint_commander"}
+  - node: {name: headless, module: tests.support.dummy_node, unless: $(var gui)}
   - group:
       namespace: inner
       actions:
-        - node: {name: grouped, module: launch.dummy_node, namespace: deeper, remap: ["a:=b"]}
+        - node: {name: grouped, module: tests.support.dummy_node, namespace: deeper, remap: ["a:=b"]}
 """
 
 
@@ -64,13 +64,13 @@ def test_good_file_resolves_with_typed_params_namespaces_and_conditions(tmp_path
     assert plan.nodes[3].remaps == [("a", "b")]
     assert plan.args == {"x": "0.5", "mode": "lockstep", "gui": "false", "commander": "joint_commander"}
     command = talker.command("python", Path("/tmp/p.yaml"))
-    assert command[:5] == ["python", "-m", "launch.dummy_node", "--name", "talker"]
+    assert command[:5] == ["python", "-m", "tests.support.dummy_node", "--name", "talker"]
     assert "--ns" in command and command[command.index("--ns") + 1] == "humanoid"
     assert command[-2:] == ["--exit-after", "1"]
     gui_plan = resolve(write(tmp_path, GOOD), {"gui": "true", "commander": "none"})
     assert [n.name for n in gui_plan.nodes] == ["talker", "viewer", "tool", "grouped"]
     tool = gui_plan.nodes[2]
-    assert tool.command("ignored", None) == [sys.executable, "-m", "launch.dummy_node"]
+    assert tool.command("ignored", None) == [sys.executable, "-m", "tests.support.dummy_node"]
 
 
 @pytest.mark.parametrize(
@@ -78,43 +78,43 @@ def test_good_file_resolves_with_typed_params_namespaces_and_conditions(tmp_path
     [
         ("launch: []\nextra: 1\n", 2, "unknown key 'extra'"),
         ("launch:\n  - nod: {name: a}\n", 2, "unknown action 'nod'"),
-        ("launch:\n  - node:\n      name: a\n      module: launch.dummy_node\n      respawnn: true\n", 5,
+        ("launch:\n  - node:\n      name: a\n      module: tests.support.dummy_node\n      respawnn: true\n", 5,
          "unknown key 'respawnn' in node"),
         ("launch:\n  - arg: {name: x}\n", 2, "missing required argument 'x'"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node, args: [\"$(bogus 1)\"]}\n", 2,
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node, args: [\"$(bogus 1)\"]}\n", 2,
          "unknown substitution '$(bogus)'"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node, args: [\"$(var x\"]}\n", 2, "unterminated"),
-        ("launch:\n  - arg: {name: y, default: '1'}\n  - node:\n      name: a\n      module: launch.dummy_node\n"
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node, args: [\"$(var x\"]}\n", 2, "unterminated"),
+        ("launch:\n  - arg: {name: y, default: '1'}\n  - node:\n      name: a\n      module: tests.support.dummy_node\n"
          "      args: [\"$(var x)\"]\n", 6, "no launch argument 'x' is declared"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node, args: [\"$(env ZENROID_SURELY_UNSET_VAR)\"]}\n",
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node, args: [\"$(env ZENROID_SURELY_UNSET_VAR)\"]}\n",
          2, "is not set"),
         ("launch:\n  - include: {file: missing.yaml}\n", 2, "included launch file not found: missing.yaml"),
-        ("launch:\n  - node:\n      name: a\n      module: launch.dummy_node\n      param_file: nope.yaml\n", 5,
+        ("launch:\n  - node:\n      name: a\n      module: tests.support.dummy_node\n      param_file: nope.yaml\n", 5,
          "parameter file not found: nope.yaml"),
         ("launch:\n  - node: {name: a, module: nodes.no_such_module_here}\n", 2, "module 'nodes.no_such_module_here'"),
         ("launch:\n  - node: {name: a, exec: zenroid-no-such-program}\n", 2, "program 'zenroid-no-such-program'"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node, exec: ls}\n", 2, "exactly one of 'module'"),
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node, exec: ls}\n", 2, "exactly one of 'module'"),
         ("launch:\n  - node:\n      name: a\n      name: b\n", 4, "duplicate key 'name'"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node\n", 3, "invalid YAML"),
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node\n", 3, "invalid YAML"),
         ("launch:\n  - arg: {name: m, default: fast, choices: [realtime, lockstep]}\n", 2, "must be one of"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node}\n  - node: {name: a, module: launch.dummy_node}\n",
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node}\n  - node: {name: a, module: tests.support.dummy_node}\n",
          3, "duplicate node name 'a'"),
-        ("launch:\n  - node:\n      name: a\n      module: launch.dummy_node\n      respawn: maybe\n", 5,
+        ("launch:\n  - node:\n      name: a\n      module: tests.support.dummy_node\n      respawn: maybe\n", 5,
          "must be true or false"),
-        ("launch:\n  - node:\n      name: a\n      module: launch.dummy_node\n      respawn_delay: soon\n", 5,
+        ("launch:\n  - node:\n      name: a\n      module: tests.support.dummy_node\n      respawn_delay: soon\n", 5,
          "respawn_delay' must be a number"),
-        ("launch:\n  - node:\n      name: a\n      module: launch.dummy_node\n      respawn_delay: -1\n", 5,
+        ("launch:\n  - node:\n      name: a\n      module: tests.support.dummy_node\n      respawn_delay: -1\n", 5,
          "finite number >= 0"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node}\n  - on_exit: {node: b}\n", 3,
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node}\n  - on_exit: {node: b}\n", 3,
          "on_exit watches node 'b'"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node, wait_for: [ghost]}\n", 2, "waits for 'ghost'"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node, output: loud}\n", 2, "'screen' or 'log'"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node, params: [1, 2]}\n", 2, "'params' must be a mapping"),
-        ("launch:\n  - node: {name: 'a b', module: launch.dummy_node}\n", 2, "node name 'a b'"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node, namespace: 'x y'}\n", 2, "namespace 'x y'"),
-        ("launch:\n  - node: {name: a, module: launch.dummy_node, if: perhaps}\n", 2, "'if' must be true or false"),
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node, wait_for: [ghost]}\n", 2, "waits for 'ghost'"),
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node, output: loud}\n", 2, "'screen' or 'log'"),
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node, params: [1, 2]}\n", 2, "'params' must be a mapping"),
+        ("launch:\n  - node: {name: 'a b', module: tests.support.dummy_node}\n", 2, "node name 'a b'"),
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node, namespace: 'x y'}\n", 2, "namespace 'x y'"),
+        ("launch:\n  - node: {name: a, module: tests.support.dummy_node, if: perhaps}\n", 2, "'if' must be true or false"),
         ("launch:\n  - node: !!python/object:os.system {name: a}\n", 2, "invalid YAML"),
-        ("launch:\n  - node:\n      module: launch.dummy_node\n", 2, "node needs a 'name'"),
+        ("launch:\n  - node:\n      module: tests.support.dummy_node\n", 2, "node needs a 'name'"),
         ("launch: {node: a}\n", 1, "'launch' must be a list"),
         ("- node: {name: a}\n", 1, "a launch file is a mapping"),
     ],
@@ -138,7 +138,7 @@ def test_include_passes_args_and_inherits_matching_parent_values(tmp_path: Path)
         launch:
           - arg: {name: robot}
           - arg: {name: zenoh_port, default: "1"}
-          - node: {name: "$(var robot)_node", module: launch.dummy_node, params: {port: $(var zenoh_port)}}
+          - node: {name: "$(var robot)_node", module: tests.support.dummy_node, params: {port: $(var zenoh_port)}}
         """, name="child.yaml")
     parent = write(tmp_path, """
         launch:
@@ -155,7 +155,7 @@ def test_include_passes_args_and_inherits_matching_parent_values(tmp_path: Path)
 
 
 def test_include_errors_point_into_the_included_file(tmp_path: Path) -> None:
-    child = write(tmp_path, "launch:\n  - node: {name: a, module: launch.dummy_node, bad_key: 1}\n", name="child.yaml")
+    child = write(tmp_path, "launch:\n  - node: {name: a, module: tests.support.dummy_node, bad_key: 1}\n", name="child.yaml")
     parent = write(tmp_path, "launch:\n  - include: {file: child.yaml}\n")
     error = error_of(parent)
     assert error.source == Source(child, 2)
@@ -192,7 +192,7 @@ def test_substitutions() -> None:
 
 
 def test_robot_substitution_uses_robots_dir(tmp_path: Path) -> None:
-    path = write(tmp_path, "launch:\n  - node: {name: a, module: launch.dummy_node, args: [\"$(robot no_such_bot)\"]}\n")
+    path = write(tmp_path, "launch:\n  - node: {name: a, module: tests.support.dummy_node, args: [\"$(robot no_such_bot)\"]}\n")
     error = error_of(path)
     assert error.source.line == 2 and "no_such_bot" in str(error)
 
@@ -209,7 +209,7 @@ def run_cli(*argv: str) -> subprocess.CompletedProcess:
 
 
 def test_cli_bad_file_exits_2_with_file_line_and_starts_nothing(tmp_path: Path) -> None:
-    path = write(tmp_path, "launch:\n  - node: {name: a, module: launch.dummy_node, typo: 1}\n")
+    path = write(tmp_path, "launch:\n  - node: {name: a, module: tests.support.dummy_node, typo: 1}\n")
     result = run_cli(str(path))
     assert result.returncode == 2
     assert f"{path}:2: unknown key 'typo'" in result.stderr
@@ -281,7 +281,7 @@ def test_zenroid_launch_verb_is_the_same_launcher(tmp_path: Path) -> None:
                            cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert shown.returncode == 0, shown.stderr
     assert "'zenoh_port':" in shown.stdout and "'commander':" in shown.stdout
-    path = write(tmp_path, "launch:\n  - node: {name: a, module: launch.dummy_node, if: maybe}\n")
+    path = write(tmp_path, "launch:\n  - node: {name: a, module: tests.support.dummy_node, if: maybe}\n")
     bad = subprocess.run([sys.executable, "-m", "nodes.tools.cli", "launch", str(path)], cwd=ROOT,
                          capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2 and f"{path}:2:" in bad.stderr

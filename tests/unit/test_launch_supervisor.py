@@ -71,9 +71,9 @@ launch:
 
 def test_respawn_after_kill_9_and_sigint_ends_everything(tmp_path: Path, zenoh_port: int) -> None:
     launch = Launch(tmp_path, HEADER + """
-  - node: {name: worker, module: launch.dummy_node, namespace: demo, respawn: true, respawn_delay: 0.3,
+  - node: {name: worker, module: tests.support.dummy_node, namespace: demo, respawn: true, respawn_delay: 0.3,
            params: {rate: 5.0}, args: [--child]}
-  - node: {name: steady, module: launch.dummy_node, args: [--detached-child]}
+  - node: {name: steady, module: tests.support.dummy_node, args: [--detached-child]}
 """, zenoh_port)
     try:
         launch.wait_output("[worker] ready demo/worker")
@@ -100,11 +100,59 @@ def test_respawn_after_kill_9_and_sigint_ends_everything(tmp_path: Path, zenoh_p
         launch.stop()
 
 
+def test_a_node_that_stops_answering_is_restarted_and_one_that_never_served_is_left_alone(
+        tmp_path: Path, zenoh_port: int) -> None:
+    """Health: a respawnable node that served its get_parameters probe and then stopped answering (hung
+    loop, lost link) is killed and respawned; a plain program that never served is not touched."""
+    launch = Launch(tmp_path, HEADER + """
+  - node: {name: hangs, module: tests.support.dummy_node, respawn: true, respawn_delay: 0.2, respawn_max: 1,
+           health_timeout: 2.0, args: [--serve-for, "2.0"]}
+  - node: {name: mute, module: tests.support.dummy_node, respawn: true, health_timeout: 1.0}
+""", zenoh_port)
+    try:
+        launch.wait_output("[hangs] ready hangs")
+        launch.wait_output("'hangs' has not answered for", 40)
+        launch.wait_output("started 'hangs' [pid", 10)
+        wait_until(lambda: len(launch.pids("hangs")) == 2, 20, 0.05, "hangs respawned")
+        out = launch.output()
+        assert "killing it to respawn it" in out and "'hangs' [pid" in out and "exited with signal 9" in out
+        assert len(launch.pids("mute")) == 1 and "'mute' has not answered" not in out
+    finally:
+        assert launch.stop() == 0
+
+
+def test_respawn_count_is_reset_after_a_long_run(monkeypatch) -> None:
+    """respawn_max caps crash loops: a node that ran RESPAWN_RESET_AFTER_S before it died starts afresh."""
+    import io
+
+    from launch import supervisor as sup
+    from launch.resolve import LaunchPlan, NodeSpec
+
+    spec = NodeSpec(name="n", namespace="", module=None, executable="/bin/true", args=[], params={},
+                    param_files=[], remaps=[], env={}, respawn=True, respawn_delay=0.0, respawn_max=2,
+                    required=False, output="screen", wait_for=[], wait_timeout=1.0, source="test")
+    supervisor = sup.Supervisor(LaunchPlan(Path("x.yaml"), {}, [spec]), Path("."), {}, None, out=io.StringIO())
+    managed = supervisor.nodes[0]
+    now = [1000.0]
+    monkeypatch.setattr(sup.time, "monotonic", lambda: now[0])
+    for expected in (1, 2):  # quick crashes count up ...
+        managed.started_at, managed.exit_code = now[0] - 1.0, 1
+        supervisor._on_exit(managed)
+        assert managed.restarts == expected and managed.state == "respawn_pending"
+    managed.started_at = now[0] - 1.0
+    supervisor._on_exit(managed)  # ... to the cap
+    assert "reached its restart limit (2)" in supervisor.out.getvalue()
+    managed.restarts, managed.state = 2, "running"
+    managed.started_at = now[0] - sup.RESPAWN_RESET_AFTER_S - 1.0  # ran long: a fresh count
+    supervisor._on_exit(managed)
+    assert managed.restarts == 1 and managed.state == "respawn_pending"
+
+
 def test_required_node_failure_ends_launch_with_nonzero_status(tmp_path: Path, zenoh_port: int) -> None:
     launch = Launch(tmp_path, HEADER + """
-  - node: {name: brittle, module: launch.dummy_node, required: true, respawn: true, respawn_delay: 0.1,
+  - node: {name: brittle, module: tests.support.dummy_node, required: true, respawn: true, respawn_delay: 0.1,
            respawn_max: 1, args: [--exit-after, "1", --exit-code, "4"]}
-  - node: {name: bystander, module: launch.dummy_node, output: log}
+  - node: {name: bystander, module: tests.support.dummy_node, output: log}
   - on_exit: {node: brittle, log: "brittle has gone"}
   - on_shutdown: {log: "launch over"}
 """, zenoh_port)
@@ -125,10 +173,10 @@ def test_required_node_failure_ends_launch_with_nonzero_status(tmp_path: Path, z
 
 def test_wait_for_starts_nodes_in_readiness_order(tmp_path: Path, zenoh_port: int) -> None:
     launch = Launch(tmp_path, HEADER + """
-  - node: {name: slow_server, module: launch.dummy_node, namespace: ns, args: [--start-delay, "1.5"]}
-  - node: {name: client, module: launch.dummy_node, wait_for: [slow_server]}
-  - node: {name: one_shot, module: launch.dummy_node, args: [--exit-after, "0.5"]}
-  - node: {name: after_one_shot, module: launch.dummy_node, wait_for: [one_shot, client]}
+  - node: {name: slow_server, module: tests.support.dummy_node, namespace: ns, args: [--start-delay, "1.5"]}
+  - node: {name: client, module: tests.support.dummy_node, wait_for: [slow_server]}
+  - node: {name: one_shot, module: tests.support.dummy_node, args: [--exit-after, "0.5"]}
+  - node: {name: after_one_shot, module: tests.support.dummy_node, wait_for: [one_shot, client]}
 """, zenoh_port)
     try:
         launch.wait_output("[after_one_shot] ready after_one_shot", 40)
@@ -142,8 +190,8 @@ def test_wait_for_starts_nodes_in_readiness_order(tmp_path: Path, zenoh_port: in
 
 def test_launcher_killed_with_sigkill_leaves_no_orphans(tmp_path: Path, zenoh_port: int) -> None:
     launch = Launch(tmp_path, HEADER + """
-  - node: {name: a, module: launch.dummy_node, args: [--child]}
-  - node: {name: b, module: launch.dummy_node}
+  - node: {name: a, module: tests.support.dummy_node, args: [--child]}
+  - node: {name: b, module: tests.support.dummy_node}
 """, zenoh_port)
     try:
         launch.wait_output("[a] ready a")
@@ -164,7 +212,7 @@ def test_launcher_killed_with_sigkill_leaves_no_orphans(tmp_path: Path, zenoh_po
 @pytest.mark.slow
 def test_stubborn_node_gets_sigterm_then_sigkill(tmp_path: Path, zenoh_port: int) -> None:
     launch = Launch(tmp_path, HEADER + """
-  - node: {name: stubborn, module: launch.dummy_node, args: [--ignore-sigint]}
+  - node: {name: stubborn, module: tests.support.dummy_node, args: [--ignore-sigint]}
 """, zenoh_port)
     try:
         launch.wait_output("[stubborn] ready stubborn")
@@ -179,7 +227,7 @@ def test_stubborn_node_gets_sigterm_then_sigkill(tmp_path: Path, zenoh_port: int
 
 
 def test_port_in_use_is_a_clear_error(tmp_path: Path, zenoh_port: int, router: str) -> None:
-    launch = Launch(tmp_path, HEADER + "  - node: {name: a, module: launch.dummy_node}\n", zenoh_port)
+    launch = Launch(tmp_path, HEADER + "  - node: {name: a, module: tests.support.dummy_node}\n", zenoh_port)
     try:
         assert launch.proc.wait(timeout=30) == 1
         assert f"cannot host the Zenoh router on {router}" in launch.output()
@@ -193,7 +241,7 @@ def test_external_router_from_environment(tmp_path: Path, zenoh_port: int, route
     from nodes.core import graph
 
     file = tmp_path / "test.yaml"
-    file.write_text("launch:\n  - node: {name: guest, module: launch.dummy_node, namespace: ext}\n")
+    file.write_text("launch:\n  - node: {name: guest, module: tests.support.dummy_node, namespace: ext}\n")
     env = dict(os.environ, ZENOH_CONNECT=router)
     env.pop("ZENOH_CONFIG", None)
     out_path = tmp_path / "launch.out"

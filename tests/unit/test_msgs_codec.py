@@ -146,6 +146,24 @@ def test_constants_and_imports() -> None:
     assert msgs.HumanoidState is msgs.get_type("humanoid_msgs/msg/HumanoidState")
 
 
+def test_every_message_package_is_a_module() -> None:
+    """``msgs.<pkg>`` modules are made from the definitions (msgs/packages.py), not written by hand."""
+    import importlib
+
+    for package in msgs.package_names():
+        module = importlib.import_module(f"msgs.{package}")
+        assert msgs.__dict__.get(package, module) is module and getattr(msgs, package) is module
+    from msgs.sensor_msgs import JointState
+
+    assert JointState is msgs.get_type("sensor_msgs/msg/JointState")
+    with pytest.raises(ImportError, match="NoSuchType"):
+        from msgs.sensor_msgs import NoSuchType  # noqa: F401
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("msgs.no_such_msgs")
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("msgs.sensor_msgs.deeper")
+
+
 def test_user_message_package(tmp_path) -> None:
     pkg = tmp_path / "my_robot_msgs" / "msg"
     pkg.mkdir(parents=True)
@@ -156,6 +174,9 @@ def test_user_message_package(tmp_path) -> None:
     g = Grasp(hand="left")
     assert g.force == 2.5 and g.finger_positions == [0.0] * 5
     assert decode(Grasp, encode(g)) == g
+    from msgs.my_robot_msgs import GraspCommand  # a user package is importable like the shipped ones
+
+    assert GraspCommand is Grasp
     with pytest.raises(DecodeError, match="finger_positions: expected exactly 5"):
         decode(Grasp, packed({"finger_positions": [1.0]}))
 

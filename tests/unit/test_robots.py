@@ -13,7 +13,8 @@ from nodes.kinematics import KinematicTree
 from nodes.urdf import load_robot_description, parse_urdf, parse_xacro_args, validate
 
 ROBOTS = Path(__file__).resolve().parents[2] / "robots"
-ALL = ["humanoid", "humanoid_simplified", "simple_2dof_arm", "lab_robot", "atlas", "simple_robot"]
+ALL = ["humanoid", "humanoid_simplified", "simple_2dof_arm", "lab_robot", "atlas", "simple_robot", "humanoid_20dof"]
+XACRO = {"simple_robot", "humanoid_20dof"}
 FIXED_BASE = {"humanoid_simplified", "simple_2dof_arm", "lab_robot", "simple_robot"}
 LEG_JOINTS = [
     f"{side}_{j}"
@@ -26,7 +27,7 @@ ATLAS_JOINTS = ["back_lbz", "back_mby", "back_ubx", "neck_ay"] + [
 
 
 def robot_file(name: str) -> Path:
-    return ROBOTS / (f"{name}.urdf.xacro" if name == "simple_robot" else f"{name}.urdf")
+    return ROBOTS / (f"{name}.urdf.xacro" if name in XACRO else f"{name}.urdf")
 
 
 def urdf_on_disk(name: str, tmp_path: Path) -> Path:
@@ -180,6 +181,46 @@ def test_generated_urdfs_are_up_to_date_with_the_generator(tmp_path: Path, monke
     spec.loader.exec_module(module)
     for name, build in module.BUILDERS.items():
         assert build().xml() == (ROBOTS / f"{name}.urdf").read_text(), f"{name}.urdf is stale: rerun the generator"
+    for file, build_text in module.XACRO_BUILDERS.items():
+        assert build_text() == (ROBOTS / file).read_text(), f"{file} is stale: rerun the generator"
+
+
+def _joint_table(m) -> dict:
+    return {j.name: (j.type, j.parent, j.child, j.lower, j.upper, j.velocity, j.effort) for j in m.joints.values()}
+
+
+def test_humanoid_xacro_without_arguments_is_humanoid_urdf() -> None:
+    plain, expanded = model("humanoid"), parse_urdf(load_robot_description(ROBOTS / "humanoid.urdf.xacro"))
+    assert expanded.name == plain.name == "humanoid"
+    assert _joint_table(expanded) == _joint_table(plain)
+    assert {n: (link.inertial.mass, link.inertial.inertia.tolist()) for n, link in expanded.links.items()} == \
+        {n: (link.inertial.mass, link.inertial.inertia.tolist()) for n, link in plain.links.items()}
+    assert [(c.name, c.command_interfaces, c.state_interfaces) for c in expanded.ros2_control] == \
+        [(c.name, c.command_interfaces, c.state_interfaces) for c in plain.ros2_control]
+
+
+def test_humanoid_20dof_variant_locks_waist_and_neck_and_limits_every_joint() -> None:
+    """Seed 000's exercise: 20 position-controlled joints, 2 rad/s and 50 Nm in <limit> and <ros2_control>."""
+    m = parse_urdf(load_robot_description(ROBOTS / "humanoid_20dof.urdf.xacro"))
+    assert m.name == "humanoid_20dof"
+    movable = {j.name for j in m.movable_joints()}
+    assert movable == set(LEG_JOINTS) | {f"{s}_{j}" for s in ("left", "right")
+                                         for j in ("shoulder_pitch", "shoulder_roll", "shoulder_yaw", "elbow")}
+    assert m.joints["waist_yaw"].type == m.joints["neck_pitch"].type == "fixed"
+    assert all((j.velocity, j.effort) == (2.0, 50.0) for j in m.movable_joints())
+    assert {c.name for c in m.ros2_control} == movable
+    for c in m.ros2_control:
+        assert c.command_interfaces == ["position", "velocity", "effort"]
+        assert c.bounds["velocity"] == (-2.0, 2.0) and c.bounds["effort"] == (-50.0, 50.0)
+    assert [str(i) for i in validate(m)] == []
+    assert m.total_mass() == pytest.approx(model("humanoid").total_mass())
+    # the command line still overrides the variant's defaults; a wrong dof is refused by name
+    other = parse_urdf(load_robot_description(ROBOTS / "humanoid_20dof.urdf.xacro",
+                                              xacro_args=parse_xacro_args(["effort_limit:=80", "dof:=22"])))
+    assert len(other.movable_joints()) == 22 and {j.effort for j in other.movable_joints()} == {80.0}
+    from nodes.urdf import UrdfError
+    with pytest.raises(UrdfError, match="dof must be 22 or 20, got 21"):
+        load_robot_description(ROBOTS / "humanoid.urdf.xacro", xacro_args={"dof": "21"})
 
 
 def test_humanoid_centre_of_mass_is_over_the_feet_standing_and_squatting(tmp_path: Path) -> None:

@@ -6,8 +6,9 @@ import threading
 
 import pytest
 
+from msgs import time_map
 from nodes.sim import stepping
-from nodes.sim.robot_link import Command, time_map
+from nodes.sim.robot_link import Command
 from nodes.sim.stepping import CommandInbox, Pacer
 
 

@@ -136,7 +136,10 @@ def test_hardware_command_parsing_names_the_field():
     command = parse_command(good)
     assert (command.step, command.name, command.value) == (3, ["a"], [0.5])
     # NaN passes the parser: it is rejected per joint (and logged) when applied
-    assert math.isnan(parse_command(msgpack.packb({"value": [float("nan")]})).value[0])
+    nan = msgpack.packb({"name": ["a"], "interface": ["position"], "value": [float("nan")]})
+    assert math.isnan(parse_command(nan).value[0])
+    with pytest.raises(CommandError, match="value: has 1 entries but name has 0"):
+        parse_command(msgpack.packb({"value": [0.5]}))
     for payload, field in [
         (b"\xc1garbage", "msgpack"),
         (msgpack.packb([1, 2]), "expected a map"),
@@ -144,7 +147,7 @@ def test_hardware_command_parsing_names_the_field():
         (msgpack.packb({"step": True}), "step"),
         (msgpack.packb({"name": "a"}), "name"),
         (msgpack.packb({"value": ["x"]}), "value"),
-        (msgpack.packb({"velocity": []}), "unknown field 'velocity'"),
+        (msgpack.packb({"velocity": []}), "velocity: unknown field"),
     ]:
         with pytest.raises(CommandError) as info:
             parse_command(payload)

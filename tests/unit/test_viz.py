@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -259,10 +260,45 @@ def test_output_plan_is_headless_without_a_display(monkeypatch: pytest.MonkeyPat
     assert OutputPlan.resolve(None, False, False, True, 9090, 9876).serve  # --headless wins
 
 
+def _blueprint_side(blueprint: Any) -> Any:
+    """The plots beside the 3-D scene (which looks at the world frame)."""
+    import rerun.blueprint as rrb
+
+    scene, side = blueprint.root_container.contents
+    assert isinstance(scene, rrb.Spatial3DView) and scene.origin == "world"
+    return side
+
+
+def _blueprint_views(item: Any) -> list[Any]:
+    """Every view inside a blueprint container (depth first)."""
+    children = getattr(item, "contents", None)
+    if getattr(item, "kind", None) is None:  # a view: its contents are entity queries, not blueprint items
+        return [item]
+    return [view for child in children or [] for view in _blueprint_views(child)]
+
+
 def test_blueprint_has_a_tab_per_robot() -> None:
-    assert build_blueprint() is not None
-    assert build_blueprint({"humanoid": (["joint_trajectory_controller"], True)}) is not None
-    assert build_blueprint({"a": ([], False), "b": (["jtc"], True)}) is not None
+    import rerun.blueprint as rrb
+
+    empty = _blueprint_side(build_blueprint())  # nothing seen yet: one plot of everything logged
+    assert isinstance(empty, rrb.TimeSeriesView) and empty.origin == "plots"
+
+    one = _blueprint_side(build_blueprint({"humanoid": (["joint_trajectory_controller"], True)}))
+    assert one.name == "humanoid"
+    titles = " | ".join(str(v.name) for v in _blueprint_views(one))
+    for wanted in ("position", "velocit", "effort", "joint_trajectory_controller", "balance"):
+        assert wanted in titles, f"no '{wanted}' plot in the humanoid's tab: {titles}"
+
+    two = _blueprint_side(build_blueprint({"a": ([], False), "b": (["jtc"], True)}))
+    assert isinstance(two, rrb.Tabs)
+    tabs = {tab.name: _blueprint_views(tab) for tab in two.contents}
+    assert set(tabs) == {"a", "b"}
+    for ns, views in tabs.items():
+        assert views and all(str(v.origin).startswith(f"plots/{ns}") for v in views), (ns, [v.origin for v in views])
+    a_titles = " | ".join(str(v.name) for v in tabs["a"])
+    b_titles = " | ".join(str(v.name) for v in tabs["b"])
+    assert "jtc" not in a_titles and "balance" not in a_titles, a_titles  # only what robot a has
+    assert "jtc" in b_titles and "balance" in b_titles, b_titles
 
 
 def test_path_buffer_keeps_the_newest_points_in_order() -> None:

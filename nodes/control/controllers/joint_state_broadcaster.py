@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import math
 
-import msgpack
-
+import msgs
 from nodes.control.controller import Controller, ControllerError
 from nodes.control.interfaces import read_values
 from nodes.control.messages import msg_type
+
+_pack_joint_state = msgs.packer("sensor_msgs/msg/JointState")
+_header = msgs.builder("std_msgs/msg/Header")
 
 
 class JointStateBroadcaster(Controller):
@@ -64,10 +66,7 @@ class JointStateBroadcaster(Controller):
         values = {k: read_values(loans) for k, loans in self._loans.items()}
         if any(v != v for v in values.get("position", ())):  # NaN: no state has arrived yet
             return
-        sec = int(time // 1)
-        # Hot path (every cycle): pack the sensor_msgs/JointState map directly, skipping the dataclass.
-        self._pub.publish_raw(msgpack.packb({
-            "header": {"stamp": {"sec": sec, "nanosec": min(int((time - sec) * 1e9), 999_999_999)},
-                       "frame_id": self.frame_id},
-            "name": self.joints, "position": values.get("position", []), "velocity": values.get("velocity", []),
-            "effort": values.get("effort", [])}, use_bin_type=True))
+        # every cycle: the generated packer, no message instances
+        self._pub.publish_raw(_pack_joint_state(
+            header=_header(stamp=msgs.time_map(time), frame_id=self.frame_id), name=self.joints,
+            position=values.get("position"), velocity=values.get("velocity"), effort=values.get("effort")))

@@ -1,0 +1,234 @@
+"""The main job in lockstep against the in-process ceiling of the same robot, measured in the same run.
+
+Each run:
+  (a) in-process: the humanoid stepped by plain function calls in this process, through the simulator's
+      own world code (floating base, ground contacts, joint springs; a slow squat commanded every step,
+      as the controller manager does at 1 kHz): the ceiling of physics alone;
+  (b) full stack: ``python -m launch humanoid.yaml mode:=lockstep gui:=false`` (simulator, controller
+      manager with JSB + JTC on 22 joints, robot state publisher, joint commander) while a separate
+      process that imports only zenoh and msgpack counts simulated time on ``sim/clock`` and watches the
+      pelvis height on ``sim/model_states``.
+``ratio`` = (b) / (a). Prints a table, then one JSON line with ``fullstack_steps_per_s``,
+``inprocess_steps_per_s`` and ``ratio`` (medians over the runs).
+
+    python bench/lockstep.py [--runs 3] [--seconds 8] [--physics-rate 1000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+LEG_PITCH = {"hip_pitch": -0.5, "knee": 1.0, "ankle_pitch": -0.5}   # squat direction per unit depth
+
+# The probe runs as its own process and imports nothing of this project (an outside client).
+PROBE = r"""
+import json, sys, time, threading
+import msgpack, zenoh
+endpoint, seconds, start_key = sys.argv[1], float(sys.argv[2]), sys.argv[3]
+conf = zenoh.Config()
+conf.insert_json5("mode", '"client"')
+conf.insert_json5("connect/endpoints", json.dumps([endpoint]))
+conf.insert_json5("scouting/multicast/enabled", "false")
+started = threading.Event()
+clock = []            # (wall, sim)
+pelvis = []
+with zenoh.open(conf) as s:
+    def on_clock(sample):
+        c = msgpack.unpackb(sample.payload.to_bytes())["clock"]
+        clock.append((time.perf_counter(), c["sec"] + c["nanosec"] * 1e-9))
+    def on_models(sample):
+        m = msgpack.unpackb(sample.payload.to_bytes())
+        for name, pose in zip(m["name"], m["pose"]):
+            if name == "humanoid":
+                pelvis.append(pose["position"]["z"])
+    def on_start(sample):
+        started.set()
+    subs = [s.declare_subscriber("sim/clock", on_clock), s.declare_subscriber("sim/model_states", on_models),
+            s.declare_subscriber(start_key, on_start)]
+    if not started.wait(120):
+        print(json.dumps({"error": "the commander never sent a trajectory"})); sys.exit(1)
+    time.sleep(1.0)                       # let the first command settle in
+    clock.clear(); pelvis.clear()
+    print(json.dumps({"measuring": True}), flush=True)
+    time.sleep(seconds)
+    for sub in subs:
+        sub.undeclare()
+    w0, t0 = clock[0]; w1, t1 = clock[-1]
+    print(json.dumps({"sim_seconds": t1 - t0, "wall_seconds": w1 - w0, "clock_messages": len(clock),
+                      "pelvis_min": min(pelvis), "pelvis_max": max(pelvis)}), flush=True)
+"""
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def squat_targets(names: list[str], k: int, physics_rate: float) -> list[float]:
+    """A slow squat (0.25 Hz, knees 0 .. 0.6 rad) for every joint in ``names`` (others held at zero)."""
+    depth = 0.3 * (1.0 - math.cos(2 * math.pi * 0.25 * k / physics_rate))
+    out = []
+    for name in names:
+        part = name.split("_", 1)[1] if name.startswith(("left_", "right_")) else ""
+        out.append(LEG_PITCH.get(part, 0.0) * depth)
+    return out
+
+
+def inprocess_steps_per_s(steps: int, physics_rate: float) -> tuple[float, float]:
+    """(steps per wall second, pelvis height at the end) for the humanoid stepped in this process."""
+    from nodes.core.params import load_params_file
+    from nodes.sim.config import DEFAULT_CONFIG, parse_gains
+    from nodes.sim.entity import EntitySpec, Pose
+    from nodes.sim.simulation import Simulation
+    from nodes.sim.world import PhysicsWorld
+
+    defaults = load_params_file(DEFAULT_CONFIG, "simulator")
+    world = PhysicsWorld(physics_rate)
+    world.add_ground()
+    sim = Simulation(world, parse_gains(defaults["gains"]))
+    entity = sim.spawn(EntitySpec("humanoid", (ROOT / "robots" / "humanoid.urdf").read_text(),
+                                  pose=Pose.from_xyz_rpy(0, 0, 0.93)))
+    hw = sim.hardware["humanoid"]
+    names = list(hw.names)
+    interfaces = ["position"] * len(names)
+    for _ in range(300):                      # land on the ground first
+        hw.apply_command(names, interfaces, squat_targets(names, 0, physics_rate))
+        sim.step(1)
+    start = time.perf_counter()
+    for k in range(steps):
+        hw.apply_command(names, interfaces, squat_targets(names, k, physics_rate))
+        sim.step(1)
+    elapsed = time.perf_counter() - start
+    height = float(entity.world_pose().position[2])
+    sim.clear()
+    return steps / elapsed, height
+
+
+def process_tree_cpu(pid: int) -> dict[str, float]:
+    """CPU seconds used so far by each process under ``pid``, keyed by its node name."""
+    import psutil
+
+    out: dict[str, float] = {}
+    try:
+        root = psutil.Process(pid)
+        procs = [root, *root.children(recursive=True)]
+    except psutil.Error:
+        return out
+    for proc in procs:
+        try:
+            cmd = proc.cmdline()
+            times = proc.cpu_times()
+        except psutil.Error:
+            continue
+        label = "launcher (+router)" if proc.pid == pid else _node_label(cmd)
+        out[label] = out.get(label, 0.0) + times.user + times.system
+    return out
+
+
+def _node_label(cmd: list[str]) -> str:
+    if "--name" in cmd:
+        return cmd[cmd.index("--name") + 1]
+    if "-m" in cmd:
+        return cmd[cmd.index("-m") + 1]
+    return Path(cmd[0]).name if cmd else "?"
+
+
+def fullstack(seconds: float, physics_rate: float) -> dict:
+    port = free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
+    env.pop("ZENOH_CONFIG", None)
+    env.pop("ZENOH_CONNECT", None)
+    launch = subprocess.Popen(
+        [sys.executable, "-m", "launch", "humanoid.yaml", "mode:=lockstep", "gui:=false", f"zenoh_port:={port}",
+         "--log-dir", str(Path(os.environ.get("TMPDIR", "/tmp")) / f"bench-lockstep-{port}")],
+        cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    try:
+        time.sleep(0.5)
+        probe = subprocess.Popen(
+            [sys.executable, "-c", PROBE, endpoint, str(seconds), "humanoid/joint_trajectory_controller/joint_trajectory"],
+            stdout=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONPATH=""))
+        first = probe.stdout.readline()
+        if not first:
+            raise RuntimeError("probe ended before measuring")
+        cpu_before, wall_before = process_tree_cpu(launch.pid), time.perf_counter()
+        out, _ = probe.communicate(timeout=seconds + 60)
+        cpu_after, wall = process_tree_cpu(launch.pid), time.perf_counter() - wall_before
+        result = json.loads(out.strip().splitlines()[-1])
+        if "error" in result:
+            raise RuntimeError(result["error"])
+    finally:
+        try:
+            os.killpg(launch.pid, signal.SIGINT)
+            launch.wait(20)
+        except (subprocess.TimeoutExpired, ProcessLookupError):
+            os.killpg(launch.pid, signal.SIGKILL)
+            launch.wait()
+    result["steps_per_s"] = result["sim_seconds"] * physics_rate / result["wall_seconds"]
+    result["cpu_percent"] = {k: round(100 * (cpu_after.get(k, 0.0) - v) / wall, 1) for k, v in cpu_before.items()}
+    return result
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--seconds", type=float, default=8.0, help="wall seconds measured per full-stack run")
+    parser.add_argument("--inprocess-steps", type=int, default=4000)
+    parser.add_argument("--physics-rate", type=float, default=1000.0, help="must match config/sim.yaml")
+    args = parser.parse_args(argv)
+
+    load_before = os.getloadavg()[0]
+    rows = []
+    for run in range(args.runs):
+        ceiling, height = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
+        full = fullstack(args.seconds, args.physics_rate)
+        ceiling_after, _ = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
+        ceiling = statistics.mean([ceiling, ceiling_after])   # bracket the full-stack run
+        rows.append({"inprocess": ceiling, "fullstack": full["steps_per_s"], "ratio": full["steps_per_s"] / ceiling,
+                     "pelvis_min": full["pelvis_min"], "cpu": full["cpu_percent"], "inprocess_height": height})
+        print(f"run {run + 1}: in-process {ceiling:,.0f} steps/s, full stack {full['steps_per_s']:,.0f} steps/s, "
+              f"ratio {full['steps_per_s'] / ceiling:.2f}, pelvis min {full['pelvis_min']:.3f} m", file=sys.stderr)
+
+    med = {k: statistics.median(r[k] for r in rows) for k in ("inprocess", "fullstack", "ratio")}
+    pelvis_min = min(r["pelvis_min"] for r in rows)
+    cpu_keys = sorted({k for r in rows for k in r["cpu"]})
+    cpu = {k: statistics.median(r["cpu"].get(k, 0.0) for r in rows) for k in cpu_keys}
+    table = [
+        ("(a) in-process humanoid, simulator world code", f"{med['inprocess']:,.0f} steps/s", "the ceiling"),
+        ("(b) humanoid.yaml mode:=lockstep (sim/clock, outside probe)", f"{med['fullstack']:,.0f} steps/s",
+         f"{med['fullstack'] / args.physics_rate:.2f}x real time"),
+        ("ratio (b)/(a)", f"{med['ratio']:.2f}", "goal >= 0.5, stretch 0.7"),
+        ("pelvis height, lowest seen", f"{pelvis_min:.3f} m", "standing: > 0.75 m"),
+    ]
+    table += [(f"  CPU of {k}", f"{v:.0f} %", "of one core, median") for k, v in cpu.items()]
+    table.append(("load average (1 min) before / after", f"{load_before:.1f} / {os.getloadavg()[0]:.1f}",
+                  f"{os.cpu_count()} cores"))
+    width = max(len(r[0]) for r in table)
+    print(f"{'measurement':<{width}}  {'result':>16}  note")
+    for name, value, note in table:
+        print(f"{name:<{width}}  {value:>16}  {note}")
+    print(json.dumps({
+        "fullstack_steps_per_s": round(med["fullstack"], 1), "inprocess_steps_per_s": round(med["inprocess"], 1),
+        "ratio": round(med["ratio"], 4), "runs": [{k: (round(v, 3) if isinstance(v, float) else v)
+                                                   for k, v in r.items()} for r in rows],
+        "pelvis_min": round(pelvis_min, 4), "cpu_percent": cpu, "load_average": round(load_before, 2),
+    }))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

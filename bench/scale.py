@@ -1,0 +1,162 @@
+"""How lockstep scales with the number of robots, on this machine.
+
+(a) one world, k = 1, 2, 4 humanoids: one simulator process with k entities, and per robot its own
+    namespace (humanoid_0 ...) and controller manager running JSB + JTC on its 22 joints;
+(b) k = 1, 2, 4 independent worlds side by side: k launches of the main job
+    (``humanoid.yaml mode:=lockstep gui:=false``), each on its own Zenoh port.
+
+Sim time is read from ``sim/clock`` by an outside process (zenoh + msgpack only). Reported per k: world
+steps per wall second, robot-steps per second (steps x robots), CPU per robot (all processes' CPU / k),
+and the cost per robot relative to k = 1 (1.0 = perfectly linear). Prints a table, then one JSON line.
+
+    python bench/scale.py [--seconds 6] [--counts 1,2,4]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from bench.lockstep import PROBE, process_tree_cpu  # noqa: E402 - after the path set-up
+
+ENV = {k: v for k, v in os.environ.items() if k not in ("ZENOH_CONNECT", "ZENOH_CONFIG")}
+ENV.update(PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def start_probe(port: int, seconds: float, start_key: str) -> subprocess.Popen:
+    probe = subprocess.Popen([sys.executable, "-c", PROBE, f"tcp/127.0.0.1:{port}", str(seconds), start_key],
+                             stdout=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONPATH=""))
+    return probe
+
+
+def finish_probe(probe: subprocess.Popen, seconds: float) -> dict:
+    out, _ = probe.communicate(timeout=seconds + 180)
+    result = json.loads(out.strip().splitlines()[-1])
+    if "error" in result:
+        raise RuntimeError(result["error"])
+    return result
+
+
+def stop(procs: list[subprocess.Popen]) -> None:
+    for proc in procs:
+        try:
+            os.killpg(proc.pid, signal.SIGINT)
+        except ProcessLookupError:
+            pass
+    for proc in procs:
+        try:
+            proc.wait(20)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+
+
+def cpu_of(pids: list[int]) -> float:
+    return sum(sum(process_tree_cpu(pid).values()) for pid in pids)
+
+
+def one_world(k: int, seconds: float) -> dict:
+    """k humanoids in one simulator, each with its own controller manager (JSB + JTC autostarted)."""
+    from nodes.core.session import open_router
+
+    port = free_port()
+    router = open_router(port)
+    env = dict(ENV, ZENOH_CONNECT=f"tcp/127.0.0.1:{port}")
+    entities = ", ".join(f"{{name: humanoid_{i}, file: humanoid, namespace: humanoid_{i}, y: {2.0 * i}, z: 0.93}}"
+                         for i in range(k))
+    procs = [subprocess.Popen(
+        [sys.executable, "-m", "nodes.sim", "--param", "mode:=lockstep", "--param", f"entities:=[{entities}]"],
+        cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)]
+    for i in range(k):
+        procs.append(subprocess.Popen(
+            [sys.executable, "-m", "nodes.control", "--ns", f"humanoid_{i}", "--params-file",
+             str(ROOT / "config" / "controllers.yaml"),
+             "--param", "activate:=[joint_state_broadcaster, joint_trajectory_controller]"],
+            cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True))
+    try:
+        # every JTC publishes its state once it runs: start measuring when the last one does
+        probe = start_probe(port, seconds, f"humanoid_{k - 1}/joint_trajectory_controller/controller_state")
+        probe.stdout.readline()
+        cpu0, wall0 = cpu_of([p.pid for p in procs]), time.perf_counter()
+        result = finish_probe(probe, seconds)
+        cpu = (cpu_of([p.pid for p in procs]) - cpu0) / (time.perf_counter() - wall0)
+    finally:
+        stop(procs)
+        router.close()
+    steps = result["sim_seconds"] * 1000.0 / result["wall_seconds"]
+    return {"k": k, "steps_per_s": steps, "robot_steps_per_s": steps * k, "cpu_cores": cpu,
+            "cpu_per_robot": cpu / k, "pelvis_min": result["pelvis_min"]}
+
+
+def side_by_side(k: int, seconds: float) -> dict:
+    """k independent launches of the main job in lockstep."""
+    ports = [free_port() for _ in range(k)]
+    procs = [subprocess.Popen(
+        [sys.executable, "-m", "launch", "humanoid.yaml", "mode:=lockstep", "gui:=false", f"zenoh_port:={port}",
+         "--log-dir", f"/tmp/bench-scale-{port}"],
+        cwd=ROOT, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        for port in ports]
+    try:
+        time.sleep(0.5)
+        probes = [start_probe(port, seconds, "humanoid/joint_trajectory_controller/joint_trajectory")
+                  for port in ports]
+        for probe in probes:
+            probe.stdout.readline()
+        cpu0, wall0 = cpu_of([p.pid for p in procs]), time.perf_counter()
+        results = [finish_probe(probe, seconds) for probe in probes]
+        cpu = (cpu_of([p.pid for p in procs]) - cpu0) / (time.perf_counter() - wall0)
+    finally:
+        stop(procs)
+    per_world = [r["sim_seconds"] * 1000.0 / r["wall_seconds"] for r in results]
+    return {"k": k, "steps_per_s": sum(per_world) / k, "robot_steps_per_s": sum(per_world), "cpu_cores": cpu,
+            "cpu_per_robot": cpu / k, "pelvis_min": min(r["pelvis_min"] for r in results)}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--seconds", type=float, default=6.0)
+    parser.add_argument("--counts", default="1,2,4")
+    args = parser.parse_args(argv)
+    counts = [int(c) for c in args.counts.split(",")]
+    load = os.getloadavg()[0]
+    rows = {"one_world": [], "side_by_side": []}
+    for k in counts:
+        rows["one_world"].append(one_world(k, args.seconds))
+        print(f"one world, {k} robots: {rows['one_world'][-1]}", file=sys.stderr)
+    for k in counts:
+        rows["side_by_side"].append(side_by_side(k, args.seconds))
+        print(f"{k} worlds side by side: {rows['side_by_side'][-1]}", file=sys.stderr)
+    print(f"{'setup':<24}{'k':>3}{'world steps/s':>15}{'robot-steps/s':>15}{'CPU cores':>11}"
+          f"{'CPU/robot':>11}{'cost/robot':>12}{'pelvis min':>12}")
+    for setup, results in rows.items():
+        base = results[0]["robot_steps_per_s"]
+        for r in results:
+            # wall time per robot-step relative to k = 1 (1.0: linear; above: the curve bends)
+            r["cost_per_robot_vs_k1"] = base / r["robot_steps_per_s"]
+            print(f"{setup:<24}{r['k']:>3}{r['steps_per_s']:>15,.0f}{r['robot_steps_per_s']:>15,.0f}"
+                  f"{r['cpu_cores']:>11.2f}{r['cpu_per_robot']:>11.2f}{r['cost_per_robot_vs_k1']:>12.2f}"
+                  f"{r['pelvis_min']:>12.3f}")
+    print(f"load average before: {load:.1f}; {os.cpu_count()} cores")
+    print(json.dumps({setup: [{k: round(v, 3) if isinstance(v, float) else v for k, v in r.items()} for r in results]
+                      for setup, results in rows.items()} | {"load_average": round(load, 2)}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

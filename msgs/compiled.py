@@ -1,0 +1,280 @@
+"""Encoders, decoders and builders generated from the ``.msg`` definitions, compiled once per type.
+
+Each function is Python source written from the type's field list and compiled with ``exec`` (no user
+input reaches the source: names come from parsed definitions, which only admit identifiers), so a
+message is encoded or checked by straight-line code with no per-field closures or loops over specs:
+
+- ``encoder(type)(msg)``: a message instance -> its msgpack map (what ``msgs.encode`` packs);
+- ``decoder(type, limits)(obj)``: an unpacked map -> a validated instance. It only *accepts*; on any
+  doubt it raises ``Reject`` and the caller falls back to the precise decoder in ``msgs.codec``, which
+  names the field and the reason. So both decoders accept exactly the same inputs.
+- ``builder(type)(**fields)``: keyword fields (schema names, checked by Python's signature) -> the
+  complete map with ROS defaults filled in: the hot paths (hardware frames, joint_states, tf, clock)
+  build their messages with these instead of hand-spelled dicts;
+- ``packer(type)(**fields)``: the same, packed to msgpack bytes.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable
+from typing import Any
+
+import msgpack
+
+from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec, MsgSpec
+from msgs.registry import default_value, get_class, get_spec
+
+_FLOAT_ONLY = frozenset({float})
+_STR_ONLY = frozenset({str})
+_INF = math.inf
+
+
+class Reject(Exception):
+    """The fast decoder declines an input; the precise decoder decides (and explains)."""
+
+
+def _ident(type_name: str) -> str:
+    return "".join(ch if ch.isalnum() else "_" for ch in type_name)
+
+
+# ---------------------------------------------------------------- encoders (instance -> map)
+
+def _floats(v: Any) -> list[float]:
+    if type(v) is list and _FLOAT_ONLY.issuperset(map(type, v)):
+        return v
+    if hasattr(v, "tolist"):  # numpy arrays
+        v = v.tolist()
+    return [float(x) for x in v]
+
+
+def _strs(v: Any) -> list[str]:
+    return v if type(v) is list and _STR_ONLY.issuperset(map(type, v)) else [str(x) for x in v]
+
+
+def _scalar_conv(base: str) -> str:
+    if base in FLOAT_TYPES:
+        return "float"
+    if base == "bool":
+        return "bool"
+    if base in INT_RANGES:
+        return "int"
+    return "str"
+
+
+@functools.cache
+def encoder(type_name: str) -> Callable[[Any], dict]:
+    spec = get_spec(type_name)
+    env: dict[str, Any] = {"_floats": _floats, "_strs": _strs, "bytes": bytes}
+    lines = ["def encode(m):", f"    return {_encode_expr(spec, 'm', env, depth=0)}"]
+    return _compile("\n".join(lines), env, "encode", f"encoder of {type_name}")
+
+
+def _encode_expr(spec: MsgSpec, var: str, env: dict[str, Any], depth: int) -> str:
+    """A dict display for the message in ``var``; nested single messages are inlined (up to a depth)."""
+    items = []
+    for f in spec.fields:
+        value = f"{var}.{f.name}"
+        if f.is_bytes:
+            expr = f"bytes({value})"
+        elif f.is_primitive:
+            if f.is_array:
+                expr = (f"_floats({value})" if f.base in FLOAT_TYPES else f"_strs({value})" if f.base in STRING_TYPES
+                        else f"[{_scalar_conv(f.base)}(x) for x in {value}]")
+            else:
+                conv = _scalar_conv(f.base)
+                expr = f"({value} if type({value}) is {conv} else {conv}({value}))"
+        elif f.is_array:
+            name = f"_enc_{_ident(f.base)}"
+            env[name] = encoder(f.base)
+            expr = f"[{name}(x) for x in {value}]"
+        elif depth < 3:
+            expr = _encode_expr(get_spec(f.base), value, env, depth + 1)
+        else:
+            name = f"_enc_{_ident(f.base)}"
+            env[name] = encoder(f.base)
+            expr = f"{name}({value})"
+        items.append(f"{f.name!r}: {expr}")
+    return "{" + ", ".join(items) + "}"
+
+
+# ---------------------------------------------------------------- fast decoders (map -> instance)
+
+@functools.cache
+def decoder(type_name: str, max_array_length: int, max_string_length: int, allow_nonfinite: bool,
+            lengths_checked: bool = False) -> Callable[[Any], Any]:
+    """Fast validating decoder for one set of limits; raises ``Reject`` instead of explaining.
+
+    ``lengths_checked``: the map comes from ``msgpack.unpackb`` with these limits as its ``max_str_len``
+    and ``max_array_len``, so unbounded strings need no length check of their own.
+    """
+    spec = get_spec(type_name)
+    env: dict[str, Any] = {
+        "Reject": Reject, "_cls": get_class(type_name), "_names": frozenset(f.name for f in spec.fields),
+        "_FLOAT_ONLY": _FLOAT_ONLY, "_STR_ONLY": _STR_ONLY, "_INF": _INF, "_isfinite": math.isfinite,
+        "_MAXLEN": max_array_length, "_MAXSTR": max_string_length, "_ALLOW_NONFINITE": allow_nonfinite,
+        "_LENGTHS_CHECKED": lengths_checked, "_join": "".join,
+    }
+    body = ["def decode(o):",
+            "    if type(o) is not dict or not _names.issuperset(o):",
+            "        raise Reject"]
+    args = []
+    for i, f in enumerate(spec.fields):
+        var = f"v{i}"
+        env[f"_default{i}"] = functools.partial(default_value, f)
+        body.append(f"    {var} = o.get({f.name!r}, Reject)")
+        body.append(f"    if {var} is Reject:")
+        body.append(f"        {var} = _default{i}()")
+        body.append("    else:")
+        body += ["        " + line for line in _check_lines(f, var, env, i, allow_nonfinite, lengths_checked)]
+        args.append(f"{f.name}={var}")
+    from msgs.codec import EQUAL_LENGTH_RULES  # the cross-field rules live with the precise decoder
+
+    rule = EQUAL_LENGTH_RULES.get(type_name)
+    if rule:
+        ref, others, empty_ok = rule
+        index = {f.name: i for i, f in enumerate(spec.fields)}
+        n = f"len(v{index[ref]})"
+        for other in others:
+            m = f"len(v{index[other]})"
+            cond = f"{m} != {n}" + (f" and {m} != 0" if empty_ok else "")
+            body += [f"    if {cond}:", "        raise Reject"]
+    body.append(f"    return _cls({', '.join(args)})")
+    return _compile("\n".join(body), env, "decode", f"decoder of {type_name}")
+
+
+def _check_lines(f: FieldSpec, var: str, env: dict[str, Any], index: int, allow_nonfinite: bool,
+                 lengths_checked: bool) -> list[str]:
+    fail = ["    raise Reject"]
+    if f.is_array:
+        size = []
+        if f.array_size is not None:
+            size.append(f"len({var}) != {f.array_size}")
+        if f.upper_bound is not None:
+            size.append(f"len({var}) > {f.upper_bound}")
+        size.append(f"len({var}) > _MAXLEN")
+        if f.is_bytes:
+            # bin, or a list of ints the precise decoder converts
+            return [f"if type({var}) is not bytes or {' or '.join(size)}:", *fail]
+        lines = [f"if type({var}) is not list or {' or '.join(size)}:", *fail]
+        if f.base in FLOAT_TYPES:
+            finite = "" if allow_nonfinite else f" or not _isfinite(sum({var}))"
+            return lines + [f"if not _FLOAT_ONLY.issuperset(map(type, {var})){finite}:", *fail]
+        if f.base in STRING_TYPES:
+            if lengths_checked and f.string_bound is None:
+                # ''.join type-checks every item in C; unpackb already bounded each string's length
+                return lines + ["try:", f"    _join({var})", "except TypeError:", "    raise Reject from None"]
+            bound = f.string_bound if f.string_bound is not None else "_MAXSTR"
+            return lines + [f"if not _STR_ONLY.issuperset(map(type, {var})) or sum(map(len, {var})) > _MAXSTR"
+                            f" or ({var} and max(map(len, {var})) > {bound}):", *fail]
+        if f.base in INT_RANGES:
+            lo, hi = INT_RANGES[f.base]
+            return lines + [f"for x in {var}:", f"    if type(x) is not int or not {lo} <= x <= {hi}:",
+                            "        raise Reject"]
+        if f.base == "bool":
+            return lines + [f"for x in {var}:", "    if type(x) is not bool:", "        raise Reject"]
+        name = f"_dec{index}"
+        env[name] = _nested(f.base, env)
+        return lines + [f"{var} = [{name}(x) for x in {var}]"]
+    if f.base in FLOAT_TYPES:
+        if allow_nonfinite:
+            return [f"if type({var}) is not float:",
+                    f"    if type({var}) is not int:", "        raise Reject", f"    {var} = float({var})"]
+        return [f"if type({var}) is not float or not -_INF < {var} < _INF:",
+                f"    if type({var}) is not int:", "        raise Reject", f"    {var} = float({var})",
+                f"    if not -_INF < {var} < _INF:", "        raise Reject"]
+    if f.base in INT_RANGES:
+        lo, hi = INT_RANGES[f.base]
+        return [f"if type({var}) is not int or not {lo} <= {var} <= {hi}:", *fail]
+    if f.base == "bool":
+        return [f"if type({var}) is not bool:", *fail]
+    if f.base in STRING_TYPES:
+        if lengths_checked and f.string_bound is None:
+            return [f"if type({var}) is not str:", *fail]
+        bound = f.string_bound if f.string_bound is not None else "_MAXSTR"
+        return [f"if type({var}) is not str or len({var}) > {bound}:", *fail]
+    name = f"_dec{index}"
+    env[name] = _nested(f.base, env)
+    return [f"{var} = {name}({var})"]
+
+
+def _nested(type_name: str, env: dict[str, Any]) -> Callable[[Any], Any]:
+    """The decoder of a nested type with the same limits, resolved on first use (types may recurse)."""
+    limits = (env["_MAXLEN"], env["_MAXSTR"], env["_ALLOW_NONFINITE"], env["_LENGTHS_CHECKED"])
+    resolved: list[Callable[[Any], Any]] = []
+
+    def nested(v: Any) -> Any:
+        if not resolved:
+            resolved.append(decoder(type_name, *limits))
+        return resolved[0](v)
+
+    return nested
+
+
+# ---------------------------------------------------------------- builders (keyword fields -> map)
+
+@functools.cache
+def builder(type_name: str) -> Callable[..., dict]:
+    """``build(**fields)`` -> the complete msgpack-ready map; absent fields take their ROS defaults.
+
+    Values are trusted (hot paths of our own nodes): lists are used as given, nested messages may be
+    maps from another builder or message instances.
+    """
+    spec = get_spec(type_name)
+    env: dict[str, Any] = {"_floats": _floats, "_t": type}   # fields may be called "type"
+    params, items = [], []
+    for i, f in enumerate(spec.fields):
+        default = default_value(f)
+        if f.is_primitive and not f.is_array:
+            params.append(f"{f.name}={default!r}")
+            items.append(f"{f.name!r}: {f.name}")
+            continue
+        params.append(f"{f.name}=None")
+        if f.is_primitive:   # arrays: numpy arrays become lists; None -> the default
+            env[f"_d{i}"] = default
+            conv = f"_floats({f.name})" if f.base in FLOAT_TYPES and not f.is_bytes else f.name
+            items.append(f"{f.name!r}: (_d{i} if {f.name} is None else {conv})")
+            continue
+        nested = f"_enc_{_ident(f.base)}"
+        env[nested] = encoder(f.base)
+        env[f"_d{i}"] = _default_map(f)
+        if f.is_array:
+            items.append(f"{f.name!r}: (_d{i}() if {f.name} is None else "
+                         f"[x if _t(x) is dict else {nested}(x) for x in {f.name}])")
+        else:
+            items.append(f"{f.name!r}: (_d{i}() if {f.name} is None else "
+                         f"{f.name} if _t({f.name}) is dict else {nested}({f.name}))")
+    source = f"def build(*, {', '.join(params)}):\n    return {{{', '.join(items)}}}"
+    return _compile(source, env, "build", f"builder of {type_name}")
+
+
+def _default_map(f: FieldSpec) -> Callable[[], Any]:
+    enc = encoder(f.base)
+    if f.is_array:
+        return lambda: [enc(x) for x in default_value(f)]
+    return lambda: enc(default_value(f))
+
+
+@functools.cache
+def packer(type_name: str) -> Callable[..., bytes]:
+    """``pack(**fields)`` -> msgpack bytes of the complete map (see ``builder``)."""
+    build = builder(type_name)
+    packb = msgpack.packb   # a shared Packer is not thread-safe
+
+    def packed(**fields: Any) -> bytes:
+        return packb(build(**fields))
+
+    packed.__doc__ = f"msgpack bytes of a {type_name} from its fields"
+    return packed
+
+
+# ---------------------------------------------------------------- helpers
+
+def _compile(source: str, env: dict[str, Any], name: str, what: str) -> Callable[..., Any]:
+    code = compile(source, f"<{what}>", "exec")
+    namespace = dict(env)
+    exec(code, namespace)  # noqa: S102 - source generated from parsed definitions, never from user input
+    fn = namespace[name]
+    fn.__doc__ = f"Generated {what}.\n\n{source}"
+    return fn

@@ -1,0 +1,164 @@
+"""How a node's callbacks run: one at a time, as under rclpy's single-threaded executor.
+
+Two ways to get there:
+
+- **direct** (the default): a subscription's or service's callback runs on the Zenoh thread that
+  delivered it, holding the node's executor lock; timers and ``call_soon`` work run on the thread that
+  spins, holding the same lock. No thread hand-off per message, so a hop costs what raw Zenoh costs.
+- **on the spin thread** (``Node.callbacks_on_spin_thread = True``): every callback is queued and run by
+  whoever calls ``spin_once``. The simulator uses it: DART is only touched from its stepping loop, which
+  serves requests between control periods.
+
+While a node's constructor runs it holds the lock, so no callback sees a half-built node.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import queue
+import threading
+import time
+import traceback
+from collections.abc import Callable
+from typing import Any
+
+
+class Timer:
+    """A periodic callback on the wall clock or on sim time (``now`` gives the current time)."""
+
+    def __init__(self, period: float, callback: Callable[[], None], sim_time: bool, now: Callable[[], float]) -> None:
+        if not period > 0:
+            raise ValueError(f"timer period must be > 0, got {period}")
+        self.period = float(period)
+        self.callback = callback
+        self.sim_time = sim_time
+        self._now = now
+        self.next_due = now() + self.period
+        self.due_time = self.next_due   # while its callback runs: the time this tick was due
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        self.cancelled = True
+
+    def reset(self) -> None:
+        self.next_due = self._now() + self.period
+
+
+class Executor:
+    def __init__(self, report_error: Callable[[str], None], *, on_spin_thread: bool = False) -> None:
+        self.report_error = report_error
+        self.on_spin_thread = on_spin_thread
+        self.lock = threading.RLock()
+        self._queue: queue.SimpleQueue = queue.SimpleQueue()
+        self._wall_timers: list[tuple[float, int, Timer]] = []
+        self._sim_timers: list[Timer] = []
+        self._timer_seq = itertools.count()
+        self._timer_lock = threading.Lock()
+        self._stop = threading.Event()
+
+    # ---------------------------------------------------------------- running callbacks
+    def run_callback(self, fn: Callable[..., None], *args: Any, where: str = "callback") -> None:
+        """Call ``fn(*args)`` here and now; an exception is reported and swallowed (the node lives on)."""
+        try:
+            fn(*args)
+        except Exception as exc:  # noqa: BLE001 - a failing callback is reported, the node keeps running
+            tb = traceback.extract_tb(exc.__traceback__)
+            at = f" at {tb[-1].filename}:{tb[-1].lineno}" if tb else ""
+            self.report_error(f"exception in {where}: {type(exc).__name__}: {exc}{at}")
+
+    def dispatch(self, fn: Callable[..., None], *args: Any, where: str = "callback") -> None:
+        """Run a delivered callback one-at-a-time with the node's others (from a Zenoh thread)."""
+        if self.on_spin_thread:
+            self._queue.put((fn, args, where))
+            return
+        with self.lock:
+            self.run_callback(fn, *args, where=where)
+
+    def call_soon(self, fn: Callable[..., None], *args: Any, where: str = "callback") -> None:
+        """Queue ``fn(*args)`` for the spinning thread (from any thread)."""
+        self._queue.put((fn, args, where))
+
+    @property
+    def idle(self) -> bool:
+        return self._queue.empty()
+
+    # ---------------------------------------------------------------- timers
+    def add_timer(self, timer: Timer) -> None:
+        with self._timer_lock:
+            if timer.sim_time:
+                self._sim_timers.append(timer)
+            else:
+                heapq.heappush(self._wall_timers, (timer.next_due, next(self._timer_seq), timer))
+        self.call_soon(_nothing, where="wake")   # so a waiting spin sees the new deadline
+
+    def restart_sim_timers(self, now: float) -> None:
+        """Sim time jumped back (a reset): every sim timer is next due one period from ``now``."""
+        with self._timer_lock:
+            for timer in self._sim_timers:
+                timer.next_due = now + timer.period
+
+    def run_sim_timers(self, now: float) -> None:
+        with self._timer_lock:
+            self._sim_timers = [t for t in self._sim_timers if not t.cancelled]
+            due = [t for t in self._sim_timers if t.next_due <= now + 1e-12]
+        for timer in due:
+            timer.due_time = timer.next_due
+            # Catch up without bursts: one call, next deadline after now.
+            timer.next_due += timer.period * max(1, int((now - timer.next_due) // timer.period) + 1)
+            self.run_callback(timer.callback, where="timer")
+
+    def _next_wall_deadline(self) -> float | None:
+        with self._timer_lock:
+            while self._wall_timers and self._wall_timers[0][2].cancelled:
+                heapq.heappop(self._wall_timers)
+            return self._wall_timers[0][0] if self._wall_timers else None
+
+    def _run_wall_timers(self) -> None:
+        now = time.monotonic()
+        due: list[Timer] = []
+        with self._timer_lock:
+            while self._wall_timers and self._wall_timers[0][0] <= now:
+                _, _, timer = heapq.heappop(self._wall_timers)
+                if timer.cancelled:
+                    continue
+                due.append(timer)
+                timer.due_time = timer.next_due
+                timer.next_due += timer.period
+                if timer.next_due < now:  # fell behind: skip missed ticks instead of bursting
+                    timer.next_due = now + timer.period
+                heapq.heappush(self._wall_timers, (timer.next_due, next(self._timer_seq), timer))
+        if due:
+            with self.lock:
+                for timer in due:
+                    self.run_callback(timer.callback, where="timer")
+
+    # ---------------------------------------------------------------- spinning
+    def spin_once(self, timeout: float | None = None) -> bool:
+        """Run due timers and at most one queued callback, waiting up to ``timeout`` s. True if work ran."""
+        self._run_wall_timers()
+        deadline = self._next_wall_deadline()
+        wait = timeout
+        if deadline is not None:
+            until_timer = max(0.0, deadline - time.monotonic())
+            wait = until_timer if wait is None else min(wait, until_timer)
+        try:
+            fn, args, where = self._queue.get(timeout=wait) if wait is None or wait > 0 else self._queue.get_nowait()
+        except queue.Empty:
+            self._run_wall_timers()
+            return False
+        with self.lock:
+            self.run_callback(fn, *args, where=where)
+        return True
+
+    def request_stop(self) -> None:
+        self._stop.set()
+        self.call_soon(_nothing, where="wake")
+
+    @property
+    def stopped(self) -> bool:
+        return self._stop.is_set()
+
+
+def _nothing() -> None:
+    return None

@@ -1,0 +1,256 @@
+"""Mirrors: each public endpoint of a node, also on rmw_zenoh's wire (CDR, ROS names, liveliness tokens).
+
+Our endpoints stay the single implementation: a CDR message or request coming from ROS 2 is converted to
+the msgpack map our endpoint expects and handed to it through a stand-in for the Zenoh sample or query,
+so validation, callbacks, threading and error replies are exactly those of our own wire. Outgoing msgpack
+(which the hot paths pack directly) is converted to CDR only while a ROS 2 subscriber is present.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from typing import TYPE_CHECKING, Any
+
+import msgpack
+import zenoh
+import zenoh.ext
+
+from msgs import cdr
+from nodes.core.ros2 import attachment, names
+
+if TYPE_CHECKING:
+    from nodes.core.ros2 import Ros2Node
+
+_CDR = zenoh.Encoding.APPLICATION_CDR
+
+
+def _to_cdr(type_name: str, msgpack_payload: bytes) -> bytes:
+    return cdr.encode(type_name, msgpack.unpackb(msgpack_payload, raw=False))
+
+
+def _to_msgpack(type_name: str, cdr_payload: bytes) -> bytes:
+    return msgpack.packb(cdr.decode(type_name, cdr_payload), use_bin_type=True)
+
+
+class _Entity:
+    """One liveliness token of ours (and the GID derived from it)."""
+
+    def __init__(self, owner: Ros2Node, kind: str, ros_name: str, type_name: str,
+                 qos: names.Qos = names.DEFAULT_QOS) -> None:
+        self.owner = owner
+        self.ros_name = ros_name
+        self.type_name = type_name
+        self.data_key = names.data_key(owner.domain, ros_name, type_name)
+        key = names.endpoint_token(owner.domain, owner.zid, owner.node_id, owner.next_entity_id(), kind,
+                                   owner.namespace, owner.name, ros_name, type_name, qos)
+        self.gid = attachment.make_gid(key)
+        self.token = owner.session.liveliness().declare_token(key)
+
+    def close(self) -> None:
+        self.token.undeclare()
+
+
+class TopicMirror:
+    """A publisher's CDR twin. ``active`` (read on every publish) is True while a ROS 2 subscriber exists;
+    latched topics are always active so their last message waits in the cache for late subscribers."""
+
+    def __init__(self, owner: Ros2Node, key: str, type_name: str, *, reliable: bool = True,
+                 latched: bool = False) -> None:
+        qos = names.LATCHED_QOS if latched else names.Qos(reliable=reliable)
+        self.owner = owner
+        self.type_name = type_name
+        self.entity = _Entity(owner, names.PUBLISHER, names.ros_topic_name(key, type_name), type_name, qos)
+        session = owner.session
+        if latched:
+            # rmw_zenoh's transient local: zenoh-ext's advanced publisher with a one-sample cache that late
+            # joiners' advanced subscribers query (sequence numbers, so no timestamping is needed).
+            self._pub = zenoh.ext.declare_advanced_publisher(
+                session, self.entity.data_key, encoding=_CDR, cache=zenoh.ext.CacheConfig(max_samples=1),
+                publisher_detection=True, sample_miss_detection=zenoh.ext.MissDetectionConfig())
+        else:
+            self._pub = session.declare_publisher(
+                self.entity.data_key, encoding=_CDR,
+                congestion_control=zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP)
+        self._seq = itertools.count(1)
+        self._latched = latched
+        self.active = latched
+        if not latched:
+            owner.graph.watch(self.entity.data_key, self._set_active)
+
+    def _set_active(self, active: bool) -> None:
+        self.active = active
+
+    def send(self, payload: bytes) -> None:
+        """Publish the msgpack ``payload`` as CDR (called by the publisher while ``active``)."""
+        try:
+            data = _to_cdr(self.type_name, payload)
+        except (cdr.CdrError, ValueError, msgpack.UnpackException) as exc:
+            self.owner.warn(f"ROS 2 wire: not mirrored on {self.entity.ros_name}: {exc}")
+            return
+        try:
+            self._pub.put(data, attachment=attachment.pack(next(self._seq), self.entity.gid))
+        except zenoh.ZError:
+            pass  # undeclared while a callback was still publishing: shutting down
+
+    def close(self) -> None:
+        if not self._latched:
+            self.owner.graph.unwatch(self.entity.data_key, self._set_active)
+        self.entity.close()
+        self._pub.undeclare()
+
+
+class _Payload:
+    """What our endpoints read from a Zenoh sample/query payload."""
+
+    def __init__(self, data: bytes) -> None:
+        self._data = data
+
+    def to_bytes(self) -> bytes:
+        return self._data
+
+
+class _Sample:
+    def __init__(self, key: str, payload: bytes) -> None:
+        self.key_expr = key
+        self.payload = _Payload(payload)
+        self.attachment = None
+
+
+class SubscriptionMirror:
+    """CDR from ROS 2 publishers on the data key, delivered to our subscription as if it came on our key."""
+
+    def __init__(self, owner: Ros2Node, subscription: Any) -> None:
+        self.owner = owner
+        self.target = subscription
+        self.type_name = subscription.msg_type._type
+        self.entity = _Entity(owner, names.SUBSCRIPTION, names.ros_topic_name(subscription.key, self.type_name),
+                              self.type_name)
+        self._sub = owner.session.declare_subscriber(self.entity.data_key, self._on_sample)
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        att = attachment.unpack(sample.attachment.to_bytes() if sample.attachment is not None else None)
+        if att is not None and attachment.is_ours(att.gid):
+            return  # one of our publishers' CDR twins: the message already came on our key
+        try:
+            payload = _to_msgpack(self.type_name, sample.payload.to_bytes())
+        except cdr.CdrError as exc:
+            self.owner.warn(f"ROS 2 wire: dropped a message on {self.entity.ros_name}: {exc}")
+            return
+        self.target._on_sample(_Sample(self.target.key, payload))
+
+    def close(self) -> None:
+        self.entity.close()
+        self._sub.undeclare()
+
+
+class _Query:
+    """A ROS 2 request seen by our service/action code as a query on our key with a msgpack payload; its
+    answers go back to the ROS 2 client as CDR with the client's sequence number and GID."""
+
+    def __init__(self, owner: Ros2Node, query: zenoh.Query, key: str, payload: bytes, response_type: str,
+                 data_key: str, att: attachment.Attachment) -> None:
+        self.owner = owner
+        self._query = query
+        self.key_expr = key
+        self.payload = _Payload(payload)
+        self._response_type = response_type
+        self._data_key = data_key
+        self._att = att
+
+    def reply(self, key: Any, payload: bytes, **_: Any) -> None:
+        try:
+            data = _to_cdr(self._response_type, payload)
+        except (cdr.CdrError, ValueError) as exc:
+            self.reply_err(msgpack.packb({"error": f"response not encodable as CDR: {exc}"}))
+            return
+        self._query.reply(self._data_key, data, encoding=_CDR,
+                          attachment=attachment.pack(self._att.sequence, self._att.gid, time.time_ns()))
+
+    def reply_err(self, payload: bytes) -> None:
+        try:
+            text = str(msgpack.unpackb(payload, raw=False).get("error", ""))
+        except Exception:  # noqa: BLE001 - not one of our error maps
+            text = bytes(payload).decode(errors="replace")
+        self._query.reply_err(text.encode())
+
+    def drop(self) -> None:
+        self._query.drop()
+
+
+class ServiceMirror:
+    """A queryable on the data key of a service (or of one of an action's services), answered by our
+    endpoint's query handler ``handle(query)``."""
+
+    def __init__(self, owner: Ros2Node, ros_name: str, srv_type: str, key: str, handle: Any) -> None:
+        self.owner = owner
+        self.key = key
+        self.handle = handle
+        self.request_type, self.response_type = f"{srv_type}_Request", f"{srv_type}_Response"
+        self.entity = _Entity(owner, names.SERVICE, ros_name, srv_type)
+        self._queryable = owner.session.declare_queryable(self.entity.data_key, self._on_query, complete=True)
+
+    def _on_query(self, query: zenoh.Query) -> None:
+        att = attachment.unpack(query.attachment.to_bytes() if query.attachment is not None else None)
+        if att is None:  # rmw_zenoh cannot correlate a reply without it; answer anyway
+            att = attachment.Attachment(0, 0, bytes(attachment.GID_SIZE))
+        try:
+            raw = query.payload.to_bytes() if query.payload is not None else b""
+            payload = _to_msgpack(self.request_type, raw)
+        except cdr.CdrError as exc:
+            self.owner.warn(f"ROS 2 wire: bad request on {self.entity.ros_name}: {exc}")
+            query.reply_err(str(exc).encode())
+            query.drop()
+            return
+        self.handle(_Query(self.owner, query, self.key, payload, self.response_type, self.entity.data_key, att))
+
+    def close(self) -> None:
+        self.entity.close()
+        self._queryable.undeclare()
+
+
+class TokensOnly:
+    """Endpoints ROS 2 should see in its graph but never talks to through us (our clients, action clients)."""
+
+    def __init__(self, entities: list[_Entity]) -> None:
+        self.entities = entities
+
+    def close(self) -> None:
+        for entity in self.entities:
+            entity.close()
+
+
+class Group:
+    """Several mirrors that live and die with one endpoint (an action server's three services)."""
+
+    def __init__(self, parts: list[Any]) -> None:
+        self.parts = parts
+
+    def close(self) -> None:
+        for part in self.parts:
+            part.close()
+
+
+def action_server(owner: Ros2Node, server: Any) -> Group:
+    action = server.action_type._type
+    parts = [
+        ServiceMirror(owner, names.ros_action_service(server.key, "send_goal"), f"{action}_SendGoal",
+                      f"{server.key}/send_goal", server._on_send_goal),
+        ServiceMirror(owner, names.ros_action_service(server.key, "cancel_goal"), "action_msgs/srv/CancelGoal",
+                      f"{server.key}/cancel_goal", server._on_cancel_goal),
+        ServiceMirror(owner, names.ros_action_service(server.key, "get_result"), f"{action}_GetResult",
+                      f"{server.key}/get_result", server._on_get_result),
+    ]
+    return Group(parts)
+
+
+def action_client(owner: Ros2Node, client: Any) -> TokensOnly:
+    action = client.action_type._type
+    key = client.key
+    return TokensOnly([
+        _Entity(owner, names.CLIENT, names.ros_action_service(key, "send_goal"), f"{action}_SendGoal"),
+        _Entity(owner, names.CLIENT, names.ros_action_service(key, "cancel_goal"), "action_msgs/srv/CancelGoal"),
+        _Entity(owner, names.CLIENT, names.ros_action_service(key, "get_result"), f"{action}_GetResult"),
+        _Entity(owner, names.SUBSCRIPTION, f"/{key}/_action/feedback", f"{action}_FeedbackMessage"),
+        _Entity(owner, names.SUBSCRIPTION, f"/{key}/_action/status", "action_msgs/msg/GoalStatusArray"),
+    ])

@@ -1,0 +1,164 @@
+"""The main job in lockstep, watched by a client that imports only zenoh and msgpack:
+
+- two runs started paused (``paused:=true``) and unpaused once every controller is active give
+  bit-identical joint trajectories, the joint commander's knee bends included;
+- every hot-path message (hardware frames, joint_states, tf, controller state, clock, model_states,
+  humanoid_state), built by the generated packers, is a complete map of its schema: a third-party
+  ``msgpack.unpackb`` sees exactly the fields of the ``.msg`` file, and the schema decoder accepts it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import msgpack
+import pytest
+import zenoh
+
+import msgs
+from msgs.registry import get_spec
+
+ROOT = Path(__file__).resolve().parents[2]
+RECORD_UNTIL = 5.5   # sim s: the commander stands at 2.2 s and bends the knees from 4.2 s
+HOT_KEYS = {
+    "humanoid/hardware/state": "zenroid_msgs/msg/HardwareState",
+    "humanoid/hardware/command": "zenroid_msgs/msg/HardwareCommand",
+    "humanoid/joint_states": "sensor_msgs/msg/JointState",
+    "humanoid/tf": "tf2_msgs/msg/TFMessage",
+    "humanoid/joint_trajectory_controller/controller_state": "control_msgs/msg/JointTrajectoryControllerState",
+    "humanoid/humanoid_state": "humanoid_msgs/msg/HumanoidState",
+    "sim/clock": "rosgraph_msgs/msg/Clock",
+    "sim/model_states": "gazebo_msgs/msg/ModelStates",
+}
+
+
+def client_session(port: int) -> zenoh.Session:
+    config = zenoh.Config()
+    config.insert_json5("mode", json.dumps("client"))
+    config.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
+    config.insert_json5("scouting/multicast/enabled", "false")
+    return zenoh.open(config)
+
+
+def call(session: zenoh.Session, key: str, payload: dict, timeout: float = 5.0) -> dict | None:
+    for reply in session.get(key, payload=msgpack.packb(payload), timeout=timeout):
+        if reply.ok is not None:
+            return msgpack.unpackb(reply.ok.payload.to_bytes())
+    return None
+
+
+def schema_fields(type_name: str, value: object, path: str = "") -> list[str]:
+    """Where ``value`` (a plain unpacked map) differs from the field set of ``type_name``, recursively."""
+    problems = []
+    spec = get_spec(type_name)
+    if not isinstance(value, dict):
+        return [f"{path or type_name}: not a map"]
+    expected = [f.name for f in spec.fields]
+    if sorted(value) != sorted(expected):
+        problems.append(f"{path or type_name}: fields {sorted(value)} != schema {sorted(expected)}")
+    for f in spec.fields:
+        if f.is_primitive or f.name not in value:
+            continue
+        items = value[f.name] if f.is_array else [value[f.name]]
+        for i, item in enumerate(items[:3]):
+            problems += schema_fields(f.base, item, f"{path}{f.name}[{i}]." if f.is_array else f"{path}{f.name}.")
+    return problems
+
+
+def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[float]], list[str], dict[str, bytes],
+                                                    str]:
+    """Launch paused, unpause when the controllers are active, record joint_states until RECORD_UNTIL."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env.pop("ZENOH_CONNECT", None)
+    env.pop("ZENOH_CONFIG", None)
+    out_path = log_dir / "launch.out"
+    with open(out_path, "wb") as out:
+        launcher = subprocess.Popen(
+            [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", "mode:=lockstep", "paused:=true",
+             f"zenoh_port:={port}", "--log-dir", str(log_dir / "logs")],
+            cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+    session = None
+    try:
+        deadline = time.monotonic() + 60
+        while "zenoh: embedded router" not in out_path.read_text(errors="replace"):
+            assert launcher.poll() is None and time.monotonic() < deadline, out_path.read_text()
+            time.sleep(0.05)
+        session = client_session(port)
+        joint_states = session.declare_subscriber("humanoid/joint_states", zenoh.handlers.FifoChannel(100_000))
+        samples: dict[str, bytes] = {}
+        hot = [session.declare_subscriber(key, lambda s, k=key: samples.setdefault(k, s.payload.to_bytes()))
+               for key in HOT_KEYS if key != "humanoid/joint_states"]
+        # every controller active and the commander up before the first step
+        while True:
+            assert launcher.poll() is None and time.monotonic() < deadline, out_path.read_text()
+            listed = call(session, "humanoid/controller_manager/list_controllers", {}, timeout=1.0)
+            states = {c["name"]: c["state"] for c in (listed or {}).get("controller", [])}
+            if (states.get("joint_trajectory_controller") == "active"
+                    and states.get("joint_state_broadcaster") == "active"
+                    and "Joint Commander initialized" in out_path.read_text(errors="replace")):
+                break
+            time.sleep(0.2)
+        assert call(session, "sim/unpause_physics", {}) is not None
+        trajectory: dict[tuple[int, int], list[float]] = {}
+        names: list[str] = []
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            raw = joint_states.recv().payload.to_bytes()
+            samples.setdefault("humanoid/joint_states", raw)
+            msg = msgpack.unpackb(raw)
+            stamp = msg["header"]["stamp"]
+            names = msg["name"]
+            trajectory[(stamp["sec"], stamp["nanosec"])] = msg["position"]
+            if stamp["sec"] + stamp["nanosec"] * 1e-9 >= RECORD_UNTIL:
+                break
+        assert names and len(names) == 22
+        for sub in hot:
+            sub.undeclare()
+        joint_states.undeclare()
+        return trajectory, names, samples, out_path.read_text(errors="replace")
+    finally:
+        if session is not None:
+            session.close()
+        if launcher.poll() is None:
+            launcher.send_signal(signal.SIGINT)
+        try:
+            launcher.wait(20)
+        except subprocess.TimeoutExpired:
+            os.killpg(launcher.pid, signal.SIGKILL)
+            launcher.wait()
+
+
+@pytest.mark.slow
+def test_lockstep_main_job_is_bit_identical_and_hot_paths_follow_the_schema(tmp_path: Path) -> None:
+    from tests.conftest import free_port
+
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    first, names, samples, log = run_main_job(free_port(), tmp_path / "a")
+
+    # the hot paths: complete schema maps for a third-party unpackb, accepted by the schema decoder
+    assert sorted(samples) == sorted(HOT_KEYS), f"no message on {set(HOT_KEYS) - set(samples)}"
+    for key, type_name in HOT_KEYS.items():
+        assert not schema_fields(type_name, msgpack.unpackb(samples[key])), (key, schema_fields(
+            type_name, msgpack.unpackb(samples[key])))
+        msgs.decode(msgs.get_type(type_name), samples[key])
+
+    # the run did something: the knee bend of the commander, sent at 4.0 s and stamped to start at 4.2 s
+    assert "Sent command (pose 1)" in log
+    stamps = sorted(first)
+    knee = names.index("left_knee")
+    late = [first[s][knee] for s in stamps if s[0] + s[1] * 1e-9 > 5.0]
+    assert late and max(late) > 0.3, f"the knees did not bend: {late[-3:]}"
+    assert len(stamps) > 5000, f"only {len(stamps)} joint_states in {RECORD_UNTIL} sim s"
+
+    second, _, _, _ = run_main_job(free_port(), tmp_path / "b")
+    common = sorted(set(first) & set(second))
+    assert len(common) > 0.99 * len(first), "the two runs published different stamps"
+    differing = [s for s in common if first[s] != second[s]]
+    assert not differing, f"{len(differing)} of {len(common)} joint states differ, first at {differing[0]}"

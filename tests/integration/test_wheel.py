@@ -1,0 +1,143 @@
+"""The distribution works as a wheel (non-editable, outside the checkout): ``pip install .`` into a fresh
+venv runs ``python -m launch humanoid.yaml``, robots/ and config/ included, and ``zenroid launch`` still
+works when a sourced ROS 2 environment shadows the ``launch`` package."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import msgpack
+import pytest
+
+from tests.conftest import ROOT
+
+ACTIVE = "Configured and activated joint_trajectory_controller"
+
+
+def _copy_checkout(dest: Path) -> None:
+    """The files git knows (tracked, or new and not ignored) as they are now, links kept as links; the
+    build then runs in the copy and leaves the checkout untouched (no build/ or egg-info in it)."""
+    listed = subprocess.run(["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"], cwd=ROOT,
+                            capture_output=True, check=True).stdout.decode().split("\0")
+    for name in filter(None, listed):
+        source = ROOT / name
+        if not source.exists() and not source.is_symlink():
+            continue  # deleted in the working tree
+        target = dest / name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        if source.is_symlink():
+            target.symlink_to(os.readlink(source))
+        else:
+            shutil.copy2(source, target)
+
+
+def _run(argv: list[str], **kwargs) -> subprocess.CompletedProcess:
+    result = subprocess.run(argv, capture_output=True, text=True, **kwargs)
+    assert result.returncode == 0, f"{argv} failed:\n{result.stdout[-3000:]}\n{result.stderr[-3000:]}"
+    return result
+
+
+@pytest.fixture(scope="module")
+def venv(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A fresh venv holding the wheel built from this checkout; dependencies come from the interpreter
+    running the tests (``--system-site-packages``), so nothing is downloaded but the build backend."""
+    base = tmp_path_factory.mktemp("wheel")
+    _copy_checkout(base / "src")
+    _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(base / "dist"), str(base / "src")],
+         timeout=600)
+    wheels = list((base / "dist").glob("zenroid-*.whl"))
+    assert len(wheels) == 1, wheels
+    _run([sys.executable, "-m", "venv", "--system-site-packages", str(base / "venv")], timeout=300)
+    python = base / "venv" / "bin" / "python"
+    # --force-reinstall: the interpreter underneath may hold an editable zenroid of the same version.
+    _run([str(python), "-m", "pip", "install", "-q", "--no-index", "--no-deps", "--force-reinstall",
+          str(wheels[0])], timeout=300)
+    return base / "venv"
+
+
+def _outside_env(**extra: str) -> dict[str, str]:
+    """The user's shell, without anything that points at the checkout."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "ZENOH_CONNECT", "ZENOH_CONFIG")}
+    env.update(extra)
+    return env
+
+
+def _joint_states_flow(argv: list[str], cwd: Path, env: dict[str, str], port: int) -> None:
+    """Run the main job with ``argv`` (``... humanoid.yaml gui:=false zenoh_port:=port``) until 50
+    ``humanoid/joint_states`` messages of 22 joints arrived and the trajectory controller is active (its
+    parameters come from config/controllers.yaml), then Ctrl-C it."""
+    from nodes.core.session import open_peer
+
+    out_path = cwd / "launch.out"
+    with open(out_path, "wb") as out:
+        proc = subprocess.Popen(argv, cwd=cwd, env=env, stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
+    received: list[dict] = []
+    lock = threading.Lock()
+
+    def on_sample(sample) -> None:  # noqa: ANN001 - a zenoh sample
+        with lock:
+            received.append(msgpack.unpackb(sample.payload.to_bytes()))
+
+    session = None
+    try:
+        deadline = time.monotonic() + 120
+        while "zenoh: embedded router" not in out_path.read_text(errors="replace"):
+            assert proc.poll() is None and time.monotonic() < deadline, out_path.read_text(errors="replace")
+            time.sleep(0.1)
+        session = open_peer([f"tcp/127.0.0.1:{port}"])
+        sub = session.declare_subscriber("humanoid/joint_states", on_sample)
+        while time.monotonic() < deadline:
+            with lock:
+                if len(received) >= 50 and ACTIVE in out_path.read_text(errors="replace"):
+                    break
+            assert proc.poll() is None, out_path.read_text(errors="replace")
+            time.sleep(0.2)
+        sub.undeclare()
+        with lock:
+            output = out_path.read_text(errors="replace")
+            assert len(received) >= 50 and ACTIVE in output, f"joint_states did not flow:\n{output[-4000:]}"
+            last = received[-1]
+        assert len(last["name"]) == 22 and len(last["position"]) == 22
+    finally:
+        if session is not None:
+            session.close()
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+
+
+@pytest.mark.slow
+def test_wheel_runs_the_main_job_outside_the_checkout(venv: Path, tmp_path: Path, zenoh_port: int) -> None:
+    python = venv / "bin" / "python"
+    where = _run([str(python), "-c", "import launch, msgs, nodes.share as s; "
+                  "print(launch.__file__, msgs.__file__, s.robot_file('humanoid'), s.config_file('controllers'))"],
+                 cwd=tmp_path, env=_outside_env(), timeout=60).stdout.split()
+    assert all(Path(p).resolve().is_relative_to(venv.resolve()) for p in where), (where, venv)
+    _joint_states_flow([str(python), "-m", "launch", "humanoid.yaml", "gui:=false", f"zenoh_port:={zenoh_port}",
+                       "--log-dir", str(tmp_path / "logs")], tmp_path, _outside_env(), zenoh_port)
+
+
+@pytest.mark.slow
+def test_zenroid_launch_works_when_ros2_shadows_launch(venv: Path, tmp_path: Path, zenoh_port: int) -> None:
+    """A sourced ROS 2 puts its ``launch`` package first on PYTHONPATH, so ``import launch`` (and
+    ``python -m launch``) find ROS's (README says so); ``zenroid launch`` still runs ours."""
+    ros = tmp_path / "opt_ros" / "launch"
+    ros.mkdir(parents=True)
+    (ros / "__init__.py").write_text('"""Stand-in for ROS 2\'s launch package."""\nROS = True\n')
+    env = _outside_env(PYTHONPATH=str(ros.parent))
+    shadowed = _run([str(venv / "bin" / "python"), "-c", "import launch; print(launch.__file__)"],
+                    cwd=tmp_path, env=env, timeout=60).stdout.strip()
+    assert Path(shadowed) == ros / "__init__.py"
+    _joint_states_flow([str(venv / "bin" / "zenroid"), "launch", "humanoid.yaml", "gui:=false",
+                        f"zenoh_port:={zenoh_port}", "--log-dir", str(tmp_path / "logs")], tmp_path, env, zenoh_port)

@@ -1,0 +1,285 @@
+"""Bags on disk without processes: ours read by rosbags (the other side), rosbags' read by ours.
+
+rosbags (Ternaris) is an independent pure-Python rosbag2 implementation: its reader checks our
+metadata.yaml and MCAP layout, its own CDR deserializer checks our payloads, its RIHS01 code our hashes.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import yaml
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from rosbags.highlevel import AnyReader
+from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin
+from rosbags.rosbag2 import Reader as Rosbag2Reader
+from rosbags.rosbag2 import Writer as Rosbag2Writer
+from rosbags.typesys import Stores, get_typestore
+
+import msgs
+from msgs.registry import get_spec
+from nodes.bag import rosbag2
+from nodes.bag.reader import BagError, open_bag, read_bag
+from nodes.bag.type_hash import rihs01
+from nodes.bag.writer import BagWriter
+from tests.support.samples import sample_message
+from tests.unit.test_msgs_properties import ALL, message_strategy
+
+JAZZY = get_typestore(Stores.ROS2_JAZZY)
+# Types a bag holds: not service request/response halves (rosbag2 records services as */srv/*_Event,
+# which we do not define), nor the action wrappers (FeedbackMessage, SendGoal_Request...), whose nested
+# names (X_Feedback) the .msg grammar of mcap-ros2-support rejects: the recorder reports them as
+# "not recorded".
+ACTION_WRAPPERS = ("_FeedbackMessage", "_SendGoal_Request", "_GetResult_Response")
+TOPIC_TYPES = [t for t in ALL if "/srv/" not in t and not t.endswith(ACTION_WRAPPERS)]
+METADATA_KEYS = ["version", "storage_identifier", "duration", "starting_time", "message_count",
+                 "topics_with_message_count", "compression_format", "compression_mode", "relative_file_paths",
+                 "files", "custom_data", "ros_distro"]
+QOS_KEYS = ["history", "depth", "reliability", "durability", "deadline", "lifespan", "liveliness",
+            "liveliness_lease_duration", "avoid_ros_namespace_conventions"]
+
+
+def plain_from_rosbags(type_name: str, value: Any) -> dict[str, Any]:
+    """A message deserialized by rosbags → a plain map following our definition (arrays as lists)."""
+    out = {}
+    for f in get_spec(type_name).fields:
+        v = getattr(value, f.name)
+        if f.is_bytes:
+            out[f.name] = bytes(v)
+        elif f.is_primitive:
+            out[f.name] = [x.item() if isinstance(x, np.generic) else x for x in v] if f.is_array else (
+                v.item() if isinstance(v, np.generic) else v)
+        elif f.is_array:
+            out[f.name] = [plain_from_rosbags(f.base, x) for x in v]
+        else:
+            out[f.name] = plain_from_rosbags(f.base, v)
+    return out
+
+
+def same(a: Any, b: Any) -> bool:
+    if isinstance(a, dict):
+        return isinstance(b, dict) and a.keys() == b.keys() and all(same(a[k], b[k]) for k in a)
+    if isinstance(a, list):
+        return isinstance(b, list) and len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
+    if isinstance(a, float) and isinstance(b, float):
+        return a == b or (math.isnan(a) and math.isnan(b))
+    return a == b
+
+
+def write_bag(path: Path, items: list[tuple[str, Any]], start_ns: int = 1_700_000_000_000_000_000) -> None:
+    writer = BagWriter(path)
+    for i, (key, msg) in enumerate(items):
+        assert writer.write(key, msg, start_ns + i * 1_000_000), msg._type
+    writer.close()
+
+
+def test_every_topic_type_is_decoded_by_rosbags(tmp_path: Path) -> None:
+    """One bag holding a non-default instance of every message type: rosbags decodes each to our values."""
+    items = [(f"types/{t.replace('/', '_')}", sample_message(t)) for t in TOPIC_TYPES]
+    write_bag(tmp_path / "all", items)
+    with AnyReader([tmp_path / "all"]) as reader:
+        decoded = [(c.topic, c.msgtype, reader.deserialize(raw, c.msgtype)) for c, _, raw in reader.messages()]
+    assert len(decoded) == len(items)
+    for (key, msg), (topic, msgtype, value) in zip(items, decoded):
+        assert topic == "/" + key and msgtype == msg._type
+        assert same(plain_from_rosbags(msgtype, value), msgs.to_dict(msg)), msgtype
+    # ...and ours reads it back identically.
+    assert [m.msg for m in read_bag(tmp_path / "all")] == [m for _, m in items]
+
+
+def test_types_without_a_ros_schema_are_refused_not_fatal(tmp_path: Path) -> None:
+    writer = BagWriter(tmp_path / "b")
+    for t in ALL:
+        if t.endswith(ACTION_WRAPPERS):
+            assert not writer.write("fjt/_action/x", sample_message(t)) and writer.count == 0
+    assert writer.write("j", msgs.get_type("sensor_msgs/msg/JointState")()) and writer.count == 1
+    writer.close()
+    assert open_bag(tmp_path / "b").info()["messages"] == 1
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.sampled_from(TOPIC_TYPES).flatmap(message_strategy))
+def test_random_messages_survive_rosbags(msg: Any) -> None:
+    with tempfile.TemporaryDirectory() as tmp:
+        write_bag(Path(tmp) / "bag", [("x/y", msg)])
+        with AnyReader([Path(tmp) / "bag"]) as reader:
+            [(conn, _, raw)] = list(reader.messages())
+            value = reader.deserialize(raw, conn.msgtype)
+    assert same(plain_from_rosbags(msg._type, value), msgs.to_dict(msg))
+
+
+def test_type_hashes_are_the_jazzy_ones() -> None:
+    """Our definitions of standard types hash (RIHS01) exactly as rosbags' copy of ROS 2 Jazzy's."""
+    standard = [t for t in TOPIC_TYPES if t in JAZZY.types]
+    assert "sensor_msgs/msg/JointState" in standard and len(standard) >= 30
+    for t in standard:
+        assert rihs01(t) == JAZZY.hash_rihs01(t), t
+    for t in TOPIC_TYPES:  # our own packages get a hash too
+        assert rihs01(t).startswith("RIHS01_") and len(rihs01(t)) == 7 + 64, t
+
+
+def test_metadata_yaml_follows_rosbag2(tmp_path: Path) -> None:
+    js = msgs.get_type("sensor_msgs/msg/JointState")
+    tf = msgs.get_type("tf2_msgs/msg/TFMessage")
+    items = [("humanoid/joint_states", js(name=["a"], position=[float(i)])) for i in range(3)]
+    write_bag(tmp_path / "b", [("tf_static", tf()), *items], start_ns=5_000_000_000)
+    assert sorted(os.listdir(tmp_path / "b")) == ["b_0.mcap", "metadata.yaml"]
+    doc = yaml.safe_load((tmp_path / "b" / "metadata.yaml").read_text())
+    info = doc["rosbag2_bagfile_information"]
+    assert list(doc) == ["rosbag2_bagfile_information"] and list(info) == METADATA_KEYS
+    assert info["version"] == 9 and info["storage_identifier"] == "mcap" and info["ros_distro"] == "jazzy"
+    assert info["duration"] == {"nanoseconds": 3_000_000} and info["message_count"] == 4
+    assert info["starting_time"] == {"nanoseconds_since_epoch": 5_000_000_000}
+    assert info["compression_format"] == "" and info["compression_mode"] == ""
+    assert info["relative_file_paths"] == ["b_0.mcap"]
+    assert info["files"] == [{"path": "b_0.mcap", "starting_time": {"nanoseconds_since_epoch": 5_000_000_000},
+                              "duration": {"nanoseconds": 3_000_000}, "message_count": 4}]
+    assert all(isinstance(k, str) and isinstance(v, str) for k, v in info["custom_data"].items())
+    topics = {t["topic_metadata"]["name"]: t for t in info["topics_with_message_count"]}
+    assert set(topics) == {"/tf_static", "/humanoid/joint_states"}
+    js_meta = topics["/humanoid/joint_states"]
+    assert list(js_meta) == ["topic_metadata", "message_count"] and js_meta["message_count"] == 3
+    tm = js_meta["topic_metadata"]
+    assert list(tm) == ["name", "type", "serialization_format", "offered_qos_profiles", "type_description_hash"]
+    assert tm["type"] == "sensor_msgs/msg/JointState" and tm["serialization_format"] == "cdr"
+    assert tm["type_description_hash"] == JAZZY.hash_rihs01("sensor_msgs/msg/JointState")
+    [qos] = tm["offered_qos_profiles"]
+    assert list(qos) == QOS_KEYS and qos["reliability"] == "reliable" and qos["durability"] == "volatile"
+    assert qos["deadline"] == {"sec": 9223372036, "nsec": 854775807}
+    assert topics["/tf_static"]["topic_metadata"]["offered_qos_profiles"][0]["durability"] == "transient_local"
+    # rosbags' own rosbag2 reader agrees on everything, QoS included.
+    with Rosbag2Reader(tmp_path / "b") as reader:
+        assert reader.message_count == 4 and reader.ros_distro == "jazzy"
+        conns = {c.topic: c for c in reader.connections}
+        assert conns["/humanoid/joint_states"].digest == tm["type_description_hash"]
+        assert conns["/tf_static"].ext.offered_qos_profiles[0].durability.name == "TRANSIENT_LOCAL"
+        assert len(list(reader.messages())) == 4
+
+
+def test_single_mcap_file_stays_a_single_file(tmp_path: Path) -> None:
+    js = msgs.get_type("sensor_msgs/msg/JointState")
+    write_bag(tmp_path / "one.mcap", [("j", js(name=["a"], position=[1.0]))])
+    assert os.listdir(tmp_path) == ["one.mcap"]
+    with AnyReader([tmp_path / "one.mcap"]) as reader:
+        [(conn, _, raw)] = list(reader.messages())
+        assert list(reader.deserialize(raw, conn.msgtype).position) == [1.0]
+    assert open_bag(tmp_path / "one.mcap").info()["ros_distro"] == "jazzy"  # from the rosbag2 record inside
+    with pytest.raises(FileExistsError):
+        BagWriter(tmp_path / "one.mcap")
+
+
+def test_directory_without_metadata_still_opens(tmp_path: Path) -> None:
+    """What zenroid wrote before rosbag2 metadata (and what a killed ros2 bag record leaves)."""
+    js = msgs.get_type("sensor_msgs/msg/JointState")
+    write_bag(tmp_path / "old", [("j", js(name=["a"], position=[float(i)])) for i in range(4)])
+    (tmp_path / "old" / "metadata.yaml").unlink()
+    bag = open_bag(tmp_path / "old")
+    assert not bag.has_metadata_file and bag.info()["messages"] == 4
+    assert [m.msg.position for m in bag.messages()] == [[0.0], [1.0], [2.0], [3.0]]
+
+
+def rosbags_bag(path: Path, storage: StoragePlugin, compression: CompressionMode | None = None) -> list[Any]:
+    """A bag written by rosbags: JointStates on two topics plus an Imu (a type zenroid does not define)."""
+    js = JAZZY.types["sensor_msgs/msg/JointState"]
+    header = JAZZY.types["std_msgs/msg/Header"]
+    stamp = JAZZY.types["builtin_interfaces/msg/Time"]
+    writer = Rosbag2Writer(path, version=9, storage_plugin=storage)
+    if compression is not None:
+        writer.set_compression(compression, CompressionFormat.ZSTD)
+    sent = []
+    with writer:
+        a = writer.add_connection("/humanoid/joint_states", js.__msgtype__, typestore=JAZZY)
+        b = writer.add_connection("/other/joint_states", js.__msgtype__, typestore=JAZZY)
+        imu = writer.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=JAZZY)
+        for i in range(6):
+            m = js(header=header(stamp=stamp(sec=i, nanosec=7), frame_id="base"), name=["l", "r"],
+                   position=np.array([0.1 * i, -0.1 * i]), velocity=np.array([1.0, 2.0]),
+                   effort=np.array([], dtype=np.float64))
+            conn = a if i % 2 == 0 else b
+            t = 10**18 + i * 50_000_000
+            writer.write(conn, t, JAZZY.serialize_cdr(m, js.__msgtype__))
+            sent.append((conn.topic, t, m))
+        writer.write(imu, 10**18, JAZZY.serialize_cdr(JAZZY.types["sensor_msgs/msg/Imu"](
+            header=header(stamp=stamp(sec=0, nanosec=0), frame_id=""),
+            orientation=JAZZY.types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
+            orientation_covariance=np.zeros(9),
+            angular_velocity=JAZZY.types["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0),
+            angular_velocity_covariance=np.zeros(9),
+            linear_acceleration=JAZZY.types["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0),
+            linear_acceleration_covariance=np.zeros(9)), "sensor_msgs/msg/Imu"))
+    return sent
+
+
+@pytest.mark.parametrize("storage,compression", [
+    (StoragePlugin.MCAP, None), (StoragePlugin.SQLITE3, None), (StoragePlugin.MCAP, CompressionMode.FILE),
+    (StoragePlugin.MCAP, CompressionMode.MESSAGE), (StoragePlugin.SQLITE3, CompressionMode.FILE),
+    (StoragePlugin.SQLITE3, CompressionMode.MESSAGE)], ids=lambda v: getattr(v, "name", "none"))
+def test_reads_bags_written_by_rosbags(tmp_path: Path, storage: StoragePlugin,
+                                       compression: CompressionMode | None) -> None:
+    sent = rosbags_bag(tmp_path / "theirs", storage, compression)
+    bag = open_bag(tmp_path / "theirs")
+    info = bag.info()
+    assert info["storage"] == storage.name.lower() and info["messages"] == 7
+    assert {t["topic"]: t["count"] for t in info["topics"]} == {"/humanoid/joint_states": 3,
+                                                                "/other/joint_states": 3, "/imu": 1}
+    unknown: list[tuple[str, str]] = []
+    got = list(bag.messages(on_unknown=lambda topic, reason: unknown.append((topic, reason))))
+    assert [u[0] for u in unknown] == ["/imu"] and "sensor_msgs/msg/Imu" in unknown[0][1]
+    assert [("/" + m.key, m.log_time_ns) for m in got] == [(topic, t) for topic, t, _ in sent]
+    for item, (_, _, m) in zip(got, sent):
+        assert item.msg.header.stamp.sec == m.header.stamp.sec and item.msg.header.stamp.nanosec == 7
+        assert item.msg.header.frame_id == "base" and item.msg.name == ["l", "r"]
+        assert item.msg.position == list(m.position) and item.msg.velocity == [1.0, 2.0] and item.msg.effort == []
+    only = [m.key for m in bag.messages(["humanoid/joint_states"])]
+    assert only == ["humanoid/joint_states"] * 3
+    with pytest.raises(BagError, match="/imu.*sensor_msgs/msg/Imu"):
+        list(bag.messages())
+
+
+@pytest.mark.parametrize("mutate,expected", [
+    (lambda d: d.pop("rosbag2_bagfile_information"), "rosbag2_bagfile_information: missing"),
+    (lambda d: d["rosbag2_bagfile_information"].update(version=12), "version: 12"),
+    (lambda d: d["rosbag2_bagfile_information"].update(storage_identifier="rosbag_v1"),
+     "storage_identifier: 'rosbag_v1' is not supported"),
+    (lambda d: d["rosbag2_bagfile_information"].update(relative_file_paths=["gone.mcap"]),
+     "relative_file_paths: 'gone.mcap' does not exist"),
+    (lambda d: d["rosbag2_bagfile_information"].update(compression_mode="file", compression_format="lz4"),
+     "compression_format: 'lz4' is not supported"),
+    (lambda d: d["rosbag2_bagfile_information"]["topics_with_message_count"][0]["topic_metadata"].pop("type"),
+     r"topics_with_message_count\[0\]: type: missing"),
+    (lambda d: d["rosbag2_bagfile_information"].update(message_count="many"), "message_count: expected int"),
+])
+def test_bad_metadata_is_a_clear_error(tmp_path: Path, mutate: Any, expected: str) -> None:
+    js = msgs.get_type("sensor_msgs/msg/JointState")
+    write_bag(tmp_path / "b", [("j", js())])
+    path = tmp_path / "b" / "metadata.yaml"
+    doc = yaml.safe_load(path.read_text())
+    mutate(doc)
+    path.write_text(yaml.safe_dump(doc))
+    with pytest.raises(BagError, match=expected):
+        open_bag(tmp_path / "b")
+
+
+def test_garbage_is_a_clear_error(tmp_path: Path) -> None:
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "metadata.yaml").write_text("rosbag2_bagfile_information: [unclosed")
+    with pytest.raises(BagError, match="not readable YAML"):
+        open_bag(tmp_path / "b")
+    (tmp_path / "x.db3").write_bytes(b"SQLite format 3\x00" + os.urandom(100))
+    with pytest.raises(BagError, match="not a readable rosbag2 sqlite3 file"):
+        open_bag(tmp_path / "x.db3")
+    (tmp_path / "x.txt").write_text("hello")
+    with pytest.raises(BagError, match="unknown file format"):
+        open_bag(tmp_path / "x.txt")
+
+
+def test_qos_dump_matches_rosbag2_layout() -> None:
+    text = rosbag2.qos_yaml(rosbag2.offered_qos("/tf_static"))
+    assert text.startswith("- history: keep_last\n  depth: 1\n  reliability: reliable\n  durability: transient_local")
