@@ -14,11 +14,15 @@ Section keys may carry a namespace (``/humanoid/controller_manager``) or be the 
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
+
+# a controller type as ros2_controllers spells it: <package>/<Class> (looked up in a registry, never imported)
+TYPE_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*/[A-Za-z][A-Za-z0-9_]*")
 
 
 class ConfigError(ValueError):
@@ -91,9 +95,9 @@ def parse_config(data: Any, source: str = "<yaml>", manager_name: str = "control
 
 
 def _add_type(config: ManagerConfig, source: str, name: str, type_name: Any) -> None:
-    if not isinstance(type_name, str) or not ("/" in type_name or ":" in type_name):
-        raise ConfigError(f"{source}: controller_manager.{name}.type must be 'package/Class' (or "
-                          f"'python.module:Class'), got {type_name!r}")
+    if not isinstance(type_name, str) or not TYPE_NAME.fullmatch(type_name):
+        raise ConfigError(f"{source}: controller_manager.{name}.type must be 'package/Class' (a registered "
+                          f"controller type), got {type_name!r:.200}")
     config.controllers.setdefault(name, ControllerConfig(name)).type = type_name
 
 

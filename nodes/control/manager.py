@@ -13,7 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from nodes.control.config import ControllerConfig, ManagerConfig
+from nodes.control.config import TYPE_NAME, ControllerConfig, ManagerConfig
 from nodes.control.controller import (
     ACTIVE,
     INACTIVE,
@@ -84,8 +84,8 @@ class ControllerManager:
             params = dict(params)
             type_name = params.pop("type", None)
             if type_name is not None:
-                if not isinstance(type_name, str) or not ("/" in type_name or ":" in type_name):
-                    raise ManagerError(f"controller '{name}': type must be 'package/Class', got {type_name!r}")
+                if not isinstance(type_name, str) or not TYPE_NAME.fullmatch(type_name):
+                    raise ManagerError(f"controller '{name}': type must be 'package/Class', got {type_name!r:.200}")
                 cfg.type = type_name
             cfg.params.update(params)
             self._changed()
