@@ -29,6 +29,7 @@ from nodes.control.controller import ACTIVE
 from nodes.control.interfaces import COMMAND_KINDS, HardwareInterfaces, JointInfo
 from nodes.control.manager import BEST_EFFORT, STRICT, ControllerManager, ManagerError
 from nodes.core import Node, ServiceError
+from nodes.core.log import truncate
 
 ListControllers = msgs.get_type("controller_manager_msgs/srv/ListControllers")
 LoadController = msgs.get_type("controller_manager_msgs/srv/LoadController")
@@ -43,6 +44,12 @@ HardwareState = msgs.get_type("zenroid_msgs/msg/HardwareState")
 HardwareCommand = msgs.get_type("zenroid_msgs/msg/HardwareCommand")
 SetParameters = msgs.get_type("zenroid_msgs/srv/SetParameters")
 Trigger = msgs.get_type("std_srvs/srv/Trigger")
+# A request names at most this many controllers, each at most MAX_NAME_CHARS long (a controller manager
+# has a handful); the limits are checked before anything is looked up or logged per name.
+MAX_SWITCH_CONTROLLERS = 256
+MAX_NAME_CHARS = 256
+MAX_REPLY_CHARS = 2000   # a status message quoted back to a caller
+MAX_PARAMS_CHARS = 64 * 1024   # one controller's parameters as YAML
 # A forward jump of sim time between two hardware states larger than this (the simulator's default
 # command_timeout: it has started holding position) restarts the controllers (see _resync).
 RESYNC_GAP_S = 0.5
@@ -327,29 +334,41 @@ class ControllerManagerNode(Node):
             required_command_interfaces=r["required_command_interfaces"],
             required_state_interfaces=r["required_state_interfaces"]) for r in rows])
 
-    def _attempt(self, what: str, fn: Any) -> bool:
+    def _attempt(self, what: str, name: str, fn: Any) -> bool:
+        problem = _name_problem("name", name)
+        if problem:
+            self.logger.error(f"{what} refused: {problem}")
+            return False
         try:
-            fn()
+            fn(name)
             return True
         except ManagerError as exc:
             self.logger.error(f"{what}: {exc}")
             return False
 
     def _srv_load(self, request: Any) -> Any:
-        return LoadController.Response(ok=self._attempt("load_controller", lambda: self.manager.load(request.name)))
+        return LoadController.Response(ok=self._attempt("load_controller", request.name, self.manager.load))
 
     def _srv_configure(self, request: Any) -> Any:
         return ConfigureController.Response(
-            ok=self._attempt("configure_controller", lambda: self.manager.configure(request.name)))
+            ok=self._attempt("configure_controller", request.name, self.manager.configure))
 
     def _srv_unload(self, request: Any) -> Any:
-        return UnloadController.Response(
-            ok=self._attempt("unload_controller", lambda: self.manager.unload(request.name)))
+        return UnloadController.Response(ok=self._attempt("unload_controller", request.name, self.manager.unload))
 
     def _srv_switch(self, request: Any) -> Any:
-        strictness = request.strictness if request.strictness in (BEST_EFFORT, STRICT) else BEST_EFFORT
+        problem = _switch_request_problem(request)
+        if problem:
+            self.logger.error(f"switch_controller refused: {problem}")
+            return SwitchController.Response(ok=False, message=problem)
+        strictness = request.strictness
+        if strictness == 0:   # unset: ros2_control defaults to BEST_EFFORT with a warning
+            self.logger.warn("switch_controller: strictness not set (0): defaulting to BEST_EFFORT (1); "
+                             "pass 1 (BEST_EFFORT) or 2 (STRICT)")
+            strictness = BEST_EFFORT
         ok, message = self.manager.switch(list(request.activate_controllers), list(request.deactivate_controllers),
                                           strictness)
+        message = truncate(message, MAX_REPLY_CHARS)
         if not ok:
             self.logger.error(f"switch_controller refused: {message}")
         return SwitchController.Response(ok=ok, message=message)
@@ -364,8 +383,18 @@ class ControllerManagerNode(Node):
         """names[i] = controller name, values_yaml[i] = its parameters (a YAML map, may include ``type``)."""
         if len(request.names) != len(request.values_yaml):
             raise ValueError(f"{len(request.names)} names but {len(request.values_yaml)} values_yaml")
+        if len(request.names) > MAX_SWITCH_CONTROLLERS:
+            raise ValueError(f"names: {len(request.names)} controllers, over the limit of {MAX_SWITCH_CONTROLLERS}")
         ok, reasons = [], []
-        for name, text in zip(request.names, request.values_yaml, strict=True):
+        for i, (name, text) in enumerate(zip(request.names, request.values_yaml, strict=True)):
+            problem = _name_problem(f"names[{i}]", name)
+            if not problem and len(text) > MAX_PARAMS_CHARS:
+                problem = f"values_yaml[{i}]: {len(text)} characters, over the {MAX_PARAMS_CHARS}-character limit"
+            if problem:
+                ok.append(False)
+                reasons.append(problem)
+                self.logger.error(f"set_controller_parameters refused: {problem}")
+                continue
             try:
                 self.manager.set_controller_params(name, parse_controller_yaml(text, f"parameters of '{name}'"))
                 ok.append(True)
@@ -395,3 +424,26 @@ class ControllerManagerNode(Node):
         active = [name for name, e in manager.controllers.items() if e.state == ACTIVE]
         if active:
             manager.switch([], active, BEST_EFFORT)  # ends running goals (aborted) before the session closes
+
+
+def _name_problem(field: str, name: str) -> str:
+    """Why ``name`` (a controller name in a request) is refused, or ""."""
+    if len(name) > MAX_NAME_CHARS:
+        return f"{field}: {len(name)} characters, over the {MAX_NAME_CHARS}-character limit for a controller name"
+    return ""
+
+
+def _switch_request_problem(request: Any) -> str:
+    """Why a switch_controller request is refused before any controller is looked at, or ""."""
+    if request.strictness not in (0, BEST_EFFORT, STRICT):
+        return (f"strictness: {request.strictness} is not BEST_EFFORT ({BEST_EFFORT}) or STRICT ({STRICT})"
+                + (" (AUTO and FORCE_AUTO are not supported)" if request.strictness in (3, 4) else ""))
+    for field in ("activate_controllers", "deactivate_controllers"):
+        names = getattr(request, field)
+        if len(names) > MAX_SWITCH_CONTROLLERS:
+            return f"{field}: {len(names)} names, over the limit of {MAX_SWITCH_CONTROLLERS} per request"
+        for i, name in enumerate(names):
+            problem = _name_problem(f"{field}[{i}]", name)
+            if problem:
+                return problem
+    return ""

@@ -15,6 +15,7 @@ import zenoh
 
 import msgs
 from msgs import DecodeError
+from nodes.core.log import truncate
 
 if TYPE_CHECKING:
     from nodes.core.node import Node
@@ -175,7 +176,7 @@ class Subscription:
 
 
 def _error_payload(reason: str) -> bytes:
-    return msgpack.packb({"error": reason}, use_bin_type=True)
+    return msgpack.packb({"error": truncate(reason)}, use_bin_type=True)
 
 
 _EMPTY_MAP = msgpack.packb({})

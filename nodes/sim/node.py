@@ -52,12 +52,34 @@ MAX_STEP_REQUEST = 1_000_000
 STARTUP_SPAWN_RETRY_S = 0.5
 
 
-def _gravity_validator(value: Any) -> str | None:
-    if not (isinstance(value, list) and len(value) == 3):
+# Plausible ranges of what a request may set (DART integrates anything, and a gravity of 1e308 or a time step
+# of 5e-324 ends in non-finite states, millions of DART warnings or a crash, not in an error).
+MAX_GRAVITY = 100.0                  # m/s^2 per axis (about 10 g)
+# s: 100 kHz .. 100 Hz physics (the humanoid standing on its joint springs diverges at 0.05 s steps)
+TIME_STEP_RANGE = (1e-5, 0.01)
+REAL_TIME_FACTOR_RANGE = (0.01, 1000.0)
+MAX_SHOWN_CHARS = 200                # of a refused text value quoted back to the caller
+
+
+def _shown(text: str) -> str:
+    """``text`` quoted, cut to MAX_SHOWN_CHARS (a refused 100,000-character value is not echoed back)."""
+    if len(text) <= MAX_SHOWN_CHARS:
+        return repr(text)
+    return f"{text[:MAX_SHOWN_CHARS]!r}… ({len(text)} characters)"
+
+
+def _gravity_problem(value: Any) -> str | None:
+    if not (isinstance(value, (list, tuple)) and len(value) == 3):
         return "expected three numbers [x, y, z]"
-    if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in value):
-        return "every component must be a finite number"
+    for axis, v in zip("xyz", value):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            return f"{axis} = {v!r} is not a finite number"
+        if abs(v) > MAX_GRAVITY:
+            return f"{axis} = {v:g} m/s^2 is outside [-{MAX_GRAVITY:g}, {MAX_GRAVITY:g}]"
     return None
+
+
+_gravity_validator = _gravity_problem
 
 
 class SimulatorNode(Node):
@@ -79,7 +101,7 @@ class SimulatorNode(Node):
             return self.declare_parameter(name, defaults.get(name, default), **options)
 
         physics_rate = p("physics_rate", 1000.0, description="physics steps per simulated second",
-                         min_value=10.0, max_value=100000.0)
+                         min_value=1.0 / TIME_STEP_RANGE[1], max_value=1.0 / TIME_STEP_RANGE[0])
         mode = p("mode", "lockstep", description="lockstep | realtime | kinematic", choices=MODES)
         gravity = p("gravity", [0.0, 0.0, -9.81], description="m/s^2", validator=_gravity_validator)
         ground = p("ground_enabled", True, description="add the ground_plane model")
@@ -272,23 +294,13 @@ class SimulatorNode(Node):
                                        f"sim time {self.world.time:.4f} s")
 
     def _srv_set_physics(self, request: Any) -> Any:
-        def fail(reason: str) -> Any:
+        reason = _physics_request_problem(request)
+        if reason:
+            self.logger.warn(f"set_physics_properties refused: {reason}")
             return SetPhysicsProperties.Response(success=False, status_message=reason)
-
         changes = []
-        if request.mode and request.mode not in MODES:
-            return fail(f"mode {request.mode!r} is not one of {', '.join(MODES)}")
-        if request.time_step and not (math.isfinite(request.time_step) and 1e-5 <= request.time_step <= 0.1):
-            return fail(f"time_step {request.time_step} must be within [1e-5, 0.1] s")
-        if request.real_time_factor and not (math.isfinite(request.real_time_factor)
-                                             and 0.01 <= request.real_time_factor <= 1000):
-            return fail(f"real_time_factor {request.real_time_factor} must be within [0.01, 1000]")
-        if request.add_ground and request.remove_ground:
-            return fail("add_ground and remove_ground are both set")
         g = request.gravity
         gravity = [g.x, g.y, g.z]
-        if request.set_gravity and not all(math.isfinite(v) for v in gravity):
-            return fail(f"gravity {gravity} must be finite")
         if request.set_gravity:
             self.world.set_gravity(gravity)
             changes.append(f"gravity {gravity}")
@@ -461,6 +473,28 @@ class SimulatorNode(Node):
 
     def on_process_exit(self) -> None:
         self.logger.info(f"simulator stopping at sim time {self.world.time:.3f} s after {self.sim.step_count} steps")
+
+
+def _physics_request_problem(request: Any) -> str | None:
+    """Why a set_physics_properties request is refused (naming the field), or None."""
+    if request.mode and request.mode not in MODES:
+        return f"mode: {_shown(request.mode)} is not one of {', '.join(MODES)}"
+    low, high = TIME_STEP_RANGE
+    if request.time_step and not (math.isfinite(request.time_step) and low <= request.time_step <= high):
+        return f"time_step: {request.time_step!r} s is outside [{low:g}, {high:g}] s (0 keeps the current one)"
+    low, high = REAL_TIME_FACTOR_RANGE
+    if request.real_time_factor and not (math.isfinite(request.real_time_factor)
+                                         and low <= request.real_time_factor <= high):
+        return (f"real_time_factor: {request.real_time_factor!r} is outside [{low:g}, {high:g}] "
+                "(0 keeps the current one)")
+    if request.add_ground and request.remove_ground:
+        return "add_ground and remove_ground are both set"
+    if request.set_gravity:
+        g = request.gravity
+        problem = _gravity_problem([g.x, g.y, g.z])
+        if problem:
+            return f"gravity.{problem}"
+    return None
 
 
 def _file_defaults() -> dict[str, Any]:

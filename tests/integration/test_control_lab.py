@@ -5,6 +5,7 @@ position and PID controllers, invalid trajectories, interface conflicts and the 
 from __future__ import annotations
 
 import math
+import os
 import subprocess
 import sys
 import threading
@@ -16,6 +17,7 @@ import pytest
 import msgs
 from nodes.core import Node, ServiceError
 from tests.conftest import ROOT, wait_until
+from tests.support.control import plugin_dir
 
 pytestmark = pytest.mark.slow
 
@@ -42,14 +44,16 @@ class Lab:
     """Simulator + controller manager for simple_robot, and a client node of the test itself."""
 
     def __init__(self, processes, router: str, activate=("joint_state_broadcaster", "joint_trajectory_controller"),
-                 sim_params: tuple[str, ...] = (), manager_args: tuple[str, ...] = ()) -> None:
+                 sim_params: tuple[str, ...] = (), manager_args: tuple[str, ...] = (),
+                 manager_env: dict[str, str] | None = None) -> None:
         self.processes = processes
         self.sim = processes.start(
             "-m", "nodes.sim", "--params-file", "config/sim.yaml",
             "--param", f"entities:=[{{name: {NS}, file: simple_robot, fixed: true}}]", *sim_params, name="sim")
         self.manager = processes.start(
             "-m", "nodes.control", "--ns", NS, "--params-file", "config/controller_lab_controllers.yaml",
-            "--param", f"activate:=[{', '.join(activate)}]", *manager_args, name="controller_manager")
+            "--param", f"activate:=[{', '.join(activate)}]", *manager_args, name="controller_manager",
+            env=manager_env)
         self.node = Node("lab_test_client", connect=[router])
         self.lock = threading.Lock()
         self.states: list[tuple[float, float, float]] = []  # (sim t, position, velocity)
@@ -320,14 +324,18 @@ def test_crashing_controller_is_deactivated_while_the_others_run(processes, rout
 controller_manager:
   ros__parameters:
     crasher:
-      type: tests.support.control:CrashingController
+      type: test_controllers/CrashingController
 crasher:
   ros__parameters:
     joints: []  # claims nothing: joint1 belongs to the JTC (one joint, one controller)
     crash_after: 0.5
 """)
+    # registered the way a plug-in package does it: an entry point in the zenroid.controllers group
+    plugins = plugin_dir(tmp_path / "plugins", {"test_controllers/CrashingController":
+                                                "tests.support.control:CrashingController"})
     lab = Lab(processes, router, activate=("joint_state_broadcaster", "joint_trajectory_controller", "crasher"),
-              manager_args=("--params-file", str(extra)))
+              manager_args=("--params-file", str(extra)),
+              manager_env={"PYTHONPATH": os.pathsep.join([str(ROOT), str(plugins)])})
     try:
         wait_until(lambda: "controller 'crasher' deactivated: update raised RuntimeError" in lab.log(), timeout=60,
                    message="crash report")

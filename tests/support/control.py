@@ -4,6 +4,7 @@ plant) and a controller that crashes on purpose: the controller tests drive cont
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 from nodes.control.controller import Controller
@@ -189,9 +190,10 @@ class FirstOrderPlant:
 
 class CrashingController(Controller):
     """A controller whose ``update`` raises after ``crash_after`` s of sim time (type
-    ``tests.support.control:CrashingController``): shows the manager deactivating it while others run."""
+    ``test_controllers/CrashingController``, registered with ``plugin_dir``): shows the manager deactivating
+    it while others run."""
 
-    type_name = "tests.support.control:CrashingController"
+    type_name = "test_controllers/CrashingController"
 
     def on_init(self) -> None:
         self.declare_parameter("joints", [], type=list, element_type=str)
@@ -215,3 +217,15 @@ class CrashingController(Controller):
         if time - self.started > self.crash_after:
             raise RuntimeError(f"deliberate crash after {self.crash_after} s")
         # Claims its interfaces but writes nothing (NaN): the hardware keeps the other controllers' commands.
+
+
+def plugin_dir(root: Path, controllers: dict[str, str]) -> Path:
+    """A directory holding an installed-distribution record (``*.dist-info``) that registers ``controllers``
+    (type name -> ``module:Class``) in the ``zenroid.controllers`` entry-point group, as ``pip install`` of a
+    plug-in package would: put it on a controller manager's ``PYTHONPATH``."""
+    info = root / "zenroid_test_controllers-0.0.dist-info"
+    info.mkdir(parents=True, exist_ok=True)
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: zenroid-test-controllers\nVersion: 0.0\n")
+    lines = ["[zenroid.controllers]", *(f"{name} = {target}" for name, target in controllers.items())]
+    (info / "entry_points.txt").write_text("\n".join(lines) + "\n")
+    return root

@@ -1,0 +1,73 @@
+"""Semantic and size limits on requests, checked without processes: every physical quantity in a plausible
+range, every name and list bounded, every refusal naming the field, nothing long echoed back."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+import msgs
+from nodes.control.node import MAX_SWITCH_CONTROLLERS, _switch_request_problem
+from nodes.sim.node import _physics_request_problem
+
+SetPhysics = msgs.get_type("zenroid_sim_msgs/srv/SetPhysicsProperties")
+SwitchController = msgs.get_type("controller_manager_msgs/srv/SwitchController")
+Vector3 = msgs.get_type("geometry_msgs/msg/Vector3")
+
+
+def physics(**fields) -> object:
+    return SetPhysics.Request(**fields)
+
+
+@pytest.mark.parametrize("request_fields, field", [
+    ({"set_gravity": True, "gravity": Vector3(z=1e308)}, "gravity.z"),
+    ({"set_gravity": True, "gravity": Vector3(z=1e6)}, "gravity.z"),
+    ({"set_gravity": True, "gravity": Vector3(x=-101.0)}, "gravity.x"),
+    ({"set_gravity": True, "gravity": Vector3(y=math.inf)}, "gravity.y"),
+    ({"set_gravity": True, "gravity": Vector3(y=math.nan)}, "gravity.y"),
+    ({"time_step": 5e-324}, "time_step"),
+    ({"time_step": -0.001}, "time_step"),
+    ({"time_step": 0.5}, "time_step"),
+    ({"time_step": math.nan}, "time_step"),
+    ({"real_time_factor": 1e9}, "real_time_factor"),
+    ({"real_time_factor": -1.0}, "real_time_factor"),
+    ({"mode": "x" * 100_000}, "mode"),
+    ({"add_ground": True, "remove_ground": True}, "add_ground"),
+])
+def test_physics_requests_out_of_range_are_refused_naming_the_field(request_fields, field) -> None:
+    problem = _physics_request_problem(physics(**request_fields))
+    assert problem and problem.startswith(field), problem
+    assert len(problem) < 500   # a 100,000-character mode is not echoed back
+
+
+@pytest.mark.parametrize("request_fields", [
+    {}, {"set_gravity": True, "gravity": Vector3(z=-9.81)}, {"set_gravity": True}, {"time_step": 0.001},
+    {"time_step": 1e-5}, {"time_step": 0.01}, {"real_time_factor": 2.0}, {"mode": "kinematic"},
+    {"set_gravity": True, "gravity": Vector3(x=100.0, y=-100.0, z=-1.62)},
+])
+def test_plausible_physics_requests_pass(request_fields) -> None:
+    assert _physics_request_problem(physics(**request_fields)) is None
+
+
+def switch(**fields) -> object:
+    return SwitchController.Request(**{"strictness": 2, **fields})
+
+
+@pytest.mark.parametrize("request_fields, field", [
+    ({"strictness": 99}, "strictness"),
+    ({"strictness": -1}, "strictness"),
+    ({"strictness": 3}, "strictness"),
+    ({"activate_controllers": [f"c{i}" for i in range(1_000_000)]}, "activate_controllers"),
+    ({"deactivate_controllers": ["x"] * (MAX_SWITCH_CONTROLLERS + 1)}, "deactivate_controllers"),
+    ({"activate_controllers": ["ok", "n" * 10_000_000]}, "activate_controllers[1]"),
+])
+def test_switch_requests_beyond_limits_are_refused_naming_the_field(request_fields, field) -> None:
+    problem = _switch_request_problem(switch(**request_fields))
+    assert problem.startswith(field), problem
+    assert len(problem) < 500
+
+
+@pytest.mark.parametrize("strictness", [0, 1, 2])
+def test_switch_strictness_values_ros2_control_accepts(strictness) -> None:
+    assert _switch_request_problem(switch(strictness=strictness, activate_controllers=["a"])) == ""
