@@ -16,6 +16,7 @@ import zenoh
 import msgs
 from msgs import DecodeError
 from nodes.core.log import truncate
+from nodes.core.session import max_payload_bytes
 
 if TYPE_CHECKING:
     from nodes.core.node import Node
@@ -123,6 +124,7 @@ class Subscription:
         self.raw = raw
         self.inline = inline
         self.with_key = with_key  # callback(msg, key): for wildcard keys ("*/joint_states")
+        self.max_payload = max_payload_bytes()   # bigger messages are dropped (logged) before decoding
         if max_rate is not None and not max_rate > 0:
             raise ValueError(f"max_rate must be > 0 Hz, got {max_rate}")
         if max_rate is None:
@@ -148,6 +150,12 @@ class Subscription:
             return
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
+        size = len(sample.payload)
+        if size > self.max_payload:   # before copying or decoding anything
+            self.node.logger.warn_throttle(
+                1.0, f"dropped a message on '{sample.key_expr}': payload: {size} bytes, over the "
+                f"{self.max_payload}-byte limit", key=f"size:{self.key}")
+            return
         payload = sample.payload.to_bytes()
         if self.raw or self.msg_type is None:
             msg: Any = payload
@@ -182,10 +190,16 @@ def _error_payload(reason: str) -> bytes:
 _EMPTY_MAP = msgpack.packb({})
 
 
-def decode_request(node: Node, query: zenoh.Query, cls: Any, what: str) -> Any | None:
-    """The query's request as ``cls``; on a bad payload, answer ``reply_err`` naming the field and return None."""
-    payload = query.payload.to_bytes() if query.payload is not None else b""
+def decode_request(node: Node, query: zenoh.Query, cls: Any, what: str,
+                   max_payload: int | None = None) -> Any | None:
+    """The query's request as ``cls``; on a bad or oversized payload, answer ``reply_err`` naming the field
+    and return None. The size is checked before the payload is copied or decoded."""
+    limit = max_payload_bytes() if max_payload is None else max_payload
+    size = len(query.payload) if query.payload is not None else 0
     try:
+        if size > limit:
+            raise DecodeError(cls._type, "", f"request is {size} bytes, over the {limit}-byte limit")
+        payload = query.payload.to_bytes() if query.payload is not None else b""
         return msgs.decode(cls, payload or _EMPTY_MAP)  # no payload: a request without fields
     except DecodeError as exc:
         node.logger.warn_throttle(1.0, f"{what}: bad request: {exc}", key=f"bad request:{what}")

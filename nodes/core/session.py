@@ -13,6 +13,25 @@ DEFAULT_PORT = 7447
 ENV_CONNECT = "ZENOH_CONNECT"
 ENV_CONFIG = "ZENOH_CONFIG"
 RECONNECT = {"period_init_ms": 250, "period_max_ms": 1000, "period_increase_factor": 2}
+# The largest message a node decodes (nodes.core.endpoints checks it before decoding and logs what it drops);
+# ZENROID_MAX_PAYLOAD_BYTES raises it for a deployment that moves bigger messages.
+ENV_MAX_PAYLOAD = "ZENROID_MAX_PAYLOAD_BYTES"
+DEFAULT_MAX_PAYLOAD = 4 * 1024 * 1024
+
+
+def max_payload_bytes() -> int:
+    raw = os.environ.get(ENV_MAX_PAYLOAD, "").strip()
+    try:
+        return max(1024, int(raw)) if raw else DEFAULT_MAX_PAYLOAD
+    except ValueError:
+        return DEFAULT_MAX_PAYLOAD
+
+
+def max_transport_message_bytes() -> int:
+    """What Zenoh itself accepts from a link (it drops bigger messages without closing the link): a few times
+    the decode limit, so an oversized message still reaches the node to be refused with a log line, while a
+    56 MB flood is never reassembled in the router's or a node's memory (Zenoh's default is 1 GiB)."""
+    return 4 * max_payload_bytes()
 
 
 def loopback_endpoint(port: int) -> str:
@@ -37,7 +56,13 @@ def _base_config() -> zenoh.Config:
     config = zenoh.Config.from_file(path) if path else zenoh.Config()
     # Never discover peers by multicast: only the endpoints we are told about.
     config.insert_json5("scouting/multicast/enabled", "false")
+    if not path:   # a user's config file keeps its own transport limits
+        _limit_message_size(config)
     return config
+
+
+def _limit_message_size(config: zenoh.Config) -> None:
+    config.insert_json5("transport/link/rx/max_message_size", str(max_transport_message_bytes()))
 
 
 def _local_addresses_toward(endpoints: list[str]) -> list[str]:
@@ -99,6 +124,7 @@ def router_config(port: int = DEFAULT_PORT, listen: list[str] | None = None) -> 
     config.insert_json5("listen/endpoints", json.dumps(listen or [loopback_endpoint(port)]))
     config.insert_json5("connect/endpoints", "[]")
     config.insert_json5("scouting/multicast/enabled", "false")
+    _limit_message_size(config)
     return config
 
 

@@ -18,6 +18,7 @@ import zenoh.ext
 
 from msgs import cdr
 from nodes.core.ros2 import attachment, names
+from nodes.core.session import max_payload_bytes
 
 if TYPE_CHECKING:
     from nodes.core.ros2 import Ros2Node
@@ -109,6 +110,9 @@ class _Payload:
     def to_bytes(self) -> bytes:
         return self._data
 
+    def __len__(self) -> int:
+        return len(self._data)
+
 
 class _Sample:
     def __init__(self, key: str, payload: bytes) -> None:
@@ -132,6 +136,10 @@ class SubscriptionMirror:
         att = attachment.unpack(sample.attachment.to_bytes() if sample.attachment is not None else None)
         if att is not None and attachment.is_ours(att.gid):
             return  # one of our publishers' CDR twins: the message already came on our key
+        if len(sample.payload) > self.target.max_payload:   # before converting anything
+            self.owner.warn(f"ROS 2 wire: dropped a message on {self.entity.ros_name}: payload: "
+                            f"{len(sample.payload)} bytes, over the {self.target.max_payload}-byte limit")
+            return
         try:
             payload = _to_msgpack(self.type_name, sample.payload.to_bytes())
         except cdr.CdrError as exc:
@@ -195,6 +203,9 @@ class ServiceMirror:
         if att is None:  # rmw_zenoh cannot correlate a reply without it; answer anyway
             att = attachment.Attachment(0, 0, bytes(attachment.GID_SIZE))
         try:
+            size, limit = (len(query.payload) if query.payload is not None else 0), max_payload_bytes()
+            if size > limit:   # before converting anything
+                raise cdr.CdrError(f"request is {size} bytes, over the {limit}-byte limit")
             raw = query.payload.to_bytes() if query.payload is not None else b""
             payload = _to_msgpack(self.request_type, raw)
         except cdr.CdrError as exc:
