@@ -101,6 +101,11 @@ def peer_config(connect: list[str] | None = None) -> zenoh.Config:
     """A peer session config that connects to ``connect`` (default: ``default_endpoints()``)."""
     config = _base_config()
     if os.environ.get(ENV_CONFIG) and connect is None:
+        # The file decides everything else (mode, credentials, TLS, listeners): a deployment gives each node
+        # its own file (its identity, e.g. docker-compose.secure.yml); ZENOH_CONNECT, when also set, names
+        # the router, so one file serves every host.
+        if os.environ.get(ENV_CONNECT, "").strip():
+            config.insert_json5("connect/endpoints", json.dumps(default_endpoints()))
         return config
     endpoints = connect or default_endpoints()
     config.insert_json5("mode", json.dumps("peer"))
@@ -117,24 +122,45 @@ def peer_config(connect: list[str] | None = None) -> zenoh.Config:
     return config
 
 
-def router_config(port: int = DEFAULT_PORT, listen: list[str] | None = None) -> zenoh.Config:
-    """A router config listening on loopback ``port`` (or the given endpoints)."""
-    config = zenoh.Config()
+def router_config(port: int = DEFAULT_PORT, listen: list[str] | None = None, file: str | None = None) -> zenoh.Config:
+    """A router config listening on loopback ``port`` (or the given endpoints).
+
+    ``file``: a zenohd configuration (json5) to start from, e.g. one with ``access_control`` and
+    ``transport/auth``; its listeners are kept unless ``listen`` is given."""
+    config = zenoh.Config.from_file(file) if file else zenoh.Config()
     config.insert_json5("mode", json.dumps("router"))
-    config.insert_json5("listen/endpoints", json.dumps(listen or [loopback_endpoint(port)]))
-    config.insert_json5("connect/endpoints", "[]")
+    # Without a file's own listeners (zenoh's default is a per-mode map that means every interface): loopback.
+    if listen or not listen_endpoints(config):
+        config.insert_json5("listen/endpoints", json.dumps(listen or [loopback_endpoint(port)]))
+    if not file:
+        config.insert_json5("connect/endpoints", "[]")
     config.insert_json5("scouting/multicast/enabled", "false")
     _limit_message_size(config)
     return config
+
+
+def open_config(config: zenoh.Config) -> zenoh.Session:
+    return zenoh.open(config)
+
+
+def init_zenoh_log(default_level: str = "error") -> None:
+    """Zenoh's own log lines on stderr, at ``RUST_LOG``'s level when set (as zenohd)."""
+    zenoh.init_log_from_env_or(default_level)
 
 
 def open_peer(connect: list[str] | None = None) -> zenoh.Session:
     return zenoh.open(peer_config(connect))
 
 
-def open_router(port: int = DEFAULT_PORT, listen: list[str] | None = None) -> zenoh.Session:
+def open_router(port: int = DEFAULT_PORT, listen: list[str] | None = None, file: str | None = None) -> zenoh.Session:
     """Open an embedded router (what the launcher hosts); close it with ``.close()``."""
-    return zenoh.open(router_config(port, listen))
+    return zenoh.open(router_config(port, listen, file))
+
+
+def listen_endpoints(config: zenoh.Config) -> list[str]:
+    """The endpoints a config lists explicitly ([] for zenoh's per-mode default)."""
+    endpoints = json.loads(config.get_json("listen/endpoints") or "[]")
+    return [str(e) for e in endpoints] if isinstance(endpoints, list) else []
 
 
 def is_connected(session: zenoh.Session) -> bool:

@@ -1,7 +1,10 @@
 """``zenroid router``: a standalone Zenoh router (a stand-in for ``zenohd`` on a machine without it).
 
 Listens on loopback by default; give ``--listen tcp/<address>:<port>`` to serve other machines, then point
-their launchers and nodes at it with ``ZENOH_CONNECT=tcp/<address>:<port>``.
+their launchers and nodes at it with ``ZENOH_CONNECT=tcp/<address>:<port>``. Takes zenohd's own options for
+what it does (``--config FILE`` with a zenohd json5 configuration, e.g. access control and user/password
+authentication; ``--listen``; ``--no-multicast-scouting``, always the case here), so a zenohd command line
+(docker-compose.yml) runs unchanged. ``RUST_LOG`` sets Zenoh's log level, as for zenohd.
 """
 
 from __future__ import annotations
@@ -10,29 +13,50 @@ import argparse
 import signal
 import threading
 
-from nodes.core.session import DEFAULT_PORT, loopback_endpoint, open_router
+from nodes.core.session import (
+    DEFAULT_PORT,
+    init_zenoh_log,
+    listen_endpoints,
+    loopback_endpoint,
+    open_config,
+    router_config,
+)
 from nodes.tools.cli import UsageError
+
+ENDPOINT_PROTOCOLS = ("tcp/", "udp/", "quic/", "tls/", "unixsock-stream/")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--listen", action="append", default=[], metavar="ENDPOINT",
-                        help=f"endpoint to listen on (repeatable); default {loopback_endpoint(DEFAULT_PORT)}")
+    parser.add_argument("--listen", "-l", action="append", default=[], metavar="ENDPOINT",
+                        help=f"endpoint to listen on (repeatable); default {loopback_endpoint(DEFAULT_PORT)}, "
+                             "or the --config file's listeners")
     parser.add_argument("--zenoh-port", type=int, default=DEFAULT_PORT, help="loopback port when no --listen")
+    parser.add_argument("--config", "-c", metavar="FILE",
+                        help="zenohd configuration (json5): access control, authentication, listeners, ...")
+    parser.add_argument("--no-multicast-scouting", action="store_true",
+                        help="accepted for zenohd compatibility: multicast scouting is always off here")
 
 
 def run(args: argparse.Namespace) -> int:
-    listen = args.listen or [loopback_endpoint(args.zenoh_port)]
-    for endpoint in listen:
-        if not endpoint.startswith(("tcp/", "udp/", "quic/", "tls/", "unixsock-stream/")):
+    for endpoint in args.listen:
+        if not endpoint.startswith(ENDPOINT_PROTOCOLS):
             raise UsageError(f"bad endpoint '{endpoint}': expected e.g. tcp/127.0.0.1:7447")
+    init_zenoh_log()
     try:
-        session = open_router(listen=listen)
+        config = router_config(args.zenoh_port, args.listen or None, args.config)
+    except Exception as exc:  # noqa: BLE001 - zenoh reports an unreadable or invalid file as a generic error
+        raise UsageError(f"cannot use the configuration {args.config}: {exc}") from None
+    listen = listen_endpoints(config)
+    try:
+        session = open_config(config)
     except Exception as exc:  # noqa: BLE001 - zenoh reports a busy port or bad address as a generic error
         raise UsageError(f"cannot listen on {', '.join(listen)}: {exc}") from None
     stop = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: stop.set())
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    print(f"zenoh router {session.info.zid()} listening on {', '.join(listen)} (multicast scouting off)", flush=True)
+    extras = " with " + args.config if args.config else ""
+    print(f"zenoh router {session.info.zid()} listening on {', '.join(listen)}{extras} (multicast scouting off)",
+          flush=True)
     try:
         stop.wait()
     finally:

@@ -1,0 +1,187 @@
+"""Programs the deployment tests run on their hosts (network namespaces), printing one JSON line.
+
+``watch SECONDS``: waits for ``humanoid/joint_states`` (at most 120 s), then records for SECONDS what a
+user on that host sees: joint_states, the left knee's range (the joint commander bends it every 2 s), the
+pelvis height (sim/model_states), sim time, and every sample on the robot's command keys whose
+attachment marks it as the rogue's.
+
+``rogue``: what a stranger holding only the read-only ``guest`` account tries: read joint_states, then
+drive the robot (hardware commands, trajectories, wildcard puts), call the simulator's and the controller
+manager's services, answer a simulator service in its place.
+
+``call KEY``: one service call with an empty request; prints the replies (ok/error).
+
+Connects like a node (``ZENOH_CONNECT``, ``ZENOH_CONFIG`` for its identity).
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import threading
+import time
+
+import msgpack
+
+from nodes.core.session import open_peer
+
+ROGUE = b"rogue"
+COMMAND_KEYS = ("humanoid/hardware/**", "humanoid/*/joint_trajectory", "humanoid/**/send_goal", "sim/**")
+KNEE = "left_knee"
+
+
+def _stamp(sample) -> bytes:
+    attachment = sample.attachment
+    return attachment.to_bytes() if attachment is not None else b""
+
+
+def watch(seconds: float) -> dict:
+    session = open_peer()
+    lock = threading.Lock()
+    knees: list[float] = []
+    pelvis: list[float] = []
+    clock: list[float] = []
+    rogue_seen: list[str] = []
+    first = threading.Event()
+
+    def on_joint_states(sample) -> None:
+        msg = msgpack.unpackb(sample.payload.to_bytes())
+        with lock:
+            if KNEE in msg["name"]:
+                knees.append(msg["position"][msg["name"].index(KNEE)])
+        first.set()
+
+    def on_model_states(sample) -> None:
+        msg = msgpack.unpackb(sample.payload.to_bytes())
+        if "humanoid" in msg["name"]:
+            with lock:
+                pelvis.append(msg["pose"][msg["name"].index("humanoid")]["position"]["z"])
+
+    def on_clock(sample) -> None:
+        msg = msgpack.unpackb(sample.payload.to_bytes())["clock"]
+        with lock:
+            clock.append(msg["sec"] + msg["nanosec"] * 1e-9)
+
+    def on_command(sample) -> None:
+        if _stamp(sample).startswith(ROGUE):
+            with lock:
+                rogue_seen.append(str(sample.key_expr))
+
+    subs = [session.declare_subscriber("humanoid/joint_states", on_joint_states),
+            session.declare_subscriber("sim/model_states", on_model_states),
+            session.declare_subscriber("sim/clock", on_clock)]
+    subs += [session.declare_subscriber(key, on_command) for key in COMMAND_KEYS]
+    try:
+        if not first.wait(120):
+            return {"error": "no joint_states in 120 s"}
+        with lock:
+            knees.clear(), pelvis.clear(), clock.clear()
+        time.sleep(seconds)
+        with lock:
+            return {"joint_states": len(knees), "knee_min": min(knees, default=None),
+                    "knee_max": max(knees, default=None), "pelvis_min": min(pelvis, default=None),
+                    "sim_time": [clock[0], clock[-1]] if clock else None, "rogue_seen": rogue_seen}
+    finally:
+        for sub in subs:
+            sub.undeclare()
+        session.close()
+
+
+def _replies(session, key: str, payload: dict, timeout: float = 3.0) -> list[str]:
+    out = []
+    for reply in session.get(key, payload=msgpack.packb(payload), timeout=timeout):
+        out.append("ok" if reply.ok is not None else "err")
+    return out
+
+
+def rogue() -> dict:
+    try:
+        session = open_peer()
+    except Exception as exc:  # noqa: BLE001 - report the refusal, whatever zenoh calls it
+        return {"connected": False, "error": str(exc)[:200]}
+    report: dict = {"connected": True}
+    got = threading.Event()
+    states: list[int] = []
+
+    def on_joint_states(sample) -> None:
+        states.append(len(msgpack.unpackb(sample.payload.to_bytes())["name"]))
+        got.set()
+
+    sub = session.declare_subscriber("humanoid/joint_states", on_joint_states)
+    report["read_joint_states"] = got.wait(30)
+    report["joints"] = states[0] if states else 0
+    # A real hardware frame bending every leg joint hard: if one reached the simulator, the robot would fall.
+    legs = [f"{side}_{joint}" for side in ("left", "right")
+            for joint in ("hip_pitch", "knee", "ankle_pitch")]
+    frame = msgpack.packb({"step": 0, "update_rate": 1000, "name": legs, "interface": ["position"] * len(legs),
+                           "value": [1.5] * len(legs)})
+    trajectory = msgpack.packb({"header": {"stamp": {"sec": 0, "nanosec": 0}, "frame_id": ""}, "joint_names": legs,
+                                "points": [{"positions": [1.5] * len(legs), "velocities": [], "accelerations": [],
+                                            "effort": [], "time_from_start": {"sec": 0, "nanosec": 200_000_000}}]})
+    spoof = session.declare_queryable("sim/get_physics_properties",
+                                      lambda query: query.reply(query.key_expr, msgpack.packb({"success": True}),
+                                                                attachment=ROGUE))
+    puts = {"humanoid/hardware/command": frame, "humanoid/hardware/*": frame, "humanoid/**": frame, "**": frame,
+            "humanoid/hardware/state": frame,
+            "humanoid/joint_trajectory_controller/joint_trajectory": trajectory}
+    deadline = time.monotonic() + 4.0
+    sent = 0
+    while time.monotonic() < deadline:
+        for key, payload in puts.items():
+            session.put(key, payload, attachment=ROGUE)
+            sent += 1
+        time.sleep(0.01)
+    report["puts"] = sent
+    calls = {
+        "sim/pause_physics": {},
+        "sim/reset_world": {},
+        "sim/set_physics_properties": {"gravity": {"x": 0.0, "y": 0.0, "z": 9.81}, "set_gravity": True},
+        "sim/**": {},
+        "**": {},
+        "simulator/set_parameters": {"parameters": []},
+        "humanoid/controller_manager/switch_controller": {
+            "activate_controllers": [], "deactivate_controllers": ["joint_trajectory_controller"],
+            "strictness": 1, "activate_asap": False, "timeout": {"sec": 0, "nanosec": 0}},
+    }
+    report["replies"] = {key: _replies(session, key, payload) for key, payload in calls.items()}
+    spoof.undeclare()
+    sub.undeclare()
+    session.close()
+    return report
+
+
+def call(key: str) -> dict:
+    session = open_peer()
+    try:
+        deadline = time.monotonic() + 30
+        while True:  # the service may still be coming up
+            replies = []
+            for reply in session.get(key, payload=msgpack.packb({}), timeout=3.0):
+                if reply.ok is not None:
+                    replies.append({"ok": msgpack.unpackb(reply.ok.payload.to_bytes()),
+                                    "attachment": _stamp(reply.ok).decode(errors="replace")})
+                else:
+                    replies.append({"err": reply.err.payload.to_bytes().decode(errors="replace")})
+            if replies or time.monotonic() > deadline:
+                return {"replies": replies}
+            time.sleep(0.5)
+    finally:
+        session.close()
+
+
+def main(argv: list[str]) -> int:
+    verb = argv[0]
+    if verb == "watch":
+        result = watch(float(argv[1]))
+    elif verb == "rogue":
+        result = rogue()
+    elif verb == "call":
+        result = call(argv[1])
+    else:
+        raise SystemExit(f"unknown verb {verb!r}")
+    print(json.dumps(result), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
