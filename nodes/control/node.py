@@ -211,7 +211,10 @@ class ControllerManagerNode(Node):
         self.logger.info(f"hardware '{info.robot_name}' ({info.mode}, {len(joints)} joints); "
                          f"update rate {self.update_rate} Hz; controllers in config: "
                          f"{sorted(self.config.controllers)}")
-        self._cmd_pub = self.create_publisher(HardwareCommand, "hardware/command", express=True, reliable=False)
+        # Reliable so that in lockstep a congested link delays a command instead of losing it (the
+        # simulator would hold position and the run would no longer be repeatable); in realtime each
+        # command is dropped rather than waited for, as the next one supersedes it.
+        self._cmd_pub = self.create_publisher(HardwareCommand, "hardware/command", express=True)
         self.create_subscription(HardwareState, "hardware/state", self._on_state, inline=True, raw=True)
         self.create_service(ListControllers, "~/list_controllers", self._srv_list)
         self.create_service(LoadController, "~/load_controller", self._srv_load)
@@ -294,7 +297,8 @@ class ControllerManagerNode(Node):
             cmd_names, cmd_kinds, cmd_values = manager.command()
             self._last_state_wall = time.monotonic()
         self._cmd_pub.publish_raw(_pack_command(step=step, update_rate=self.update_rate, name=cmd_names,
-                                                interface=cmd_kinds, value=cmd_values))
+                                                interface=cmd_kinds, value=cmd_values),
+                                  droppable=self.realtime_hardware)
         deferred, self.deferred_publications = self.deferred_publications, None
         for publisher, payload in deferred or ():
             publisher._publisher.publish_raw(payload, droppable=self.realtime_hardware)

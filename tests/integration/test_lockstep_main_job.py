@@ -157,8 +157,10 @@ def test_lockstep_main_job_is_bit_identical_and_hot_paths_follow_the_schema(tmp_
     assert late and max(late) > 0.3, f"the knees did not bend: {late[-3:]}"
     assert len(stamps) > 5000, f"only {len(stamps)} joint_states in {RECORD_UNTIL} sim s"
 
-    second, _, _, _ = run_main_job(free_port(), tmp_path / "b")
+    second, _, _, second_log = run_main_job(free_port(), tmp_path / "b")
     common = sorted(set(first) & set(second))
     assert len(common) > 0.99 * len(first), "the two runs published different stamps"
     differing = [s for s in common if first[s] != second[s]]
-    assert not differing, f"{len(differing)} of {len(common)} joint states differ, first at {differing[0]}"
+    holds = [line for line in (log + second_log).splitlines() if "no hardware/command" in line]
+    assert not differing, (f"{len(differing)} of {len(common)} joint states differ, first at {differing[0]}; "
+                           f"simulator holds: {holds[:3]}")
