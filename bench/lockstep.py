@@ -45,7 +45,16 @@ conf.insert_json5("scouting/multicast/enabled", "false")
 started = threading.Event()
 clock = []            # (wall, sim)
 pelvis = []
-with zenoh.open(conf) as s:
+deadline = time.monotonic() + 60
+while True:  # the launcher's router may not listen yet (a loaded machine starts it late)
+    try:
+        session = zenoh.open(conf)
+        break
+    except zenoh.ZError:
+        if time.monotonic() > deadline:
+            raise
+        time.sleep(0.2)
+with session as s:
     def on_clock(sample):
         c = msgpack.unpackb(sample.payload.to_bytes())["clock"]
         clock.append((time.perf_counter(), c["sec"] + c["nanosec"] * 1e-9))
