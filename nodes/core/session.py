@@ -135,8 +135,13 @@ def router_config(port: int = DEFAULT_PORT, listen: list[str] | None = None, fil
     if not file:
         config.insert_json5("connect/endpoints", "[]")
     config.insert_json5("scouting/multicast/enabled", "false")
-    _limit_message_size(config)
+    if not file:  # a zenohd file keeps its own transport limits (as for nodes)
+        _limit_message_size(config)
     return config
+
+
+def insert_config_value(config: zenoh.Config, key: str, json5_value: str) -> None:
+    config.insert_json5(key, json5_value)
 
 
 def open_config(config: zenoh.Config) -> zenoh.Session:

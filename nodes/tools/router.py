@@ -16,6 +16,7 @@ import threading
 from nodes.core.session import (
     DEFAULT_PORT,
     init_zenoh_log,
+    insert_config_value,
     listen_endpoints,
     loopback_endpoint,
     open_config,
@@ -33,6 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--zenoh-port", type=int, default=DEFAULT_PORT, help="loopback port when no --listen")
     parser.add_argument("--config", "-c", metavar="FILE",
                         help="zenohd configuration (json5): access control, authentication, listeners, ...")
+    parser.add_argument("--cfg", action="append", default=[], metavar="KEY:VALUE",
+                        help="set one configuration value, as zenohd: a config path and a json5 value, "
+                             "e.g. 'transport/link/rx/max_message_size:16777216'")
     parser.add_argument("--no-multicast-scouting", action="store_true",
                         help="accepted for zenohd compatibility: multicast scouting is always off here")
 
@@ -46,6 +50,14 @@ def run(args: argparse.Namespace) -> int:
         config = router_config(args.zenoh_port, args.listen or None, args.config)
     except Exception as exc:  # noqa: BLE001 - zenoh reports an unreadable or invalid file as a generic error
         raise UsageError(f"cannot use the configuration {args.config}: {exc}") from None
+    for item in args.cfg:
+        key, sep, value = item.partition(":")
+        if not sep or not key.strip():
+            raise UsageError(f"--cfg takes KEY:VALUE (a config path and a json5 value), got '{item}'")
+        try:
+            insert_config_value(config, key.strip(), value)
+        except Exception as exc:  # noqa: BLE001 - zenoh names the bad key or value in a generic error
+            raise UsageError(f"--cfg {item}: {exc}") from None
     listen = listen_endpoints(config)
     try:
         session = open_config(config)

@@ -23,6 +23,7 @@ from tests.conftest import ROOT
 from tests.support import compose as replay
 
 COMPOSE = ROOT / "docker-compose.yml"
+SECURE = ROOT / "docker-compose.secure.yml"  # tests/integration/test_acl.py
 ENDPOINT = "tcp/zenohd:7447"
 # where each service runs in the namespace replay (a new service must be placed here: the test says so)
 PLACEMENT = {
@@ -47,7 +48,7 @@ def docker_compose() -> str:
 
 
 # --- the file, checked by docker-compose itself ------------------------------------------------------
-@pytest.mark.parametrize("files", [[COMPOSE]], ids=["base"])
+@pytest.mark.parametrize("files", [[COMPOSE], [COMPOSE, SECURE]], ids=["base", "secure"])
 def test_docker_compose_accepts_the_file(files: list[Path]) -> None:
     argv = [docker_compose()]
     for path in files:
@@ -138,22 +139,33 @@ def test_services_run_the_main_jobs_nodes_with_its_parameters() -> None:
 
 
 # --- the topology, run from the file across network namespaces ---------------------------------------
-def run_probe(network: replay.Network, host: str, log_dir: Path, name: str, *argv: str,
-              env: dict[str, str] | None = None, secrets: dict[str, Path] | None = None,
-              timeout: float = 240) -> dict:
+def start_probe(network: replay.Network, host: str, log_dir: Path, name: str, *argv: str,
+                env: dict[str, str] | None = None, secrets: dict[str, Path] | None = None) -> subprocess.Popen:
+    """``tests/support/deploy_probe.py ARGV`` on ``host``, with ``env`` over the image's environment."""
     environment = replay.base_environment()
     environment.update(env or {})
-    log = log_dir / f"{name}.log"
-    proc = network.popen(host, [sys.executable, "-m", "tests.support.deploy_probe", *argv], environment, log,
-                         secrets)
+    proc = network.popen(host, [sys.executable, "-m", "tests.support.deploy_probe", *argv], environment,
+                         log_dir / f"{name}.log", secrets)
+    proc.log_path = log_dir / f"{name}.log"  # type: ignore[attr-defined]
+    return proc
+
+
+def probe_result(proc: subprocess.Popen, timeout: float = 240) -> dict:
+    """The JSON line a probe printed (fails the test with its output when it printed none)."""
     try:
         proc.wait(timeout)
     except subprocess.TimeoutExpired:
         proc.kill()
         proc.wait()
+    log = proc.log_path  # type: ignore[attr-defined]
     lines = [line for line in log.read_text(errors="replace").splitlines() if line.startswith("{")]
-    assert proc.returncode == 0 and lines, f"{name} failed:\n{log.read_text(errors='replace')[-3000:]}"
+    assert proc.returncode == 0 and lines, f"{log.stem} failed:\n{log.read_text(errors='replace')[-3000:]}"
     return json.loads(lines[-1])
+
+
+def run_probe(network: replay.Network, host: str, log_dir: Path, name: str, *argv: str,
+              env: dict[str, str] | None = None, secrets: dict[str, Path] | None = None) -> dict:
+    return probe_result(start_probe(network, host, log_dir, name, *argv, env=env, secrets=secrets))
 
 
 @pytest.mark.slow

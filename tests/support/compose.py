@@ -38,7 +38,7 @@ class Service:
     command: list[str]
     environment: dict[str, str]
     restart: str = "no"
-    secrets: list[str] = field(default_factory=list)
+    secrets: dict[str, str] = field(default_factory=dict)  # file name in /run/secrets -> secret
     ports: list[str] = field(default_factory=list)
     depends_on: list[str] = field(default_factory=list)
 
@@ -67,8 +67,14 @@ def _as_env(value: Any) -> dict[str, str]:
     return {str(k): "" if v is None else str(v) for k, v in value.items()}
 
 
-def _secret_names(value: Any) -> list[str]:
-    return [item if isinstance(item, str) else str(item["source"]) for item in value or []]
+def _secret_mounts(value: Any) -> dict[str, str]:
+    """``/run/secrets/<target>`` -> secret name, from the short (name) or long (source, target) syntax."""
+    mounts = {}
+    for item in value or []:
+        source = item if isinstance(item, str) else str(item["source"])
+        target = source if isinstance(item, str) else str(item.get("target", source))
+        mounts[target] = source
+    return mounts
 
 
 def load(*files: Path) -> Compose:
@@ -80,12 +86,13 @@ def load(*files: Path) -> Compose:
     for path in files:
         document = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
         for name, spec in (document.get("services") or {}).items():
-            merged = raw.setdefault(name, {"environment": {}, "secrets": [], "ports": [], "depends_on": []})
+            merged = raw.setdefault(name, {"environment": {}, "secrets": {}, "ports": [], "depends_on": []})
             for key in ("image", "command", "restart", "build"):
                 if key in spec:
                     merged[key] = spec[key]
             merged["environment"].update(_as_env(spec.get("environment")))
-            for key, convert in (("secrets", _secret_names), ("ports", _as_list), ("depends_on", _as_list)):
+            merged["secrets"].update(_secret_mounts(spec.get("secrets")))
+            for key, convert in (("ports", _as_list), ("depends_on", _as_list)):
                 merged[key] += [v for v in convert(spec.get(key)) if v not in merged[key]]
         for name, spec in (document.get("secrets") or {}).items():
             secrets[name] = (base_dir / spec["file"]).resolve()
@@ -198,7 +205,7 @@ class Network:
 
 def base_environment() -> dict[str, str]:
     """What the image gives every container: the package importable, our interpreter as ``python``."""
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("ZENOH_", "ZENROID_", "RUST_LOG"))}
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("ZENOH_", "ZENROID_"))}
     env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
     env["PYTHONPATH"] = str(ROOT)
     env["PYTHONUNBUFFERED"] = "1"
@@ -241,7 +248,7 @@ class Replay:
     def _start(self, run: Running) -> None:
         env = base_environment()
         env.update(run.service.environment)
-        secrets = {name: self.compose.secrets[name] for name in run.service.secrets}
+        secrets = {target: self.compose.secrets[name] for target, name in run.service.secrets.items()}
         with open(run.log, "ab") as log:
             log.write(f"--- start {run.starts + 1}: {shlex.join(self.argv(run.service))}\n".encode())
         run.proc = self.network.popen(run.host, self.argv(run.service), env, run.log, secrets)

@@ -23,10 +23,10 @@ import time
 
 import msgpack
 
-from nodes.core.session import open_peer
+from nodes.core.session import is_connected, open_peer
 
 ROGUE = b"rogue"
-COMMAND_KEYS = ("humanoid/hardware/**", "humanoid/*/joint_trajectory", "humanoid/**/send_goal", "sim/**")
+COMMAND_KEYS = ("humanoid/hardware/**", "humanoid/*/joint_trajectory")
 KNEE = "left_knee"
 
 
@@ -87,10 +87,14 @@ def watch(seconds: float) -> dict:
         session.close()
 
 
-def _replies(session, key: str, payload: dict, timeout: float = 3.0) -> list[str]:
+def _replies(session, key: str, payload: dict, timeout: float = 2.0) -> list[str]:
+    """What answered a call: "ok" / "err" per reply, leaving out our own fake service's answers."""
     out = []
     for reply in session.get(key, payload=msgpack.packb(payload), timeout=timeout):
-        out.append("ok" if reply.ok is not None else "err")
+        if reply.ok is None:
+            out.append("err")
+        elif _stamp(reply.ok) != ROGUE:
+            out.append("ok")
     return out
 
 
@@ -98,7 +102,13 @@ def rogue() -> dict:
     try:
         session = open_peer()
     except Exception as exc:  # noqa: BLE001 - report the refusal, whatever zenoh calls it
-        return {"connected": False, "error": str(exc)[:200]}
+        return {"connected": False, "error": str(exc)[:300]}
+    deadline = time.monotonic() + 5
+    while not is_connected(session) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    if not is_connected(session):
+        session.close()
+        return {"connected": False, "error": "no router or peer accepted the session"}
     report: dict = {"connected": True}
     got = threading.Event()
     states: list[int] = []
