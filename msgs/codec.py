@@ -66,6 +66,9 @@ def encode(msg: Any) -> bytes:
 
 # ---------------------------------------------------------------- decode
 
+_fast_default_decoders: dict[str, Callable[[Any], Any]] = {}  # the common case without hashing Limits
+
+
 def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFAULT_LIMITS) -> Any:
     """Decode and validate ``data`` as a ``cls`` message; raises ``DecodeError``."""
     type_name = cls._type
@@ -80,9 +83,14 @@ def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFA
         )
     except (msgpack.ExtraData, msgpack.FormatError, msgpack.StackError, ValueError, TypeError) as exc:
         raise DecodeError(type_name, "", f"not a valid msgpack payload ({type(exc).__name__}: {exc})") from None
-    try:   # unpackb bounded every string and array with these limits
-        return compiled.decoder(type_name, limits.max_array_length, limits.max_string_length,
-                                limits.allow_nonfinite, True)(obj)
+    fast = _fast_default_decoders.get(type_name) if limits is DEFAULT_LIMITS else None
+    if fast is None:  # unpackb bounded every string and array with these limits
+        fast = compiled.decoder(type_name, limits.max_array_length, limits.max_string_length,
+                                limits.allow_nonfinite, True)
+        if limits is DEFAULT_LIMITS:
+            _fast_default_decoders[type_name] = fast
+    try:
+        return fast(obj)
     except compiled.Reject:
         return _precise(cls, obj, limits)
 

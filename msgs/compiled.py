@@ -109,42 +109,56 @@ def decoder(type_name: str, max_array_length: int, max_string_length: int, allow
     ``lengths_checked``: the map comes from ``msgpack.unpackb`` with these limits as its ``max_str_len``
     and ``max_array_len``, so unbounded strings need no length check of their own.
     """
-    spec = get_spec(type_name)
     env: dict[str, Any] = {
-        "Reject": Reject, "_cls": get_class(type_name), "_names": frozenset(f.name for f in spec.fields),
-        "_FLOAT_ONLY": _FLOAT_ONLY, "_STR_ONLY": _STR_ONLY, "_INF": _INF, "_isfinite": math.isfinite,
-        "_MAXLEN": max_array_length, "_MAXSTR": max_string_length, "_ALLOW_NONFINITE": allow_nonfinite,
-        "_LENGTHS_CHECKED": lengths_checked, "_join": "".join,
+        "Reject": Reject, "_FLOAT_ONLY": _FLOAT_ONLY, "_STR_ONLY": _STR_ONLY, "_INF": _INF,
+        "_isfinite": math.isfinite, "_MAXLEN": max_array_length, "_MAXSTR": max_string_length,
+        "_ALLOW_NONFINITE": allow_nonfinite, "_LENGTHS_CHECKED": lengths_checked, "_join": "".join,
     }
-    body = ["def decode(o):",
-            "    if type(o) is not dict or not _names.issuperset(o):",
-            "        raise Reject"]
-    args = []
-    for i, f in enumerate(spec.fields):
-        var = f"v{i}"
-        env[f"_default{i}"] = functools.partial(default_value, f)
-        body.append(f"    {var} = o.get({f.name!r}, Reject)")
-        body.append(f"    if {var} is Reject:")
-        body.append(f"        {var} = _default{i}()")
-        body.append("    else:")
-        body += ["        " + line for line in _check_lines(f, var, env, i, allow_nonfinite, lengths_checked)]
-        args.append(f"{f.name}={var}")
+    body = ["def decode(o):", *_decode_lines(type_name, "o", "result", env, "", 0, allow_nonfinite,
+                                              lengths_checked), "    return result"]
+    return _compile("\n".join(body), env, "decode", f"decoder of {type_name}")
+
+
+def _decode_lines(type_name: str, obj: str, result: str, env: dict[str, Any], prefix: str, depth: int,
+                  allow_nonfinite: bool, lengths_checked: bool) -> list[str]:
+    """Lines (indented for the function body) that check the map in ``obj`` and bind ``result`` to the
+    instance; nested single messages are inlined up to a depth (no call per Header or Time)."""
     from msgs.codec import EQUAL_LENGTH_RULES  # the cross-field rules live with the precise decoder
 
+    spec = get_spec(type_name)
+    env[f"_cls{prefix}"] = get_class(type_name)
+    env[f"_names{prefix}"] = frozenset(f.name for f in spec.fields)
+    body = [f"    if type({obj}) is not dict or not _names{prefix}.issuperset({obj}):", "        raise Reject"]
+    args = []
+    for i, f in enumerate(spec.fields):
+        var = f"v{prefix}_{i}"
+        env[f"_default{prefix}_{i}"] = functools.partial(default_value, f)
+        body.append(f"    {var} = {obj}.get({f.name!r}, Reject)")
+        body.append(f"    if {var} is Reject:")
+        body.append(f"        {var} = _default{prefix}_{i}()")
+        body.append("    else:")
+        if not f.is_primitive and not f.is_array and depth < 3:
+            inner = _decode_lines(f.base, var, var, env, f"{prefix}_{i}", depth + 1, allow_nonfinite,
+                                  lengths_checked)
+            body += ["    " + line for line in inner]
+        else:
+            body += ["        " + line
+                     for line in _check_lines(f, var, env, f"{prefix}_{i}", allow_nonfinite, lengths_checked)]
+        args.append(f"{f.name}={var}")
     rule = EQUAL_LENGTH_RULES.get(type_name)
     if rule:
         ref, others, empty_ok = rule
         index = {f.name: i for i, f in enumerate(spec.fields)}
-        n = f"len(v{index[ref]})"
+        n = f"len(v{prefix}_{index[ref]})"
         for other in others:
-            m = f"len(v{index[other]})"
+            m = f"len(v{prefix}_{index[other]})"
             cond = f"{m} != {n}" + (f" and {m} != 0" if empty_ok else "")
             body += [f"    if {cond}:", "        raise Reject"]
-    body.append(f"    return _cls({', '.join(args)})")
-    return _compile("\n".join(body), env, "decode", f"decoder of {type_name}")
+    body.append(f"    {result} = _cls{prefix}({', '.join(args)})")
+    return body
 
 
-def _check_lines(f: FieldSpec, var: str, env: dict[str, Any], index: int, allow_nonfinite: bool,
+def _check_lines(f: FieldSpec, var: str, env: dict[str, Any], index: str, allow_nonfinite: bool,
                  lengths_checked: bool) -> list[str]:
     fail = ["    raise Reject"]
     if f.is_array:
