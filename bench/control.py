@@ -58,7 +58,6 @@ class _ContextHost:
         self.node = node
         self.control_time = 0.0
         self.logger = node.logger
-        self._entities = node._entities
 
     def __getattr__(self, name: str):
         return getattr(self.node, name)

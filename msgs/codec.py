@@ -15,7 +15,7 @@ import msgpack
 
 from msgs import compiled
 from msgs.compiled import _FLOAT_ONLY, _STR_ONLY
-from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
+from msgs.idl import EQUAL_LENGTH_RULES, FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
 from msgs.registry import default_value, get_class, get_spec
 
 
@@ -41,16 +41,6 @@ class Limits:
 
 
 DEFAULT_LIMITS = Limits()
-
-# Cross-field rules ROS messages carry in their comments; checked after field decoding.
-EQUAL_LENGTH_RULES: dict[str, tuple[str, tuple[str, ...], bool]] = {
-    # type: (reference field, fields that must match it, empty allowed)
-    "sensor_msgs/msg/JointState": ("name", ("position", "velocity", "effort"), True),
-    "zenroid_msgs/msg/HardwareState": ("name", ("position", "velocity", "effort"), False),
-    "zenroid_msgs/msg/HardwareCommand": ("name", ("interface", "value"), False),
-    "gazebo_msgs/msg/ModelStates": ("name", ("pose", "twist"), False),
-    "humanoid_msgs/msg/HumanoidState": ("joint_names", ("joint_positions", "joint_velocities", "joint_efforts"), True),
-}
 
 
 # ---------------------------------------------------------------- encode

@@ -23,7 +23,7 @@ from typing import Any
 
 import msgpack
 
-from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec, MsgSpec
+from msgs.idl import EQUAL_LENGTH_RULES, FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec, MsgSpec
 from msgs.registry import default_value, get_class, get_spec
 
 _FLOAT_ONLY = frozenset({float})
@@ -123,7 +123,6 @@ def _decode_lines(type_name: str, obj: str, result: str, env: dict[str, Any], pr
                   allow_nonfinite: bool, lengths_checked: bool) -> list[str]:
     """Lines (indented for the function body) that check the map in ``obj`` and bind ``result`` to the
     instance; nested single messages are inlined up to a depth (no call per Header or Time)."""
-    from msgs.codec import EQUAL_LENGTH_RULES  # the cross-field rules live with the precise decoder
 
     spec = get_spec(type_name)
     env[f"_cls{prefix}"] = get_class(type_name)

@@ -184,3 +184,14 @@ def split_sections(text: str, count: int, type_name: str) -> list[str]:
     if len(sections) != count:
         raise DefinitionError(f"{type_name}: expected {count} sections separated by '---', found {len(sections)}")
     return ["\n".join(s) for s in sections]
+
+
+# Cross-field rules ROS messages carry in their comments; checked after field decoding.
+EQUAL_LENGTH_RULES: dict[str, tuple[str, tuple[str, ...], bool]] = {
+    # type: (reference field, fields that must match it, empty allowed)
+    "sensor_msgs/msg/JointState": ("name", ("position", "velocity", "effort"), True),
+    "zenroid_msgs/msg/HardwareState": ("name", ("position", "velocity", "effort"), False),
+    "zenroid_msgs/msg/HardwareCommand": ("name", ("interface", "value"), False),
+    "gazebo_msgs/msg/ModelStates": ("name", ("pose", "twist"), False),
+    "humanoid_msgs/msg/HumanoidState": ("joint_names", ("joint_positions", "joint_velocities", "joint_efforts"), True),
+}

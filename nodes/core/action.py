@@ -8,15 +8,14 @@ import threading
 import time
 from collections import OrderedDict
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import zenoh
 
 import msgs
+from nodes.core import graph
 from nodes.core.endpoints import Publisher, ServiceError, call_raw, decode_request, encoding_for
-
-if TYPE_CHECKING:
-    from nodes.core.node import Node
+from nodes.core.runtime import NodeRuntime
 
 _GoalStatus = msgs.get_type("action_msgs/msg/GoalStatus")
 _GoalStatusArray = msgs.get_type("action_msgs/msg/GoalStatusArray")
@@ -87,7 +86,7 @@ class ServerGoalHandle:
 
 
 class ActionServer:
-    def __init__(self, node: Node, action_type: Any, key: str, *,
+    def __init__(self, node: NodeRuntime, action_type: Any, key: str, *,
                  goal_callback: Callable[[Any], bool | tuple[bool, str]] | None = None,
                  cancel_callback: Callable[[ServerGoalHandle], bool] | None = None,
                  accepted_callback: Callable[[ServerGoalHandle], None] | None = None,
@@ -110,28 +109,28 @@ class ActionServer:
         self._status = Publisher(node, _GoalStatusArray, f"{key}/status")
         s = node.session
         self._queryables = [
-            s.declare_queryable(f"{key}/send_goal", self._on_send_goal, complete=True),
-            s.declare_queryable(f"{key}/cancel_goal", self._on_cancel_goal, complete=True),
-            s.declare_queryable(f"{key}/get_result", self._on_get_result, complete=True),
+            s.declare_queryable(f"{key}/send_goal", self.handle_send_goal, complete=True),
+            s.declare_queryable(f"{key}/cancel_goal", self.handle_cancel_goal, complete=True),
+            s.declare_queryable(f"{key}/get_result", self.handle_get_result, complete=True),
         ]
-        self._token = node._graph_token("act", key, action_type._type)
-        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
+        self._token = node.presence.token("act", key, action_type._type)
+        self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     # -- zenoh side: decode, then hand the work to the node's executor
     def _decode(self, query: zenoh.Query, cls: Any) -> Any | None:
         return decode_request(self.node, query, cls, f"action '{self.key}'")
 
-    def _on_send_goal(self, query: zenoh.Query) -> None:
+    def handle_send_goal(self, query: zenoh.Query) -> None:
         request = self._decode(query, self.action_type.SendGoalRequest)
         if request is not None:
             self.node.executor.dispatch(self._handle_goal, query, request, where=f"action '{self.key}' goal")
 
-    def _on_cancel_goal(self, query: zenoh.Query) -> None:
+    def handle_cancel_goal(self, query: zenoh.Query) -> None:
         request = self._decode(query, _CancelGoal.Request)
         if request is not None:
             self.node.executor.dispatch(self._handle_cancel, query, request, where=f"action '{self.key}' cancel")
 
-    def _on_get_result(self, query: zenoh.Query) -> None:
+    def handle_get_result(self, query: zenoh.Query) -> None:
         request = self._decode(query, self.action_type.GetResultRequest)
         if request is None:
             return
@@ -296,14 +295,14 @@ class ClientGoalHandle:
 class ActionClient:
     """Feedback callbacks run on Zenoh's thread, so scripts can use a client without spinning."""
 
-    def __init__(self, node: Node, action_type: Any, key: str) -> None:
+    def __init__(self, node: NodeRuntime, action_type: Any, key: str) -> None:
         self.node = node
         self.action_type = action_type
         self.key = key
         self._feedback_callbacks: dict[bytes, Callable[[Any], None]] = {}
         self._feedback_sub = node.session.declare_subscriber(f"{key}/feedback", self._on_feedback)
-        self._token = node._graph_token("actc", key, action_type._type)
-        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
+        self._token = node.presence.token("actc", key, action_type._type)
+        self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     def _on_feedback(self, sample: zenoh.Sample) -> None:
         try:
@@ -316,8 +315,6 @@ class ActionClient:
             self.node.executor.run_callback(callback, msg.feedback, where="feedback callback")
 
     def wait_for_server(self, timeout: float = 5.0) -> bool:
-        from nodes.core import graph
-
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             if any(e.kind == "act" and e.name == self.key for e in graph.snapshot(self.node.session, 0.3)):

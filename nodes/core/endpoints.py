@@ -8,18 +8,17 @@ import struct
 import threading
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import msgpack
 import zenoh
 
 import msgs
 from msgs import DecodeError
+from nodes.core.graph import parse_key
 from nodes.core.log import truncate
+from nodes.core.runtime import NodeRuntime
 from nodes.core.session import max_payload_bytes
-
-if TYPE_CHECKING:
-    from nodes.core.node import Node
 
 ENCODING = "application/msgpack"
 _ATTACHMENT = struct.Struct("<Q16s")  # sequence number, source id (loss detection, `topic hz`)
@@ -45,7 +44,7 @@ class ServiceError(RuntimeError):
 
 
 class Publisher:
-    def __init__(self, node: Node, msg_type: Any, key: str, *, reliable: bool = True,
+    def __init__(self, node: NodeRuntime, msg_type: Any, key: str, *, reliable: bool = True,
                  priority: zenoh.Priority | None = None, express: bool = False, latched: bool = False) -> None:
         self.node = node
         self.msg_type = msg_type
@@ -59,8 +58,8 @@ class Publisher:
         )
         self._source = os.urandom(16)
         self._seq = itertools.count(1)   # next() on a count is atomic under the GIL: no lock per message
-        self._token = node._graph_token("pub", key, msg_type._type)
-        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
+        self._token = node.presence.token("pub", key, msg_type._type)
+        self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     def publish(self, msg: Any) -> None:
         """Encode and send ``msg`` (a ``msg_type`` instance)."""
@@ -87,7 +86,7 @@ class Publisher:
     def publish_raw(self, payload: bytes, *, droppable: bool = False) -> None:
         """Send an encoded message. ``droppable=True``: drop it rather than wait when the link is congested
         (a periodic stream whose next message supersedes this one), whatever the publisher's reliability."""
-        if self.node._closed:
+        if self.node.closed:
             return  # a callback still running while the node shuts down: nothing to send to
         pub = self._pub
         if droppable and self.reliable:
@@ -114,7 +113,7 @@ class Subscription:
     ``joint_states`` costs a consumer that only needs 50 updates a second 50 wake-ups, not 1000.
     """
 
-    def __init__(self, node: Node, msg_type: Any, key: str, callback: Callable[[Any], None] | None, *,
+    def __init__(self, node: NodeRuntime, msg_type: Any, key: str, callback: Callable[[Any], None] | None, *,
                  inline: bool = False, raw: bool = False, with_key: bool = False,
                  max_rate: float | None = None, backlog: int = 256) -> None:
         self.node = node
@@ -128,13 +127,13 @@ class Subscription:
         if max_rate is not None and not max_rate > 0:
             raise ValueError(f"max_rate must be > 0 Hz, got {max_rate}")
         if max_rate is None:
-            self._sub = node.session.declare_subscriber(key, self._on_sample)
+            self._sub = node.session.declare_subscriber(key, self.handle_sample)
         else:
             self._sub = node.session.declare_subscriber(key, zenoh.handlers.RingChannel(backlog))
             threading.Thread(target=self._drain, args=(1.0 / max_rate,), daemon=True,
                              name=f"sub:{key}").start()
-        self._token = node._graph_token("sub", key, msg_type._type if msg_type else "*")
-        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
+        self._token = node.presence.token("sub", key, msg_type._type if msg_type else "*")
+        self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     def _drain(self, period: float) -> None:
         try:
@@ -144,12 +143,12 @@ class Subscription:
                     batch.append(sample)
                 with self.node.executor.lock:       # the batch in one go: work queued meanwhile sees all of it
                     for sample in batch:
-                        self._on_sample(sample)
+                        self.handle_sample(sample)
                 time.sleep(period)
         except Exception:  # noqa: BLE001 - the subscriber was undeclared: the channel is closed
             return
 
-    def _on_sample(self, sample: zenoh.Sample) -> None:
+    def handle_sample(self, sample: zenoh.Sample) -> None:
         size = len(sample.payload)
         if size > self.max_payload:   # before copying or decoding anything
             self.node.logger.warn_throttle(
@@ -190,7 +189,7 @@ def _error_payload(reason: str) -> bytes:
 _EMPTY_MAP = msgpack.packb({})
 
 
-def decode_request(node: Node, query: zenoh.Query, cls: Any, what: str,
+def decode_request(node: NodeRuntime, query: zenoh.Query, cls: Any, what: str,
                    max_payload: int | None = None) -> Any | None:
     """The query's request as ``cls``; on a bad or oversized payload, answer ``reply_err`` naming the field
     and return None. The size is checked before the payload is copied or decoded."""
@@ -211,7 +210,7 @@ def decode_request(node: Node, query: zenoh.Query, cls: Any, what: str,
 class ServiceServer:
     """A queryable on ``key``: request map in, response map out (DESIGN §4 wire protocol)."""
 
-    def __init__(self, node: Node, srv_type: Any, key: str, handler: Callable[[Any], Any], *,
+    def __init__(self, node: NodeRuntime, srv_type: Any, key: str, handler: Callable[[Any], Any], *,
                  inline: bool = False) -> None:
         self.node = node
         self.srv_type = srv_type
@@ -219,11 +218,11 @@ class ServiceServer:
         self.handler = handler
         self.inline = inline
         self._encoding = encoding_for(srv_type.Response._type)
-        self._queryable = node.session.declare_queryable(key, self._on_query, complete=True)
-        self._token = node._graph_token("srv", key, srv_type._type)
-        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
+        self._queryable = node.session.declare_queryable(key, self.handle_query, complete=True)
+        self._token = node.presence.token("srv", key, srv_type._type)
+        self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
-    def _on_query(self, query: zenoh.Query) -> None:
+    def handle_query(self, query: zenoh.Query) -> None:
         request = decode_request(self.node, query, self.srv_type.Request, f"service '{self.key}'")
         if request is None:
             return
@@ -280,12 +279,12 @@ def call_raw(session: zenoh.Session, key: str, payload: bytes, timeout: float) -
 
 
 class Client:
-    def __init__(self, node: Node, srv_type: Any, key: str) -> None:
+    def __init__(self, node: NodeRuntime, srv_type: Any, key: str) -> None:
         self.node = node
         self.srv_type = srv_type
         self.key = key
-        self._token = node._graph_token("cli", key, srv_type._type)
-        self._mirror = node._mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
+        self._token = node.presence.token("cli", key, srv_type._type)
+        self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     def call(self, request: Any | None = None, timeout: float = 2.0) -> Any:
         """Send ``request`` (default: an empty Request) and return the decoded Response."""
@@ -298,8 +297,6 @@ class Client:
 
     def service_is_ready(self) -> bool:
         replies = self.node.session.liveliness().get("@graph/srv/**", timeout=0.5)
-        from nodes.core.graph import parse_key
-
         for reply in replies:
             if reply.ok is not None:
                 entry = parse_key(str(reply.ok.key_expr))

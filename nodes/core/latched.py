@@ -9,28 +9,25 @@ from __future__ import annotations
 
 import threading
 import time
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import zenoh
 
 import msgs
 from nodes.core.endpoints import Publisher, encoding_for
-
-if TYPE_CHECKING:
-    from nodes.core.node import Node
+from nodes.core.runtime import NodeRuntime
 
 
 class LatchedPublisher:
-    def __init__(self, node: Node, msg_type: Any, topic: str) -> None:
+    def __init__(self, node: NodeRuntime, msg_type: Any, key: str) -> None:
         self.node = node
         self.msg_type = msg_type
-        self.key = node.resolve(topic)
+        self.key = key
         self._publisher = Publisher(node, msg_type, self.key, latched=True)
         self._encoding = encoding_for(msg_type._type)
         self._last: bytes | None = None
         self._lock = threading.Lock()
         self._queryable = node.session.declare_queryable(self.key, self._on_query, complete=True)
-        node._entities.append(self)
 
     def publish(self, msg: Any) -> None:
         if getattr(msg, "_type", None) != self.msg_type._type:

@@ -28,6 +28,11 @@ class ParameterDescriptor:
     read_only: bool | str = False  # a string says why (shown when a change is refused)
 
 
+def type_of_default(value: Any) -> type:
+    """The parameter type a default implies (a tuple is a list; anything else unchecked)."""
+    return {bool: bool, int: int, float: float, str: str, list: list, tuple: list, dict: dict}.get(type(value), object)
+
+
 def parse_value(text: str) -> Any:
     """A command-line parameter value: YAML scalars/lists (``1``, ``true``, ``[a, b]``), else the string."""
     try:

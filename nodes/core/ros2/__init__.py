@@ -100,10 +100,9 @@ class Ros2Node:
                 return mirror.SubscriptionMirror(self, endpoint)
             if kind == "ServiceServer":
                 srv = endpoint.srv_type._type
-                return mirror.ServiceMirror(self, names.ros_service_name(key), srv, key, endpoint._on_query)
+                return mirror.ServiceMirror(self, names.ros_service_name(key), srv, key, endpoint.handle_query)
             if kind == "Client":
-                return mirror.TokensOnly([mirror._Entity(self, names.CLIENT, names.ros_service_name(key),
-                                                         endpoint.srv_type._type)])
+                return mirror.service_client(self, endpoint)
             if kind == "ActionServer":
                 return mirror.action_server(self, endpoint)
             if kind == "ActionClient":

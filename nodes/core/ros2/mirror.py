@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import itertools
 import time
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import msgpack
 import zenoh
@@ -18,10 +18,23 @@ import zenoh.ext
 
 from msgs import cdr
 from nodes.core.ros2 import attachment, names
+from nodes.core.ros2.graph import RosGraph
 from nodes.core.session import max_payload_bytes
 
-if TYPE_CHECKING:
-    from nodes.core.ros2 import Ros2Node
+
+class MirrorOwner(Protocol):
+    """What a mirror needs of the node's ROS 2 presence (``nodes.core.ros2.Ros2Node``)."""
+
+    session: zenoh.Session
+    domain: int
+    zid: str
+    node_id: int
+    namespace: str
+    name: str
+    graph: RosGraph
+
+    def next_entity_id(self) -> int: ...
+    def warn(self, text: str) -> None: ...
 
 _CDR = zenoh.Encoding.APPLICATION_CDR
 
@@ -37,7 +50,7 @@ def _to_msgpack(type_name: str, cdr_payload: bytes) -> bytes:
 class _Entity:
     """One liveliness token of ours (and the GID derived from it)."""
 
-    def __init__(self, owner: Ros2Node, kind: str, ros_name: str, type_name: str,
+    def __init__(self, owner: MirrorOwner, kind: str, ros_name: str, type_name: str,
                  qos: names.Qos = names.DEFAULT_QOS) -> None:
         self.owner = owner
         self.ros_name = ros_name
@@ -56,7 +69,7 @@ class TopicMirror:
     """A publisher's CDR twin. ``active`` (read on every publish) is True while a ROS 2 subscriber exists;
     latched topics are always active so their last message waits in the cache for late subscribers."""
 
-    def __init__(self, owner: Ros2Node, key: str, type_name: str, *, reliable: bool = True,
+    def __init__(self, owner: MirrorOwner, key: str, type_name: str, *, reliable: bool = True,
                  latched: bool = False) -> None:
         qos = names.LATCHED_QOS if latched else names.Qos(reliable=reliable)
         self.owner = owner
@@ -124,7 +137,7 @@ class _Sample:
 class SubscriptionMirror:
     """CDR from ROS 2 publishers on the data key, delivered to our subscription as if it came on our key."""
 
-    def __init__(self, owner: Ros2Node, subscription: Any) -> None:
+    def __init__(self, owner: MirrorOwner, subscription: Any) -> None:
         self.owner = owner
         self.target = subscription
         self.type_name = subscription.msg_type._type
@@ -145,7 +158,7 @@ class SubscriptionMirror:
         except cdr.CdrError as exc:
             self.owner.warn(f"ROS 2 wire: dropped a message on {self.entity.ros_name}: {exc}")
             return
-        self.target._on_sample(_Sample(self.target.key, payload))
+        self.target.handle_sample(_Sample(self.target.key, payload))
 
     def close(self) -> None:
         self.entity.close()
@@ -156,7 +169,7 @@ class _Query:
     """A ROS 2 request seen by our service/action code as a query on our key with a msgpack payload; its
     answers go back to the ROS 2 client as CDR with the client's sequence number and GID."""
 
-    def __init__(self, owner: Ros2Node, query: zenoh.Query, key: str, payload: bytes, response_type: str,
+    def __init__(self, owner: MirrorOwner, query: zenoh.Query, key: str, payload: bytes, response_type: str,
                  data_key: str, att: attachment.Attachment) -> None:
         self.owner = owner
         self._query = query
@@ -190,7 +203,7 @@ class ServiceMirror:
     """A queryable on the data key of a service (or of one of an action's services), answered by our
     endpoint's query handler ``handle(query)``."""
 
-    def __init__(self, owner: Ros2Node, ros_name: str, srv_type: str, key: str, handle: Any) -> None:
+    def __init__(self, owner: MirrorOwner, ros_name: str, srv_type: str, key: str, handle: Any) -> None:
         self.owner = owner
         self.key = key
         self.handle = handle
@@ -242,20 +255,24 @@ class Group:
             part.close()
 
 
-def action_server(owner: Ros2Node, server: Any) -> Group:
+def action_server(owner: MirrorOwner, server: Any) -> Group:
     action = server.action_type._type
     parts = [
         ServiceMirror(owner, names.ros_action_service(server.key, "send_goal"), f"{action}_SendGoal",
-                      f"{server.key}/send_goal", server._on_send_goal),
+                      f"{server.key}/send_goal", server.handle_send_goal),
         ServiceMirror(owner, names.ros_action_service(server.key, "cancel_goal"), "action_msgs/srv/CancelGoal",
-                      f"{server.key}/cancel_goal", server._on_cancel_goal),
+                      f"{server.key}/cancel_goal", server.handle_cancel_goal),
         ServiceMirror(owner, names.ros_action_service(server.key, "get_result"), f"{action}_GetResult",
-                      f"{server.key}/get_result", server._on_get_result),
+                      f"{server.key}/get_result", server.handle_get_result),
     ]
     return Group(parts)
 
 
-def action_client(owner: Ros2Node, client: Any) -> TokensOnly:
+def service_client(owner: MirrorOwner, client: Any) -> TokensOnly:
+    return TokensOnly([_Entity(owner, names.CLIENT, names.ros_service_name(client.key), client.srv_type._type)])
+
+
+def action_client(owner: MirrorOwner, client: Any) -> TokensOnly:
     action = client.action_type._type
     key = client.key
     return TokensOnly([
