@@ -128,6 +128,10 @@ class HardwareInterfaces:
             raise KeyError(f"command interface '{name}' does not exist")
         return LoanedCommandInterface(name, slot)
 
+    def command_slot(self, name: str) -> _Slot:
+        """The slot behind a command interface (the manager reads claimed ones in one pass per cycle)."""
+        return self._command[name]
+
     def read_state(self, names: list[str], position: list[float], velocity: list[float],
                    effort: list[float]) -> None:
         """Copy one ``hardware/state`` frame into the state slots (unknown joints are ignored)."""

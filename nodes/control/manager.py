@@ -293,7 +293,7 @@ class ControllerManager:
         slots = []
         for iface in self.claims:
             joint, kind = split_interface(iface)
-            slots.append((joint, kind, self.hardware._command[iface]))
+            slots.append((joint, kind, self.hardware.command_slot(iface)))
         self._claimed_slots = slots
         self._claimed_names = [joint for joint, _, _ in slots]
         self._claimed_kinds = [kind for _, kind, _ in slots]

@@ -174,7 +174,8 @@ class SimulatorNode(Node):
         """Spawn and wire up a robot; returns a status line, raises SpawnError/UrdfError on failure."""
         entity = self.sim.spawn(spec, reference_frame)
         try:
-            self.robots[entity.namespace] = RobotLink(self, self.sim.hardware[entity.namespace])
+            self.robots[entity.namespace] = RobotLink(self, self.sim, self.sim.hardware[entity.namespace],
+                                                      self.command_timeout)
         except Exception:
             self.sim.delete(entity.name)
             raise

@@ -1,17 +1,20 @@
-"""The Zenoh side of one spawned robot: its hardware frames, humanoid_state and hardware/info service."""
+"""The Zenoh side of one spawned robot: its hardware frames, humanoid_state and hardware/info service.
+
+A link gets what it works with: the node its endpoints live on (``nodes.core.Node``), the ``Simulation``
+that holds the robot (mode, physics rate, balance) and the robot's ``HardwareInterface``.
+"""
 
 from __future__ import annotations
 
 from collections import deque
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import msgs
+from nodes.core import Node
 from nodes.sim.hardware import CommandError, HardwareInterface
 from nodes.sim.interfaces import GetHardwareInfo, HardwareCommand, HardwareState, HumanoidState
+from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import CommandInbox
-
-if TYPE_CHECKING:
-    from nodes.sim.node import SimulatorNode
 
 _HardwareJoint = msgs.get_type("zenroid_msgs/msg/HardwareJoint")
 
@@ -36,9 +39,12 @@ def parse_command(payload: bytes) -> Any:
 
 
 class RobotLink:
-    def __init__(self, node: SimulatorNode, hardware: HardwareInterface) -> None:
+    def __init__(self, node: Node, sim: Simulation, hardware: HardwareInterface, command_timeout: float) -> None:
+        """``command_timeout`` (wall s): a command answering a state older than this is stale (ignored)."""
         self.node = node
+        self.sim = sim
         self.hardware = hardware
+        self.command_timeout = command_timeout
         self.namespace = hardware.entity.namespace
         self.inbox = CommandInbox()
         self.update_rate = 0.0          # learned from the controller manager's commands
@@ -74,7 +80,7 @@ class RobotLink:
                                            f"message: {exc}", key=f"cmdparse:{self.namespace}")
             return
         last = self._last_state_step
-        if last is not None and 0 <= command.step < last - self.node.command_timeout * self.node.world.physics_rate:
+        if last is not None and 0 <= command.step < last - self.command_timeout * self.sim.physics_rate:
             # Buffered in a network that was cut, or from a controller manager that fell far behind: its
             # controllers computed it from a state older than command_timeout (the simulator has been
             # holding position meanwhile). Applying it would replay stale trajectory points.
@@ -89,7 +95,7 @@ class RobotLink:
         hw = self.hardware
         self.state_pub.publish_raw(_pack_state(
             step=step, stamp=msgs.time_map(sim_time), name=hw.names, position=hw.positions().tolist(),
-            velocity=hw.velocities().tolist(), effort=hw.efforts().tolist()), droppable=self.node.sim.mode == "realtime")
+            velocity=hw.velocities().tolist(), effort=hw.efforts().tolist()), droppable=self.sim.mode == "realtime")
         self._last_state_step = step
 
     def apply(self, command) -> None:
@@ -113,7 +119,7 @@ class RobotLink:
     def publish_humanoid_state(self, sim_time: float) -> None:
         """humanoid_msgs/HumanoidState."""
         hw = self.hardware
-        balance = self.node.sim.balance(self.namespace)
+        balance = self.sim.balance(self.namespace)
         com = balance.center_of_mass
         self.humanoid_pub.publish_raw(_pack_humanoid_state(
             header=_header(stamp=msgs.time_map(sim_time), frame_id="world"),
@@ -125,7 +131,7 @@ class RobotLink:
 
     def _on_info(self, _request) -> object:
         return GetHardwareInfo.Response(
-            robot_name=self.hardware.entity.name, mode=self.node.sim.mode,
-            physics_rate=self.node.world.physics_rate,
+            robot_name=self.hardware.entity.name, mode=self.sim.mode,
+            physics_rate=self.sim.physics_rate,
             joints=[_HardwareJoint(**row) for row in self.hardware.joint_table()],
         )

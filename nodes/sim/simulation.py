@@ -35,6 +35,11 @@ class Simulation:
         self._recent_contacts: dict[str, list[tuple[float, list]]] = {}  # namespace -> [(time, contacts)]
 
     @property
+    def physics_rate(self) -> float:
+        """Physics steps per simulated second (changes with ``set_physics_properties time_step``)."""
+        return self.world.physics_rate
+
+    @property
     def kinematic(self) -> bool:
         return self.mode == "kinematic"
 
