@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import ast
+import os
 import subprocess
+import sys
 from pathlib import Path
 
 from tests.conftest import ROOT
@@ -46,3 +48,205 @@ def test_the_zenoh_check_sees_a_zenoh_import() -> None:
     assert "zenoh.ext" in imported_modules(ast.parse("def f():\n    import zenoh.ext\n"))
     assert "zenoh" in imported_modules(ast.parse("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
                                                  "    from zenoh import Session\n"))
+
+
+# ------------------------------------------------------------------------------------------ imports
+PACKAGES = ("launch", "msgs", "nodes")
+
+
+def project_modules() -> dict[str, Path]:
+    """Every module of the installable packages by dotted name (``__main__`` files run programs: left out)."""
+    found: dict[str, Path] = {}
+    for path in tracked_python_files():
+        relative = path.relative_to(ROOT)
+        if relative.parts[0] not in PACKAGES or path.name == "__main__.py":
+            continue
+        parts = list(relative.with_suffix("").parts)
+        if parts[-1] == "__init__":
+            parts.pop()
+        found[".".join(parts)] = path
+    return found
+
+
+def import_graph(modules: dict[str, Path]) -> dict[str, set[str]]:
+    """module -> the project modules its import statements name: at module level, inside functions and under
+    ``if TYPE_CHECKING:`` alike (a cycle hidden in either is still a cycle in the design). ``from pkg import x``
+    counts as an import of ``pkg.x`` when that is a module, else of ``pkg``."""
+    def owner(name: str) -> str | None:
+        while name and name not in modules:
+            name = name.rpartition(".")[0]
+        return name or None
+
+    graph: dict[str, set[str]] = {}
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        targets: set[str | None] = set()
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            if isinstance(node, ast.Import):
+                targets.update(owner(alias.name) for alias in node.names)
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    base = ".".join(anchor + ([node.module] if node.module else []))
+                for alias in node.names:
+                    full = f"{base}.{alias.name}"
+                    targets.add(full if full in modules else owner(base))
+        graph[name] = {t for t in targets if t is not None and t != name}
+    return graph
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph.get(child, ())))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.append(sorted(component))
+    return found
+
+
+def test_no_import_cycles() -> None:
+    found = cycles(import_graph(project_modules()))
+    assert not found, f"modules that import each other (directly or around a loop): {found}"
+
+
+def test_the_cycle_check_sees_a_cycle_hidden_behind_type_checking(tmp_path) -> None:
+    (tmp_path / "a.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from pkg import b\n")
+    (tmp_path / "b.py").write_text("def f():\n    from pkg.a import thing\n")
+    (tmp_path / "c.py").write_text("import pkg.a\n")
+    modules = {"pkg.a": tmp_path / "a.py", "pkg.b": tmp_path / "b.py", "pkg.c": tmp_path / "c.py"}
+    assert cycles(import_graph(modules)) == [["pkg.a", "pkg.b"]]
+
+
+# Imports each module given on the command line in a child of its own (fork), so every module starts from an
+# interpreter that has loaded no project module: one that only imports because another module happened to
+# be imported first fails here. Third-party packages are loaded once up front (they cannot hide an import
+# order problem of ours, and loading dartpy or rerun 150 times would take minutes).
+_IMPORT_ALONE = r"""
+import importlib, os, sys, traceback
+modules, third_party = sys.argv[1].split(","), sys.argv[2].split(",")
+for name in third_party:
+    try:
+        importlib.import_module(name)
+    except Exception:
+        pass
+running, failed = {}, []
+
+def reap():
+    pid, status = os.wait()
+    if status != 0:
+        failed.append(running[pid])
+    del running[pid]
+
+for name in modules:
+    while len(running) >= (os.cpu_count() or 1):
+        reap()
+    pid = os.fork()
+    if pid == 0:
+        try:
+            importlib.import_module(name)
+        except BaseException:
+            traceback.print_exc()
+            os._exit(1)
+        os._exit(0)
+    running[pid] = name
+while running:
+    reap()
+print("FAILED:" + ",".join(sorted(failed)))
+"""
+
+
+def third_party_modules(modules: dict[str, Path]) -> set[str]:
+    names: set[str] = set()
+    for path in modules.values():
+        names.update(m.partition(".")[0] for m in imported_modules(ast.parse(path.read_text())))
+    return {n for n in names if n not in PACKAGES and n not in sys.stdlib_module_names}
+
+
+def test_every_module_imports_alone() -> None:
+    modules = project_modules()
+    result = subprocess.run(
+        [sys.executable, "-c", _IMPORT_ALONE, ",".join(sorted(modules)), ",".join(sorted(third_party_modules(modules)))],
+        cwd=ROOT, capture_output=True, text=True, timeout=600,
+        env={**os.environ, "PYTHONPATH": str(ROOT), "ZENROID_ROS2": "0"})
+    failed = result.stdout.strip().rpartition("FAILED:")[2]
+    assert result.returncode == 0 and "FAILED:" in result.stdout and not failed, \
+        f"modules that fail to import on their own: {failed}\n{result.stderr[-4000:]}"
+
+
+# ------------------------------------------------------------------------------------------ encapsulation
+def private_attributes_from_elsewhere(path: Path) -> list[str]:
+    """``obj._name`` where ``obj`` is not ``self``/``cls`` and nothing in this module defines ``_name``: a reach
+    into another module's private members. Private names of third-party and stdlib modules are not ours."""
+    tree = ast.parse(path.read_text())
+    defined: set[str] = set()
+    foreign_aliases: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            defined.add(node.name)
+        elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store):
+            defined.add(node.attr)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            defined.add(node.id)
+        elif isinstance(node, ast.arg):
+            defined.add(node.arg)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            module = getattr(node, "module", None) or ""
+            for alias in node.names:
+                top = (module or alias.name).partition(".")[0]
+                if top not in PACKAGES:
+                    foreign_aliases.add(alias.asname or alias.name.partition(".")[0])
+    found = []
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__")):
+            continue
+        owner = node.value.id if isinstance(node.value, ast.Name) else None
+        # ``_type`` is the message classes' public type name (like namedtuple's ``_fields``)
+        if owner in ("self", "cls") or owner in foreign_aliases or node.attr in defined or node.attr == "_type":
+            continue
+        found.append(f"{path.relative_to(ROOT)}:{node.lineno}: {ast.unparse(node)}")
+    return found
+
+
+def test_no_private_member_access_across_modules() -> None:
+    offenders = [hit for path in project_modules().values() for hit in private_attributes_from_elsewhere(path)]
+    assert not offenders, "private members used outside their module:\n" + "\n".join(offenders)
+
+
+def test_endpoints_depend_on_the_runtime_interface_not_on_node() -> None:
+    graph = import_graph(project_modules())
+    for module in ("nodes.core.endpoints", "nodes.core.action", "nodes.core.latched", "nodes.core.factory"):
+        assert "nodes.core.node" not in graph[module], f"{module} imports nodes.core.node"
