@@ -1,6 +1,8 @@
 """The controller base class, in the shape of ros2_controllers' ``ControllerInterface``.
 
-A controller declares parameters in ``on_init``, claims ``joint/interface`` names through
+A controller declares its parameters once, as a schema dataclass in ``Params`` (``nodes.core.param_schema``:
+types, defaults, bounds, descriptions, per-joint maps such as ``gains.<joint>.p``), and reads them typed from
+``self.params``; it claims ``joint/interface`` names through
 ``command_interface_configuration()`` / ``state_interface_configuration()``, and is driven by the
 manager through the lifecycle ``unconfigured -> inactive -> active``. ``update(time, period)`` runs on
 sim time (seconds) and may only touch its loaned interfaces; topics, services and actions are created
@@ -9,10 +11,12 @@ through the small ``ControllerContext`` handle the manager passes in, never thro
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar, Protocol
 
 from nodes.control.interfaces import JointInfo, LoanedCommandInterface, LoanedStateInterface
-from nodes.control.params import Parameters
+from nodes.core.param_schema import load_parameters
 
 UNCONFIGURED = "unconfigured"
 INACTIVE = "inactive"
@@ -48,17 +52,26 @@ class ControllerContext(Protocol):
     def destroy_all(self) -> None: ...
 
 
+@dataclass(frozen=True)
+class NoParameters:
+    """The schema of a controller without parameters."""
+
+
 class Controller:
-    """Base class; subclasses override the ``on_*`` hooks, the interface configurations and ``update``."""
+    """Base class; subclasses set ``Params`` and override the ``on_*`` hooks, the interface configurations
+    and ``update``."""
 
     #: ros2_controllers plugin name, e.g. ``"joint_trajectory_controller/JointTrajectoryController"``
     type_name = ""
+    #: the parameter schema (a dataclass of ``param``/``namespace``/``per_key`` fields); ``self.params`` holds
+    #: its values once the manager has called ``load_parameters``
+    Params: ClassVar[type] = NoParameters
 
     def __init__(self, name: str, context: ControllerContext) -> None:
         self.name = name
         self.context = context
         self.logger = context.logger
-        self.params = Parameters(name)
+        self.params: Any = self.Params()
         self.state = UNCONFIGURED
         self.command_interfaces: list[LoanedCommandInterface] = []
         self.state_interfaces: list[LoanedStateInterface] = []
@@ -67,15 +80,17 @@ class Controller:
         self.joint_info: dict[str, JointInfo] = {}
 
     # --- parameters -------------------------------------------------------------------------------
-    def declare_parameter(self, name: str, default: Any, **kwargs: Any) -> Any:
-        return self.params.declare(name, default, **kwargs)
-
-    def get_parameter(self, name: str) -> Any:
-        return self.params.get(name)
+    def load_parameters(self, given: Mapping[str, Any]) -> None:
+        """``self.params`` from the controller's YAML block (nested or dotted names); raises ParameterError
+        naming the parameter. Names the schema does not declare are logged and ignored (typos)."""
+        loaded = load_parameters(self.Params, given, ignore=("type",))
+        self.params = loaded.values
+        if loaded.unknown:
+            self.logger.warn(f"{self.name}: ignoring unknown parameters {loaded.unknown}")
 
     # --- hooks (ros2_controllers names) -------------------------------------------------------------
     def on_init(self) -> None:
-        """Declare parameters (values from YAML are already known)."""
+        """Called once after the parameters are loaded; most controllers need nothing here."""
 
     def on_configure(self) -> None:
         """Read and check parameters, create topics/services/actions. Raise to refuse."""

@@ -24,7 +24,7 @@ from nodes.control.controller import (
 )
 from nodes.control.controllers import controller_class
 from nodes.control.interfaces import HardwareInterfaces, split_interface
-from nodes.control.params import ParameterError
+from nodes.core.params import ParameterError
 
 BEST_EFFORT = 1
 STRICT = 2
@@ -108,7 +108,7 @@ class ControllerManager:
             try:
                 params = {**{k: v for k, v in self.config.shared_params.items() if k != "use_sim_time"},
                           **cfg.params}
-                controller.params.set_overrides(params)
+                controller.load_parameters(params)
                 controller.on_init()
             except (ParameterError, ValueError) as exc:
                 context.destroy_all()

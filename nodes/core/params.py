@@ -23,9 +23,11 @@ class ParameterDescriptor:
     description: str = ""
     min_value: float | None = None
     max_value: float | None = None
-    choices: tuple[Any, ...] | None = None
+    choices: tuple[Any, ...] | None = None  # for a list: every item must be one of them
     validator: Callable[[Any], str | None] | None = None
     read_only: bool | str = False  # a string says why (shown when a change is refused)
+    element_type: type | None = None  # a list's items (None: as the default's first item)
+    allow_infinite: bool = False  # ``.inf`` accepted (a clamp or limit meaning "none"); NaN never is
 
 
 def type_of_default(value: Any) -> type:
@@ -88,37 +90,56 @@ def _flatten(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
 
 
 def coerce(desc: ParameterDescriptor, value: Any) -> Any:
-    """Check ``value`` against ``desc``; returns the (possibly converted) value or raises ParameterError."""
+    """Check ``value`` against ``desc``; returns the (possibly converted) value or raises ParameterError.
+
+    The one coercion for node and controller parameters: an int is accepted for a float, a tuple for a
+    list; a bool is never a number; NaN is refused, infinity only where ``allow_infinite`` says so."""
     name = desc.name
     t = desc.type
-    if t is float and isinstance(value, int) and not isinstance(value, bool):
-        value = float(value)
-    if t is not None and value is not None:
+    if t is not None and t is not object and value is not None:
         if t is list:
             if isinstance(value, tuple):
                 value = list(value)
             if not isinstance(value, list):
                 raise ParameterError(f"parameter '{name}': expected a list, got {type(value).__name__} {value!r}")
-            item_t = _item_type(desc.default)
+            item_t = desc.element_type or _item_type(desc.default)
             if item_t is not None:
-                value = [_coerce_item(name, i, item_t, x) for i, x in enumerate(value)]
+                value = [_coerce_item(desc, i, item_t, x) for i, x in enumerate(value)]
         elif t is bool and not isinstance(value, bool):
             raise ParameterError(f"parameter '{name}': expected a bool, got {value!r}")
-        elif not isinstance(value, t) or (t is int and isinstance(value, bool)):
-            raise ParameterError(f"parameter '{name}': expected {t.__name__}, got {type(value).__name__} {value!r}")
-    if isinstance(value, float) and not math.isfinite(value):
-        raise ParameterError(f"parameter '{name}': must be finite, got {value}")
-    if desc.min_value is not None and isinstance(value, (int, float)) and value < desc.min_value:
+        else:
+            value = _coerce_scalar(name, t, value)
+    _check_number(desc, name, value)
+    if desc.min_value is not None and _is_number(value) and value < desc.min_value:
         raise ParameterError(f"parameter '{name}': {value} is below the minimum {desc.min_value}")
-    if desc.max_value is not None and isinstance(value, (int, float)) and value > desc.max_value:
+    if desc.max_value is not None and _is_number(value) and value > desc.max_value:
         raise ParameterError(f"parameter '{name}': {value} is above the maximum {desc.max_value}")
-    if desc.choices is not None and value not in desc.choices:
-        raise ParameterError(f"parameter '{name}': {value!r} is not one of {list(desc.choices)}")
+    if desc.choices is not None and value is not None:
+        for item in value if isinstance(value, list) else [value]:
+            if item not in desc.choices:
+                raise ParameterError(f"parameter '{name}': {item!r} is not one of {list(desc.choices)}")
     if desc.validator is not None:
         problem = desc.validator(value)
         if problem:
             raise ParameterError(f"parameter '{name}': {problem}")
     return value
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _coerce_scalar(name: str, t: type, value: Any) -> Any:
+    if t is float and _is_number(value):
+        return float(value)
+    if not isinstance(value, t) or (t in (int, float) and isinstance(value, bool)):
+        raise ParameterError(f"parameter '{name}': expected {t.__name__}, got {type(value).__name__} {value!r}")
+    return value
+
+
+def _check_number(desc: ParameterDescriptor, name: str, value: Any) -> None:
+    if isinstance(value, float) and not math.isfinite(value) and (math.isnan(value) or not desc.allow_infinite):
+        raise ParameterError(f"parameter '{name}': must be finite, got {value}")
 
 
 def _item_type(default: Any) -> type | None:
@@ -128,11 +149,12 @@ def _item_type(default: Any) -> type | None:
     return None
 
 
-def _coerce_item(name: str, i: int, t: type, x: Any) -> Any:
-    if t is float and isinstance(x, int) and not isinstance(x, bool):
-        return float(x)
-    if not isinstance(x, t) or (t is int and isinstance(x, bool)):
-        raise ParameterError(f"parameter '{name}[{i}]': expected {t.__name__}, got {x!r}")
-    if isinstance(x, float) and not math.isfinite(x):
-        raise ParameterError(f"parameter '{name}[{i}]': must be finite, got {x}")
+def _coerce_item(desc: ParameterDescriptor, i: int, t: type, x: Any) -> Any:
+    name = f"{desc.name}[{i}]"
+    if t is bool:
+        if not isinstance(x, bool):
+            raise ParameterError(f"parameter '{name}': expected a bool, got {x!r}")
+        return x
+    x = _coerce_scalar(name, t, x)
+    _check_number(desc, name, x)
     return x

@@ -4,11 +4,13 @@ plant) and a controller that crashes on purpose: the controller tests drive cont
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from nodes.control.controller import Controller
 from nodes.control.interfaces import HardwareInterfaces, JointInfo
+from nodes.core.param_schema import param
 
 
 class ListLogger:
@@ -188,25 +190,29 @@ class FirstOrderPlant:
                 self.pos[j] += self.vel[j] * dt
 
 
+@dataclass(frozen=True)
+class CrashingParameters:
+    joints: list[str] = param([], description="joints it claims")
+    crash_after: float = param(0.5, min_value=0.0, description="s of sim time before update raises")
+    interface: str = param("velocity", choices=("position", "velocity", "effort"), description="claimed interface")
+
+
 class CrashingController(Controller):
     """A controller whose ``update`` raises after ``crash_after`` s of sim time (type
     ``test_controllers/CrashingController``, registered with ``plugin_dir``): shows the manager deactivating
     it while others run."""
 
     type_name = "test_controllers/CrashingController"
-
-    def on_init(self) -> None:
-        self.declare_parameter("joints", [], type=list, element_type=str)
-        self.declare_parameter("crash_after", 0.5, min_value=0.0)
-        self.declare_parameter("interface", "velocity", choices=("position", "velocity", "effort"))
+    Params = CrashingParameters
+    params: CrashingParameters
 
     def on_configure(self) -> None:
-        self.joints = list(self.get_parameter("joints"))
-        self.crash_after = self.get_parameter("crash_after")
+        self.joints = list(self.params.joints)
+        self.crash_after = self.params.crash_after
         self.started: float | None = None
 
     def command_interface_configuration(self) -> list[str]:
-        return [f"{j}/{self.get_parameter('interface')}" for j in self.joints]
+        return [f"{j}/{self.params.interface}" for j in self.joints]
 
     def on_activate(self) -> None:
         self.started = None

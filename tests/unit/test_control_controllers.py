@@ -147,7 +147,7 @@ joint_trajectory_controller:
     rig = Rig(text, ["joint1"], ("position", "velocity"))
     rig.spawn("joint_state_broadcaster", "joint_trajectory_controller")
     jtc = rig.controller("joint_trajectory_controller")
-    assert jtc.get_parameter("constraints.joint1.goal") == 0.01
+    assert jtc.params.constraints.per_joint["joint1"].goal == 0.01
     assert rig.manager.update_rate == 100
 
 
@@ -341,7 +341,7 @@ def test_pid_reaches_target_without_overshoot_on_velocity_interface():
 
 
 def test_pid_antiwindup_limits_the_integral_while_saturated():
-    from nodes.control.controllers.pid_controller import Pid
+    from nodes.control.pid import Pid
 
     windup = Pid(p=1.0, i=5.0, d=0.0, i_min=-math.inf, i_max=math.inf, u_min=-0.1, u_max=0.1, antiwindup=False)
     guarded = Pid(p=1.0, i=5.0, d=0.0, i_min=-math.inf, i_max=math.inf, u_min=-0.1, u_max=0.1, antiwindup=True)

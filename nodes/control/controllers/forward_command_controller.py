@@ -5,33 +5,37 @@ to one command interface of each joint."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from nodes.control.controller import Controller, ControllerError
 from nodes.control.messages import msg_type
+from nodes.core.param_schema import param
+
+
+@dataclass(frozen=True)
+class JointGroupParameters:
+    joints: list[str] = param([], description="commanded joints, in the order of the commands' data")
+
+
+@dataclass(frozen=True)
+class ForwardCommandParameters(JointGroupParameters):
+    interface_name: str = param("", choices=("position", "velocity", "effort"),
+                                description="the command interface every joint is commanded through")
 
 
 class ForwardCommandController(Controller):
     type_name = "forward_command_controller/ForwardCommandController"
+    Params = ForwardCommandParameters
     #: fixed interface of the joint-group variants; None: the ``interface_name`` parameter decides
     fixed_interface: str | None = None
 
-    def on_init(self) -> None:
-        self.declare_parameter("joints", [], type=list, element_type=str)
-        if self.fixed_interface is None:
-            self.declare_parameter("interface_name", "", choices=("position", "velocity", "effort"))
-
     def on_configure(self) -> None:
-        self.joints = list(self.get_parameter("joints"))
+        self.joints = list(self.params.joints)
         if not self.joints:
             raise ControllerError("parameter 'joints' is empty")
         if len(set(self.joints)) != len(self.joints):
             raise ControllerError(f"parameter 'joints' lists a joint twice: {self.joints}")
-        self.interface = self.fixed_interface or self.get_parameter("interface_name")
-        if not self.interface:
-            raise ControllerError("parameter 'interface_name' is empty (position, velocity or effort)")
-        unknown = self.params.undeclared()
-        if unknown:
-            self.logger.warn(f"{self.name}: ignoring unknown parameters {unknown}")
+        self.interface = self.fixed_interface or self.params.interface_name
         self._latest: list[float] | None = None
         self.rejected_count = 0
         self.context.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "~/commands",
@@ -67,14 +71,17 @@ class ForwardCommandController(Controller):
 
 class JointGroupPositionController(ForwardCommandController):
     type_name = "position_controllers/JointGroupPositionController"
+    Params = JointGroupParameters
     fixed_interface = "position"
 
 
 class JointGroupVelocityController(ForwardCommandController):
     type_name = "velocity_controllers/JointGroupVelocityController"
+    Params = JointGroupParameters
     fixed_interface = "velocity"
 
 
 class JointGroupEffortController(ForwardCommandController):
     type_name = "effort_controllers/JointGroupEffortController"
+    Params = JointGroupParameters
     fixed_interface = "effort"

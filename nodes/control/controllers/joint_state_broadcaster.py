@@ -4,47 +4,48 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import msgs
 from nodes.control.controller import Controller, ControllerError
 from nodes.control.interfaces import read_values
 from nodes.control.messages import msg_type
+from nodes.core.param_schema import param
 
 _pack_joint_state = msgs.packer("sensor_msgs/msg/JointState")
 _header = msgs.builder("std_msgs/msg/Header")
 
 
+@dataclass(frozen=True)
+class JointStateBroadcasterParameters:
+    joints: list[str] = param([], description="joints to publish, in this order (empty: all joints of the robot)")
+    interfaces: list[str] = param(["position", "velocity", "effort"], choices=("position", "velocity", "effort"),
+                                  description="the state interfaces published")
+    use_local_topics: bool = param(False, description="publish on ~/joint_states instead of joint_states")
+    publish_rate: float = param(0.0, min_value=0.0, description="Hz; 0 publishes at every update")
+    frame_id: str = param("", description="header.frame_id of the messages")
+
+
 class JointStateBroadcaster(Controller):
     type_name = "joint_state_broadcaster/JointStateBroadcaster"
-
-    def on_init(self) -> None:
-        self.declare_parameter("joints", [], type=list, element_type=str,
-                               description="joints to publish, in this order (empty: all joints of the robot)")
-        self.declare_parameter("interfaces", ["position", "velocity", "effort"], element_type=str,
-                               choices=("position", "velocity", "effort"))
-        self.declare_parameter("use_local_topics", False, description="publish on ~/joint_states")
-        self.declare_parameter("publish_rate", 0.0, min_value=0.0,
-                               description="Hz; 0 publishes at every update")
-        self.declare_parameter("frame_id", "")
+    Params = JointStateBroadcasterParameters
+    params: JointStateBroadcasterParameters
 
     def on_configure(self) -> None:
-        self.joints: list[str] = list(self.get_parameter("joints")) or list(self.available_joints)
+        self.joints: list[str] = list(self.params.joints) or list(self.available_joints)
         if not self.joints:
             raise ControllerError("no joints: the hardware has none and parameter 'joints' is empty")
         unknown = [j for j in self.joints if j not in self.available_joints]
         if unknown:
             raise ControllerError(f"parameter 'joints': unknown joints {unknown}")
-        unknown_params = self.params.undeclared()
-        if unknown_params:
-            self.logger.warn(f"{self.name}: ignoring unknown parameters {unknown_params}")
-        self.kinds = list(self.get_parameter("interfaces"))
-        topic = "~/joint_states" if self.get_parameter("use_local_topics") else "joint_states"
+        self.kinds = list(self.params.interfaces)
+        topic = "~/joint_states" if self.params.use_local_topics else "joint_states"
         self._type = msg_type("sensor_msgs/msg/JointState")
         self._pub = self.context.create_publisher(self._type, topic)
-        rate = self.get_parameter("publish_rate")
+        rate = self.params.publish_rate
         self._period = 1.0 / rate if rate > 0 else 0.0
         self._last_publish = -math.inf
-        self.frame_id = self.get_parameter("frame_id")
+        self.frame_id = self.params.frame_id
 
     @property
     def available_joints(self) -> list[str]:

@@ -6,6 +6,11 @@ limit is refused; one that asks a joint for more than its velocity limit is slow
 whole when it takes over (logged with the joint, the speed and the limit); and, like ros2_control's
 joint limiter, every command is clamped into the position limits and moves at most
 ``max_velocity * period`` per update (what remains of a spline's overshoot, a first point at time 0).
+
+Parameters as ros2_controllers' (``JtcParameters``). Velocity-only and effort command interfaces close the
+position loop with ``gains.<joint>`` (a PID per joint), except velocity-only with ``open_loop_control``,
+which sends the desired velocity as it is. Without a ``velocity`` state interface the measured velocity is
+unknown: velocity errors count as zero and velocity tolerances are not checked.
 """
 
 from __future__ import annotations
@@ -19,9 +24,9 @@ import numpy as np
 
 import msgs
 from nodes.control.controller import Controller, ControllerError
-from nodes.control.controllers.pid_controller import Pid
 from nodes.control.interfaces import read_values, write_values
 from nodes.control.messages import sec_to_time
+from nodes.control.pid import Pid
 from nodes.control.trajectory import (
     MAX_DURATION,
     MAX_POINTS,
@@ -31,6 +36,7 @@ from nodes.control.trajectory import (
     duration_to_sec,
     validate_trajectory,
 )
+from nodes.core.param_schema import namespace, param, per_key
 
 # control_msgs/FollowJointTrajectory.Result error codes
 SUCCESSFUL = 0
@@ -88,85 +94,110 @@ def _merge_tolerances(default: np.ndarray, joint_index: dict[str, int], entries,
     return merged
 
 
+@dataclass(frozen=True)
+class JointGains:
+    """``gains.<joint>.*``: the closed-loop adapter of velocity-only and effort command interfaces."""
+
+    p: float = param(0.0, min_value=0.0, description="proportional gain")
+    i: float = param(0.0, min_value=0.0, description="integral gain")
+    d: float = param(0.0, min_value=0.0, description="derivative gain (on the velocity error)")
+    i_clamp: float = param(0.0, min_value=0.0, description="symmetric integral limit (0: none)")
+    ff_velocity_scale: float = param(0.0, description="feed-forward: this times the desired velocity is added")
+
+    def pid(self) -> Pid:
+        limit = self.i_clamp if self.i_clamp > 0 else math.inf
+        return Pid(self.p, self.i, self.d, -limit, limit, -math.inf, math.inf, antiwindup=True)
+
+
+@dataclass(frozen=True)
+class JointConstraints:
+    """``constraints.<joint>.*``: default tolerances of one joint (0: not checked)."""
+
+    trajectory: float = param(0.0, min_value=0.0, description="path tolerance (rad) while the trajectory runs")
+    goal: float = param(0.0, min_value=0.0, description="goal tolerance (rad) at the end")
+
+
+@dataclass(frozen=True)
+class Constraints:
+    stopped_velocity_tolerance: float = param(0.01, min_value=0.0,
+                                              description="rad/s every joint must be below at the goal")
+    goal_time: float = param(0.0, min_value=0.0,
+                             description="s after the end to meet the goal tolerances (0: wait forever)")
+    per_joint: dict[str, JointConstraints] = per_key(JointConstraints, keys="joints", inline=True)
+
+
+@dataclass(frozen=True)
+class JtcParameters:
+    joints: list[str] = param([], description="controlled joints")
+    command_interfaces: list[str] = param(
+        ["position"], choices=("position", "velocity", "effort"),
+        description="position, velocity, position+velocity, or effort (PID from gains)")
+    state_interfaces: list[str] = param(
+        ["position", "velocity"], choices=("position", "velocity", "acceleration"),
+        description="state interfaces read; must include position")
+    state_publish_rate: float = param(50.0, min_value=0.0, description="controller_state Hz (0: never)")
+    action_monitor_rate: float = param(20.0, min_value=0.0, description="feedback Hz (0: never)")
+    allow_partial_joints_goal: bool = param(False, description="accept trajectories naming a subset of the joints")
+    open_loop_control: bool = param(
+        False, description="velocity-only command interface: send the desired velocity, no PID on the error")
+    interpolation_method: str = param("splines", choices=("splines", "none"), description="between points")
+    cmd_timeout: float = param(0.0, min_value=0.0, description="s after the last point a topic trajectory is stale")
+    max_trajectory_points: int = param(MAX_POINTS, min_value=1, description="more points: the trajectory is refused")
+    max_trajectory_duration: float = param(
+        MAX_DURATION, min_value=0.0, description="s; a later time_from_start or a stamp further ahead is refused")
+    constraints: Constraints = namespace(Constraints)
+    gains: dict[str, JointGains] = per_key(JointGains, keys="joints")
+
+
 class JointTrajectoryController(Controller):
     type_name = "joint_trajectory_controller/JointTrajectoryController"
-
-    def on_init(self) -> None:
-        self.declare_parameter("joints", [], type=list, element_type=str, description="controlled joints")
-        self.declare_parameter("command_interfaces", ["position"], element_type=str,
-                               choices=("position", "velocity", "effort"),
-                               description="position, velocity, position+velocity, or effort (PID from gains)")
-        self.declare_parameter("state_interfaces", ["position", "velocity"], element_type=str,
-                               choices=("position", "velocity", "acceleration"))
-        self.declare_parameter("state_publish_rate", 50.0, min_value=0.0, description="controller_state Hz")
-        self.declare_parameter("action_monitor_rate", 20.0, min_value=0.0, description="feedback Hz")
-        self.declare_parameter("allow_partial_joints_goal", False)
-        self.declare_parameter("allow_integration_in_goal_trajectories", False)
-        self.declare_parameter("open_loop_control", False)
-        self.declare_parameter("interpolation_method", "splines", choices=("splines", "none"))
-        self.declare_parameter("cmd_timeout", 0.0, min_value=0.0,
-                               description="s after the last point a topic trajectory is stale")
-        self.declare_parameter("constraints.stopped_velocity_tolerance", 0.01, min_value=0.0)
-        self.declare_parameter("constraints.goal_time", 0.0, min_value=0.0)
-        self.declare_parameter("max_trajectory_points", MAX_POINTS, min_value=1,
-                               description="more points: the trajectory is refused")
-        self.declare_parameter("max_trajectory_duration", MAX_DURATION, min_value=0.0,
-                               description="s; a later time_from_start or a stamp further ahead is refused")
+    Params = JtcParameters
+    params: JtcParameters
 
     # --- configuration ------------------------------------------------------------------------------
     def on_configure(self) -> None:
-        joints: list[str] = self.get_parameter("joints")
+        params = self.params
+        joints = list(params.joints)
         if not joints:
             raise ControllerError("parameter 'joints' is empty")
         if len(set(joints)) != len(joints):
             raise ControllerError(f"parameter 'joints' lists a joint twice: {joints}")
-        command = self.get_parameter("command_interfaces")
+        command = list(params.command_interfaces)
         if not command:
             raise ControllerError("parameter 'command_interfaces' is empty")
-        if "position" not in self.get_parameter("state_interfaces"):
+        if "position" not in params.state_interfaces:
             raise ControllerError("parameter 'state_interfaces' must include 'position'")
         self.joints = joints
         self.joint_index = {name: i for i, name in enumerate(joints)}
         self.command_kinds: list[str] = command
+        self.state_kinds = list(dict.fromkeys(params.state_interfaces))
         n = len(joints)
-        path = np.zeros(n)
-        goal = np.zeros(n)
-        goal_vel = np.full(n, self.get_parameter("constraints.stopped_velocity_tolerance"))
-        self.pids: list[Pid] = []
-        self.ff_velocity_scale = np.zeros(n)
-        for i, joint in enumerate(joints):
-            path[i] = self.declare_parameter(f"constraints.{joint}.trajectory", 0.0, min_value=0.0)
-            goal[i] = self.declare_parameter(f"constraints.{joint}.goal", 0.0, min_value=0.0)
-            g = f"gains.{joint}."
-            p = self.declare_parameter(g + "p", 0.0, min_value=0.0)
-            i_gain = self.declare_parameter(g + "i", 0.0, min_value=0.0)
-            d = self.declare_parameter(g + "d", 0.0, min_value=0.0)
-            i_clamp = self.declare_parameter(g + "i_clamp", 0.0, min_value=0.0)
-            self.ff_velocity_scale[i] = self.declare_parameter(g + "ff_velocity_scale", 0.0)
-            limit = i_clamp if i_clamp > 0 else math.inf
-            self.pids.append(Pid(p, i_gain, d, -limit, limit, -math.inf, math.inf, antiwindup=True))
-        if command == ["velocity"] or command == ["effort"]:
-            missing = [j for j, pid in zip(joints, self.pids, strict=True) if pid.p == pid.i == pid.d == 0.0
-                       and command == ["effort"]]
+        path = np.array([params.constraints.per_joint[j].trajectory for j in joints], dtype=float)
+        goal = np.array([params.constraints.per_joint[j].goal for j in joints], dtype=float)
+        goal_vel = np.full(n, params.constraints.stopped_velocity_tolerance)
+        self.pids: list[Pid] = [params.gains[j].pid() for j in joints]
+        self.ff_velocity_scale = np.array([params.gains[j].ff_velocity_scale for j in joints], dtype=float)
+        if command == ["effort"]:
+            missing = [j for j, pid in zip(joints, self.pids, strict=True) if pid.p == pid.i == pid.d == 0.0]
             if missing:
                 raise ControllerError(f"effort commands need gains: gains.<joint>.p/i/d are all zero for {missing}")
         elif "effort" in command:
             raise ControllerError("'effort' cannot be combined with other command interfaces")
-        unknown = self.params.undeclared()
-        if unknown:
-            self.logger.warn(f"{self.name}: ignoring unknown parameters {unknown}")
-        self.default_tolerances = Tolerances(path, np.zeros(n), goal, goal_vel,
-                                             self.get_parameter("constraints.goal_time"))
+        # ros2_controllers' use_closed_loop_pid_adapter: velocity-only (unless open loop) or effort
+        self.closed_loop = command == ["effort"] or (command == ["velocity"] and not params.open_loop_control)
+        if "velocity" not in self.state_kinds:  # nothing measures it: velocity tolerances cannot be checked
+            goal_vel = np.zeros(n)
+        self.default_tolerances = Tolerances(path, np.zeros(n), goal, goal_vel, params.constraints.goal_time)
         self.limits = JointLimits.from_hardware(joints, self.joint_info)
-        self.max_points = int(self.get_parameter("max_trajectory_points"))
-        self.max_duration = float(self.get_parameter("max_trajectory_duration"))
+        self.max_points = params.max_trajectory_points
+        self.max_duration = params.max_trajectory_duration
         self._limit_output = bool(np.isfinite(self.limits.lower).any() or np.isfinite(self.limits.upper).any()
                                   or np.isfinite(self.limits.velocity).any())
         self._last_output: np.ndarray | None = None
-        self.interpolate_points = self.get_parameter("interpolation_method") == "splines"
-        self.cmd_timeout = self.get_parameter("cmd_timeout")
-        state_rate = self.get_parameter("state_publish_rate")
-        monitor_rate = self.get_parameter("action_monitor_rate")
+        self.interpolate_points = params.interpolation_method == "splines"
+        self.cmd_timeout = params.cmd_timeout
+        state_rate = params.state_publish_rate
+        monitor_rate = params.action_monitor_rate
         self.state_period = 1.0 / state_rate if state_rate > 0 else math.inf
         self.feedback_period = 1.0 / monitor_rate if monitor_rate > 0 else math.inf
 
@@ -191,12 +222,12 @@ class JointTrajectoryController(Controller):
         return [f"{j}/{k}" for k in self.command_kinds for j in self.joints]
 
     def state_interface_configuration(self) -> list[str]:
-        return [f"{j}/{k}" for k in ("position", "velocity") for j in self.joints]
+        return [f"{j}/{k}" for k in self.state_kinds for j in self.joints]
 
     def on_activate(self) -> None:
         cmd, state = self.loans_by_name()
         self._pos_state = [state[f"{j}/position"] for j in self.joints]
-        self._vel_state = [state[f"{j}/velocity"] for j in self.joints]
+        self._vel_state = [state[f"{j}/velocity"] for j in self.joints] if "velocity" in self.state_kinds else []
         self._pos_cmd = [cmd[f"{j}/position"] for j in self.joints] if "position" in self.command_kinds else []
         self._vel_cmd = [cmd[f"{j}/velocity"] for j in self.joints] if "velocity" in self.command_kinds else []
         self._eff_cmd = [cmd[f"{j}/effort"] for j in self.joints] if "effort" in self.command_kinds else []
@@ -218,7 +249,7 @@ class JointTrajectoryController(Controller):
     def _validate(self, msg) -> Trajectory:
         return validate_trajectory(
             msg, self.joints, now=self.context.now(),
-            allow_partial_joints_goal=self.get_parameter("allow_partial_joints_goal"),
+            allow_partial_joints_goal=self.params.allow_partial_joints_goal,
             limits=self.limits, max_points=self.max_points, max_duration=self.max_duration)
 
     def _on_trajectory_msg(self, msg) -> None:
@@ -255,13 +286,17 @@ class JointTrajectoryController(Controller):
             value = duration_to_sec(raw_time)
             if value > 0.0:
                 goal_time = value
-        return Tolerances(
+        tolerances = Tolerances(
             _merge_tolerances(d.path_position, self.joint_index, _get(goal, "path_tolerance"), "position"),
             _merge_tolerances(d.path_velocity, self.joint_index, _get(goal, "path_tolerance"), "velocity"),
             _merge_tolerances(d.goal_position, self.joint_index, _get(goal, "goal_tolerance"), "position"),
             _merge_tolerances(d.goal_velocity, self.joint_index, _get(goal, "goal_tolerance"), "velocity"),
             goal_time,
         )
+        if "velocity" not in self.state_kinds:  # no measured velocity to hold them against
+            tolerances.path_velocity[:] = 0.0
+            tolerances.goal_velocity[:] = 0.0
+        return tolerances
 
     def _on_accepted(self, handle) -> None:
         goal = handle.goal
@@ -278,7 +313,8 @@ class JointTrajectoryController(Controller):
     # --- real-time loop -----------------------------------------------------------------------------
     def update(self, time: float, period: float) -> None:
         actual_pos = np.array(read_values(self._pos_state))
-        actual_vel = np.array(read_values(self._vel_state))
+        # not measured (no velocity state interface): as desired, so velocity errors are zero
+        actual_vel = np.array(read_values(self._vel_state)) if self._vel_state else self._desired_vel.copy()
         if self._desired_pos is None:
             if not np.all(np.isfinite(actual_pos)):
                 return  # no state yet: command nothing
@@ -399,6 +435,12 @@ class JointTrajectoryController(Controller):
                 if self._limit_output:
                     velocity = np.minimum(np.maximum(velocity, -self.limits.velocity), self.limits.velocity)
                 write_values(self._vel_cmd, velocity.tolist())
+            return
+        if not self.closed_loop:  # velocity-only, open loop: the desired velocity as it is
+            velocity = self._desired_vel
+            if self._limit_output:
+                velocity = np.minimum(np.maximum(velocity, -self.limits.velocity), self.limits.velocity)
+            write_values(self._vel_cmd, velocity.tolist())
             return
         # Velocity-only or effort: close the position loop with the gains (as ros2_controllers does):
         # command = ff_velocity_scale * desired velocity + PID(position error, velocity error).

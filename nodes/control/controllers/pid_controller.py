@@ -8,76 +8,69 @@ arrives the joints hold the position they had on activation.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from nodes.control.controller import Controller, ControllerError
 from nodes.control.messages import msg_type
+from nodes.control.pid import Pid
+from nodes.core.param_schema import param, per_key
 
 
-class Pid:
-    """One PID loop. Derivative on the measured velocity (no kick when the reference steps)."""
+@dataclass(frozen=True)
+class PidGains:
+    """``gains.<joint>.*``, as control_toolbox's PID parameters."""
 
-    def __init__(self, p: float, i: float, d: float, i_min: float, i_max: float, u_min: float,
-                 u_max: float, antiwindup: bool) -> None:
-        self.p, self.i, self.d = p, i, d
-        self.i_min, self.i_max = i_min, i_max
-        self.u_min, self.u_max = u_min, u_max
-        self.antiwindup = antiwindup
-        self.i_term = 0.0
+    p: float = param(0.0, min_value=0.0, description="proportional gain")
+    i: float = param(0.0, min_value=0.0, description="integral gain")
+    d: float = param(0.0, min_value=0.0, description="derivative gain (on the measured velocity)")
+    i_clamp: float = param(0.0, min_value=0.0, description="symmetric integral limit (0: none)")
+    i_clamp_max: float | None = param(None, allow_infinite=True,
+                                      description="upper integral limit (default: i_clamp, else none)")
+    i_clamp_min: float | None = param(None, allow_infinite=True,
+                                      description="lower integral limit (default: -i_clamp, else none)")
+    u_clamp_max: float = param(math.inf, allow_infinite=True, description="upper output limit")
+    u_clamp_min: float = param(-math.inf, allow_infinite=True, description="lower output limit")
+    antiwindup: bool = param(True, description="stop integrating while the output is saturated")
 
-    def reset(self) -> None:
-        self.i_term = 0.0
+    def pid(self) -> Pid:
+        symmetric = self.i_clamp if self.i_clamp > 0 else math.inf
+        i_max = self.i_clamp_max if self.i_clamp_max is not None else symmetric
+        i_min = self.i_clamp_min if self.i_clamp_min is not None else -symmetric
+        return Pid(self.p, self.i, self.d, i_min, i_max, self.u_clamp_min, self.u_clamp_max, self.antiwindup)
 
-    def compute(self, error: float, error_rate: float, dt: float) -> float:
-        unsaturated = self.p * error + self.i_term + self.d * error_rate
-        saturated = min(max(unsaturated, self.u_min), self.u_max)
-        # Anti-windup: stop integrating while the output is saturated in the direction of the error.
-        winding = self.antiwindup and saturated != unsaturated and (unsaturated - saturated) * error > 0
-        if dt > 0.0 and not winding:
-            self.i_term = min(max(self.i_term + self.i * error * dt, self.i_min), self.i_max)
-        return min(max(self.p * error + self.i_term + self.d * error_rate, self.u_min), self.u_max)
+
+@dataclass(frozen=True)
+class PidParameters:
+    joints: list[str] = param([], description="controlled joints")
+    dof_names: list[str] = param([], description="ros2_controllers' name for 'joints' (used when 'joints' is empty)")
+    command_interface: str = param("effort", choices=("effort", "velocity"), description="what the PID commands")
+    reference_and_state_interfaces: list[str] = param(
+        ["position"], choices=("position",), description="the reference is a position (the only kind here)")
+    gains: dict[str, PidGains] = per_key(PidGains, keys=("joints", "dof_names"))
 
 
 class PidController(Controller):
     type_name = "pid_controller/PidController"
-
-    def on_init(self) -> None:
-        self.declare_parameter("joints", [], type=list, element_type=str)
-        self.declare_parameter("dof_names", [], type=list, element_type=str,
-                               description="ros2_controllers' name for 'joints'")
-        self.declare_parameter("command_interface", "effort", choices=("effort", "velocity"))
-        self.declare_parameter("reference_and_state_interfaces", ["position"], element_type=str,
-                               choices=("position", "velocity"))
+    Params = PidParameters
+    params: PidParameters
 
     def on_configure(self) -> None:
-        joints = list(self.get_parameter("joints")) or list(self.get_parameter("dof_names"))
+        joints = list(self.params.joints) or list(self.params.dof_names)
         if not joints:
             raise ControllerError("parameter 'joints' is empty")
         if len(set(joints)) != len(joints):
             raise ControllerError(f"parameter 'joints' lists a joint twice: {joints}")
         self.joints = joints
-        self.command_kind = self.get_parameter("command_interface")
+        self.command_kind = self.params.command_interface
         self.pids: list[Pid] = []
         for joint in joints:
-            g = f"gains.{joint}."
-            p = self.declare_parameter(g + "p", 0.0, min_value=0.0)
-            i = self.declare_parameter(g + "i", 0.0, min_value=0.0)
-            d = self.declare_parameter(g + "d", 0.0, min_value=0.0)
-            i_clamp = self.declare_parameter(g + "i_clamp", 0.0, min_value=0.0,
-                                             description="symmetric integral limit (0: none)")
-            i_max = self.declare_parameter(g + "i_clamp_max", i_clamp if i_clamp > 0 else math.inf)
-            i_min = self.declare_parameter(g + "i_clamp_min", -i_clamp if i_clamp > 0 else -math.inf)
-            u_max = self.declare_parameter(g + "u_clamp_max", math.inf)
-            u_min = self.declare_parameter(g + "u_clamp_min", -math.inf)
-            antiwindup = self.declare_parameter(g + "antiwindup", True)
-            self.declare_parameter(g + "feedforward_gain", 0.0)
-            if i_min > i_max or u_min > u_max:
+            gains = self.params.gains[joint]
+            pid = gains.pid()
+            if pid.i_min > pid.i_max or pid.u_min > pid.u_max:
                 raise ControllerError(f"gains.{joint}: a *_clamp_min is above its *_clamp_max")
-            if p == 0.0 and i == 0.0 and d == 0.0:
+            if gains.p == 0.0 and gains.i == 0.0 and gains.d == 0.0:
                 raise ControllerError(f"gains.{joint}: p, i and d are all zero")
-            self.pids.append(Pid(p, i, d, i_min, i_max, u_min, u_max, antiwindup))
-        unknown = self.params.undeclared()
-        if unknown:
-            self.logger.warn(f"{self.name}: ignoring unknown parameters {unknown}")
+            self.pids.append(pid)
         self._reference: list[float] | None = None
         self.rejected_count = 0
         self.context.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "~/reference",
