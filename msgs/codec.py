@@ -14,7 +14,6 @@ from typing import Any
 import msgpack
 
 from msgs import compiled
-from msgs.compiled import _FLOAT_ONLY, _STR_ONLY
 from msgs.idl import EQUAL_LENGTH_RULES, FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
 from msgs.registry import default_value, get_class, get_spec
 
@@ -40,6 +39,8 @@ class Limits:
     allow_nonfinite: bool = False
 
 
+_FLOAT_ONLY = frozenset({float})   # a list of exactly these types needs no per-item check
+_STR_ONLY = frozenset({str})
 DEFAULT_LIMITS = Limits()
 
 

@@ -209,8 +209,9 @@ def test_every_module_imports_alone() -> None:
 
 # ------------------------------------------------------------------------------------------ encapsulation
 def private_attributes_from_elsewhere(path: Path) -> list[str]:
-    """``obj._name`` where ``obj`` is not ``self``/``cls`` and nothing in this module defines ``_name``: a reach
-    into another module's private members. Private names of third-party and stdlib modules are not ours."""
+    """``obj._name`` where ``obj`` is not ``self``/``cls`` and nothing in this module defines ``_name``, and
+    ``from our.module import _name``: reaches into another module's private members. Private names of
+    third-party and stdlib modules are not ours."""
     tree = ast.parse(path.read_text())
     defined: set[str] = set()
     foreign_aliases: set[str] = set()
@@ -231,6 +232,9 @@ def private_attributes_from_elsewhere(path: Path) -> list[str]:
                     foreign_aliases.add(alias.asname or alias.name.partition(".")[0])
     found = []
     for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and (node.module or "").partition(".")[0] in PACKAGES:
+            found += [f"{path.relative_to(ROOT)}:{node.lineno}: from {node.module} import {alias.name}"
+                      for alias in node.names if alias.name.startswith("_") and not alias.name.startswith("__")]
         if not (isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__")):
             continue
         owner = node.value.id if isinstance(node.value, ast.Name) else None
