@@ -109,6 +109,12 @@ class RobotLink:
             self.update_rate = float(command.update_rate)
         self.holding = False
 
+    def reset(self) -> None:
+        """After a world or simulation reset: commands and pending lockstep answers mean nothing any more."""
+        self.inbox.clear()
+        self.answer_due.clear()
+        self.holding = True
+
     def hold(self, reason: str) -> None:
         if not self.holding:
             self.node.logger.warn(f"{self.namespace}: {reason}; holding position")

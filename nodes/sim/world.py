@@ -46,6 +46,9 @@ class PhysicsWorld:
     def time_step(self) -> float:
         return self.world.getTimeStep()
 
+    def set_time_step(self, time_step: float) -> None:
+        self.world.setTimeStep(time_step)
+
     @property
     def physics_rate(self) -> float:
         return 1.0 / self.world.getTimeStep()

@@ -9,7 +9,7 @@ import pytest
 
 import msgs
 from nodes.control.node import MAX_SWITCH_CONTROLLERS, _switch_request_problem
-from nodes.sim.node import _physics_request_problem
+from nodes.sim.services import physics_request_problem
 
 SetPhysics = msgs.get_type("zenroid_sim_msgs/srv/SetPhysicsProperties")
 SwitchController = msgs.get_type("controller_manager_msgs/srv/SwitchController")
@@ -36,7 +36,7 @@ def physics(**fields) -> object:
     ({"add_ground": True, "remove_ground": True}, "add_ground"),
 ])
 def test_physics_requests_out_of_range_are_refused_naming_the_field(request_fields, field) -> None:
-    problem = _physics_request_problem(physics(**request_fields))
+    problem = physics_request_problem(physics(**request_fields))
     assert problem and problem.startswith(field), problem
     assert len(problem) < 500   # a 100,000-character mode is not echoed back
 
@@ -47,7 +47,7 @@ def test_physics_requests_out_of_range_are_refused_naming_the_field(request_fiel
     {"set_gravity": True, "gravity": Vector3(x=100.0, y=-100.0, z=-1.62)},
 ])
 def test_plausible_physics_requests_pass(request_fields) -> None:
-    assert _physics_request_problem(physics(**request_fields)) is None
+    assert physics_request_problem(physics(**request_fields)) is None
 
 
 def switch(**fields) -> object:
