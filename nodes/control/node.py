@@ -29,6 +29,7 @@ from nodes.control.controller import ACTIVE
 from nodes.control.interfaces import COMMAND_KINDS, HardwareInterfaces, JointInfo
 from nodes.control.manager import BEST_EFFORT, STRICT, ControllerManager, ManagerError
 from nodes.core import Node, ServiceError
+from nodes.core.endpoints import SingleSender, source_label
 from nodes.core.log import truncate
 
 ListControllers = msgs.get_type("controller_manager_msgs/srv/ListControllers")
@@ -215,7 +216,10 @@ class ControllerManagerNode(Node):
         # simulator would hold position and the run would no longer be repeatable); in realtime each
         # command is dropped rather than waited for, as the next one supersedes it.
         self._cmd_pub = self.create_publisher(HardwareCommand, "hardware/command", express=True)
-        self.create_subscription(HardwareState, "hardware/state", self._on_state, inline=True, raw=True)
+        # frames from one simulator only: a second publisher on the key (a forged or replayed frame) is ignored
+        self._state_sender = SingleSender(takeover_after=self.hardware_timeout)
+        self.create_subscription(HardwareState, "hardware/state", self._on_state, inline=True, raw=True,
+                                 with_source=True)
         self.create_service(ListControllers, "~/list_controllers", self._srv_list)
         self.create_service(LoadController, "~/load_controller", self._srv_load)
         self.create_service(ConfigureController, "~/configure_controller", self._srv_configure)
@@ -270,8 +274,14 @@ class ControllerManagerNode(Node):
         return NodeControllerContext(self, name)
 
     # --- hardware loop (Zenoh thread) -------------------------------------------------------------------
-    def _on_state(self, payload: bytes) -> None:
+    def _on_state(self, payload: bytes, source: bytes | None = None) -> None:
         started = time.perf_counter()
+        if not self._state_sender.admit(source, time.monotonic()):
+            self.logger.warn_throttle(
+                1.0, f"hardware/state: ignored {self._state_sender.refused} frame(s) from "
+                f"{source_label(source)}: this robot's frames come from {source_label(self._state_sender.owner)} "
+                "(two publishers on hardware/state: a second simulator, a replay or a forgery)", key="foreign state")
+            return
         try:
             state = msgs.decode(HardwareState, payload)   # validated at the trust boundary
         except msgs.DecodeError as exc:   # a malformed frame is dropped, the loop lives on

@@ -39,6 +39,35 @@ def parse_attachment(sample: Any) -> tuple[int, bytes] | None:
     return _ATTACHMENT.unpack(raw)
 
 
+def source_label(source: bytes | None) -> str:
+    """A short printable name of a publisher's source id (what log lines show)."""
+    return f"source {source[:6].hex()}" if source else "a sender without a zenroid attachment"
+
+
+class SingleSender:
+    """One sender per key (a robot's hardware frames): the first source seen owns the key; another source
+    is refused while the owner keeps sending, and takes over once the owner has been silent for
+    ``takeover_after`` s (a respawned simulator or controller manager publishes with a new source id).
+
+    Source ids identify publishers, they do not authenticate them: keeping strangers off a key is Zenoh's
+    access control. This catches the accidents (a second controller manager, a test client, a replayed bag)
+    and the simple forgeries."""
+
+    def __init__(self, takeover_after: float) -> None:
+        self.takeover_after = takeover_after
+        self.owner: bytes | None = None
+        self._seen = False
+        self._last = 0.0
+        self.refused = 0
+
+    def admit(self, source: bytes | None, now: float) -> bool:
+        if not self._seen or source == self.owner or now - self._last > self.takeover_after:
+            self.owner, self._seen, self._last = source, True, now
+            return True
+        self.refused += 1
+        return False
+
+
 class ServiceError(RuntimeError):
     """A service call that returned no response: error reply, timeout or no server."""
 
@@ -114,7 +143,7 @@ class Subscription:
     """
 
     def __init__(self, node: NodeRuntime, msg_type: Any, key: str, callback: Callable[[Any], None] | None, *,
-                 inline: bool = False, raw: bool = False, with_key: bool = False,
+                 inline: bool = False, raw: bool = False, with_key: bool = False, with_source: bool = False,
                  max_rate: float | None = None, backlog: int = 256) -> None:
         self.node = node
         self.msg_type = msg_type
@@ -123,6 +152,9 @@ class Subscription:
         self.raw = raw
         self.inline = inline
         self.with_key = with_key  # callback(msg, key): for wildcard keys ("*/joint_states")
+        # callback(..., source): the sending publisher's 16-byte id from the attachment (None without one),
+        # to tell two senders on one key apart. It identifies, it does not authenticate (Zenoh's ACL does).
+        self.with_source = with_source
         self.max_payload = max_payload_bytes()   # bigger messages are dropped (logged) before decoding
         if max_rate is not None and not max_rate > 0:
             raise ValueError(f"max_rate must be > 0 Hz, got {max_rate}")
@@ -170,6 +202,9 @@ class Subscription:
             self.node.deliver_event(topic, msg)
             return
         args = (msg, topic) if self.with_key else (msg,)
+        if self.with_source:
+            attachment = parse_attachment(sample)
+            args += (attachment[1] if attachment is not None else None,)
         if self.inline:
             self.node.executor.run_callback(self.callback, *args, where=f"subscription '{self.key}'")
         else:

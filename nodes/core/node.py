@@ -141,7 +141,10 @@ class Node:
     def _publish_log(self, level: int, name: str, text: str, wall: float) -> None:
         if self._closed:
             return
-        self._rosout.publish(_Log(stamp=self.clock.stamp(wall), level=level, name=name, msg=text))
+        # droppable: a log flood on a congested link must never block the caller (the physics loop, the
+        # controller manager's hardware cycle); the line is on stdout and in the node's log file anyway
+        self._rosout.publish_raw(msgs.encode(_Log(stamp=self.clock.stamp(wall), level=level, name=name, msg=text)),
+                                 droppable=True)
 
     # ------------------------------------------------------------ parameters (nodes/core/node_parameters.py)
     def declare_parameter(self, name: str, default: Any, *, description: str = "", type: type | None = None,
@@ -189,11 +192,12 @@ class Node:
 
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], None] | None = None, *,
                             inline: bool = False, raw: bool = False, with_key: bool = False,
-                            max_rate: float | None = None) -> Subscription:
+                            with_source: bool = False, max_rate: float | None = None) -> Subscription:
         """``with_key=True`` calls ``callback(msg, key)`` (useful with wildcards like ``"/*/joint_states"``);
+        ``with_source=True`` adds the sending publisher's id (bytes, or None) as the last argument;
         ``max_rate`` (Hz) batches a fast topic: every message still arrives, at most that many wake-ups a second."""
         return self._endpoints.subscription(msg_type, topic, callback, inline=inline, raw=raw, with_key=with_key,
-                                            max_rate=max_rate)
+                                            with_source=with_source, max_rate=max_rate)
 
     def create_service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *,
                        inline: bool = False) -> ServiceServer:

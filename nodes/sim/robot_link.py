@@ -6,11 +6,13 @@ that holds the robot (mode, physics rate, balance) and the robot's ``HardwareInt
 
 from __future__ import annotations
 
+import time
 from collections import deque
 from typing import Any
 
 import msgs
 from nodes.core import Node
+from nodes.core.endpoints import SingleSender, source_label
 from nodes.sim.hardware import CommandError, HardwareInterface
 from nodes.sim.interfaces import GetHardwareInfo, HardwareCommand, HardwareState, HumanoidState
 from nodes.sim.simulation import Simulation
@@ -59,9 +61,12 @@ class RobotLink:
         # lockstep_timeout), and the simulator waits for the controller manager anyway.
         self.state_pub = node.create_publisher(HardwareState, f"{ns}/hardware/state", express=True)
         self.humanoid_pub = node.create_publisher(HumanoidState, f"{ns}/humanoid_state", reliable=False)
+        # one controller manager commands a robot (as one ros2_control hardware has one manager): commands from
+        # a second source are ignored and reported while the first keeps commanding
+        self._commander = SingleSender(takeover_after=command_timeout)
         # inline: commands go straight into the inbox from Zenoh's thread; the physics thread picks them up
         self.command_sub = node.create_subscription(HardwareCommand, f"{ns}/hardware/command", self._on_command,
-                                                    inline=True, raw=True)
+                                                    inline=True, raw=True, with_source=True)
         self.info_srv = node.create_service(GetHardwareInfo, f"{ns}/hardware/info", self._on_info)
         self._endpoints = [self.state_pub, self.humanoid_pub, self.command_sub, self.info_srv]
 
@@ -72,7 +77,13 @@ class RobotLink:
             except Exception:  # noqa: BLE001 - already gone
                 pass
 
-    def _on_command(self, payload: bytes) -> None:
+    def _on_command(self, payload: bytes, source: bytes | None = None) -> None:
+        if not self._commander.admit(source, time.monotonic()):
+            self.node.logger.warn_throttle(
+                1.0, f"{self.namespace}/hardware/command: two sources command this robot: "
+                f"{source_label(self._commander.owner)} (in control) and {source_label(source)} (ignored, "
+                f"{self._commander.refused} command(s) so far)", key=f"cmdsource:{self.namespace}")
+            return
         try:
             command = parse_command(payload)
         except CommandError as exc:

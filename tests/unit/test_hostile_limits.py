@@ -71,3 +71,16 @@ def test_switch_requests_beyond_limits_are_refused_naming_the_field(request_fiel
 @pytest.mark.parametrize("strictness", [0, 1, 2])
 def test_switch_strictness_values_ros2_control_accepts(strictness) -> None:
     assert _switch_request_problem(switch(strictness=strictness, activate_controllers=["a"])) == ""
+
+
+def test_single_sender_keeps_the_first_source_until_it_falls_silent() -> None:
+    from nodes.core.endpoints import SingleSender, source_label
+
+    guard = SingleSender(takeover_after=0.5)
+    sim, forger, respawned = b"s" * 16, b"f" * 16, b"r" * 16
+    assert guard.admit(sim, 10.0)
+    assert not guard.admit(forger, 10.1) and not guard.admit(None, 10.2)
+    assert guard.admit(sim, 10.3) and guard.refused == 2
+    assert guard.admit(respawned, 10.9)          # the owner was silent for 0.6 s: a respawned sender takes over
+    assert not guard.admit(sim, 11.0) and guard.owner == respawned
+    assert source_label(sim) == f"source {sim[:6].hex()}" and "without" in source_label(None)
