@@ -276,17 +276,17 @@ class ControllerManagerNode(Node):
     # --- hardware loop (Zenoh thread) -------------------------------------------------------------------
     def _on_state(self, payload: bytes, source: bytes | None = None) -> None:
         started = time.perf_counter()
-        if not self._state_sender.admit(source, time.monotonic()):
-            self.logger.warn_throttle(
-                1.0, f"hardware/state: ignored {self._state_sender.refused} frame(s) from "
-                f"{source_label(source)}: this robot's frames come from {source_label(self._state_sender.owner)} "
-                "(two publishers on hardware/state: a second simulator, a replay or a forgery)", key="foreign state")
-            return
         try:
             state = msgs.decode(HardwareState, payload)   # validated at the trust boundary
         except msgs.DecodeError as exc:   # a malformed frame is dropped, the loop lives on
             self._bad_frames += 1
             self.logger.warn_throttle(1.0, f"dropped a malformed hardware/state frame: {exc}")
+            return
+        if not self._state_sender.admit(source, time.monotonic()):
+            self.logger.warn_throttle(
+                1.0, f"hardware/state: ignored {self._state_sender.refused} frame(s) from "
+                f"{source_label(source)}: this robot's frames come from {source_label(self._state_sender.owner)} "
+                "(two publishers on hardware/state: a second simulator, a replay or a forgery)", key="foreign state")
             return
         step, names, positions = state.step, state.name, state.position
         velocities, efforts = state.velocity, state.effort

@@ -78,17 +78,17 @@ class RobotLink:
                 pass
 
     def _on_command(self, payload: bytes, source: bytes | None = None) -> None:
-        if not self._commander.admit(source, time.monotonic()):
-            self.node.logger.warn_throttle(
-                1.0, f"{self.namespace}/hardware/command: two sources command this robot: "
-                f"{source_label(self._commander.owner)} (in control) and {source_label(source)} (ignored, "
-                f"{self._commander.refused} command(s) so far)", key=f"cmdsource:{self.namespace}")
-            return
         try:
             command = parse_command(payload)
         except CommandError as exc:
             self.node.logger.warn_throttle(1.0, f"{self.namespace}/hardware/command: dropped a malformed "
                                            f"message: {exc}", key=f"cmdparse:{self.namespace}")
+            return
+        if not self._commander.admit(source, time.monotonic()):
+            self.node.logger.warn_throttle(
+                1.0, f"{self.namespace}/hardware/command: two sources command this robot: "
+                f"{source_label(self._commander.owner)} (in control) and {source_label(source)} (ignored, "
+                f"{self._commander.refused} command(s) so far)", key=f"cmdsource:{self.namespace}")
             return
         last = self._last_state_step
         if last is not None and 0 <= command.step < last - self.command_timeout * self.sim.physics_rate:
