@@ -11,6 +11,7 @@ through the small ``ControllerContext`` handle the manager passes in, never thro
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
@@ -72,6 +73,8 @@ class Controller:
         self.context = context
         self.logger = context.logger
         self.params: Any = self.Params()
+        self.joints: list[str] = []     # the joints it controls, known from on_configure
+        self.rejected_count = 0         # commands refused (wrong length, not finite, ...): for tests and the CLI
         self.state = UNCONFIGURED
         self.command_interfaces: list[LoanedCommandInterface] = []
         self.state_interfaces: list[LoanedStateInterface] = []
@@ -114,5 +117,21 @@ class Controller:
         raise NotImplementedError
 
     # --- helpers ----------------------------------------------------------------------------------
+    def one_value_per_joint(self, data: Any, what: str) -> list[float] | None:
+        """``data`` (a Float64MultiArray's) as one finite value per joint of ``self.joints``; None when it
+        is refused (logged with the reason, counted in ``rejected_count``)."""
+        values = list(data)
+        joints = self.joints
+        if len(values) != len(joints):
+            problem = f"data has {len(values)} values, expected {len(joints)} (joints {joints})"
+        else:
+            bad = next((i for i, v in enumerate(values) if not math.isfinite(v)), None)
+            problem = None if bad is None else f"data[{bad}] is not finite"
+        if problem is None:
+            return values
+        self.rejected_count += 1
+        self.logger.error(f"{self.name}: {what} rejected: {problem}")
+        return None
+
     def loans_by_name(self) -> tuple[dict[str, LoanedCommandInterface], dict[str, LoanedStateInterface]]:
         return ({c.name: c for c in self.command_interfaces}, {s.name: s for s in self.state_interfaces})

@@ -1,7 +1,26 @@
-"""One PID loop (control_toolbox's ``Pid``): integral clamping, output clamping and anti-windup; shared by
-the PID controller and the trajectory controller's closed-loop adapter."""
+"""One PID loop (control_toolbox's ``Pid``): integral clamping, output clamping and anti-windup; and the gains
+every controller with PIDs declares per joint (``gains.<joint>.p`` ...). Shared by the PID controller and the
+trajectory controller's closed-loop adapter."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+
+from nodes.core.param_schema import param
+
+
+@dataclass(frozen=True)
+class Gains:
+    """``gains.<joint>.*`` as control_toolbox declares them; controllers extend it with their own fields."""
+
+    p: float = param(0.0, min_value=0.0, description="proportional gain")
+    i: float = param(0.0, min_value=0.0, description="integral gain")
+    d: float = param(0.0, min_value=0.0, description="derivative gain (on the velocity error)")
+    i_clamp: float = param(0.0, min_value=0.0, description="symmetric integral limit (0: none)")
+
+    @property
+    def all_zero(self) -> bool:
+        return self.p == 0.0 and self.i == 0.0 and self.d == 0.0
 
 
 class Pid:

@@ -12,13 +12,12 @@ from nodes.core.action import STATUS_NAMES, ActionClient
 from nodes.tools.common import (
     add_common,
     add_list_verb,
+    call_failure,
     cli_node,
     interface_type,
     key_of,
     message_from_yaml,
-    offered,
     print_endpoints,
-    snapshot,
     snapshot_until,
     suggest,
     to_yaml,
@@ -85,11 +84,8 @@ def run(args: argparse.Namespace) -> int:
             raise outcome["error"]
         status, result = outcome["result"]
     except ServiceError as exc:
-        servers = offered(snapshot(node), "act")
         key = key_of(args.key)
-        if key not in servers:
-            raise Failed(f"no action server for '{key}'{suggest(key, servers)}") from None
-        raise Failed(str(exc)) from None
+        raise call_failure(node, "act", key, exc, f"no action server for '{key}'") from None
     finally:
         node.destroy()
     write_line("Result:\n" + to_yaml(msgs.to_dict(result)))

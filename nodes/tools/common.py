@@ -138,6 +138,15 @@ def offered(entries: Iterable[Any], kind: str) -> dict[str, str]:
     return {e.name: e.type_name for e in entries if e.kind == kind and not is_cli_node(e.node)}
 
 
+def call_failure(node: Node, kind: str, key: str, exc: Exception, missing: str) -> Failed:
+    """Why a call to ``key`` failed: ``missing`` and a suggestion when no node offers a ``kind`` endpoint
+    there (``srv``, ``act``), else the call's own reason."""
+    servers = offered(snapshot(node), kind)
+    if key not in servers:
+        return Failed(f"{missing}{suggest(key, servers)}")
+    return Failed(str(exc))
+
+
 def interface_type(type_name: str, kind: type) -> Any:
     """A service or action type by name (``kind``: ``msgs.Service`` or ``msgs.Action``); else a usage error."""
     found = resolve_type(type_name)

@@ -10,13 +10,12 @@ from nodes.core.endpoints import Client
 from nodes.tools.common import (
     add_common,
     add_list_verb,
+    call_failure,
     cli_node,
     interface_type,
     key_of,
     message_from_yaml,
-    offered,
     print_endpoints,
-    snapshot,
     snapshot_until,
     suggest,
     to_yaml,
@@ -51,10 +50,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"requester: making request: {request}", flush=True)
         response = Client(node, srv, key_of(args.key)).call(request, timeout=args.timeout)
     except ServiceError as exc:
-        servers = offered(snapshot(node), "srv")
-        if key_of(args.key) not in servers:
-            raise Failed(f"no service '{key_of(args.key)}' is offered{suggest(key_of(args.key), servers)}") from None
-        raise Failed(str(exc)) from None
+        key = key_of(args.key)
+        raise call_failure(node, "srv", key, exc, f"no service '{key}' is offered") from None
     finally:
         node.destroy()
     write_line("response:")

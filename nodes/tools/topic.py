@@ -399,13 +399,18 @@ def _hz(args: argparse.Namespace) -> int:
     return 0
 
 
-def _info(args: argparse.Namespace) -> int:
+def _graph_with_topic(args: argparse.Namespace) -> tuple[str, list[graph.GraphEntry]]:
+    """The topic's key and the graph, waited for until some publisher or subscriber of it shows."""
     node = cli_node(args, "topic")
     key = key_of(args.key)
     try:
-        everything = snapshot_until(node, lambda es: any(e.name == key for e in _topics(es)))
+        return key, snapshot_until(node, lambda es: any(e.name == key for e in _topics(es)))
     finally:
         node.destroy()
+
+
+def _info(args: argparse.Namespace) -> int:
+    key, everything = _graph_with_topic(args)
     entries = [e for e in _topics(everything) if e.name == key]
     if not entries:
         raise Failed(f"no publisher or subscriber on '{key}'{_hint(key, everything)}")
@@ -423,12 +428,7 @@ def _info(args: argparse.Namespace) -> int:
 
 
 def _type(args: argparse.Namespace) -> int:
-    node = cli_node(args, "topic")
-    key = key_of(args.key)
-    try:
-        everything = snapshot_until(node, lambda es: any(e.name == key for e in _topics(es)))
-    finally:
-        node.destroy()
+    key, everything = _graph_with_topic(args)
     types = sorted({e.type_name for e in _topics(everything) if e.name == key and e.type_name != "*"})
     if not types:
         raise Failed(f"no publisher or subscriber on '{key}'{_hint(key, everything)}")

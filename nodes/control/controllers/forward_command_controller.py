@@ -4,7 +4,6 @@ to one command interface of each joint."""
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from nodes.control.controller import Controller, ControllerError
@@ -45,18 +44,9 @@ class ForwardCommandController(Controller):
         return [f"{j}/{self.interface}" for j in self.joints]
 
     def _on_commands(self, msg) -> None:
-        data = list(msg.data)
-        if len(data) != len(self.joints):
-            self.rejected_count += 1
-            self.logger.error(f"{self.name}: command rejected: data has {len(data)} values, expected "
-                              f"{len(self.joints)} (joints {self.joints})")
-            return
-        bad = [i for i, v in enumerate(data) if not math.isfinite(v)]
-        if bad:
-            self.rejected_count += 1
-            self.logger.error(f"{self.name}: command rejected: data[{bad[0]}] is not finite")
-            return
-        self._latest = data  # one assignment: atomic hand-over to update()
+        data = self.one_value_per_joint(msg.data, "command")
+        if data is not None:
+            self._latest = data  # one assignment: atomic hand-over to update()
 
     def on_activate(self) -> None:
         self._latest = None  # commands sent while inactive are not replayed

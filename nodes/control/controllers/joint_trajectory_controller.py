@@ -26,7 +26,7 @@ import msgs
 from nodes.control.controller import Controller, ControllerError
 from nodes.control.interfaces import read_values, write_values
 from nodes.control.messages import sec_to_time
-from nodes.control.pid import Pid
+from nodes.control.pid import Gains, Pid
 from nodes.control.trajectory import (
     MAX_DURATION,
     MAX_POINTS,
@@ -95,13 +95,9 @@ def _merge_tolerances(default: np.ndarray, joint_index: dict[str, int], entries,
 
 
 @dataclass(frozen=True)
-class JointGains:
+class JointGains(Gains):
     """``gains.<joint>.*``: the closed-loop adapter of velocity-only and effort command interfaces."""
 
-    p: float = param(0.0, min_value=0.0, description="proportional gain")
-    i: float = param(0.0, min_value=0.0, description="integral gain")
-    d: float = param(0.0, min_value=0.0, description="derivative gain (on the velocity error)")
-    i_clamp: float = param(0.0, min_value=0.0, description="symmetric integral limit (0: none)")
     ff_velocity_scale: float = param(0.0, description="feed-forward: this times the desired velocity is added")
 
     def pid(self) -> Pid:
@@ -178,7 +174,7 @@ class JointTrajectoryController(Controller):
         self.pids: list[Pid] = [params.gains[j].pid() for j in joints]
         self.ff_velocity_scale = np.array([params.gains[j].ff_velocity_scale for j in joints], dtype=float)
         if command == ["effort"]:
-            missing = [j for j, pid in zip(joints, self.pids, strict=True) if pid.p == pid.i == pid.d == 0.0]
+            missing = [j for j in joints if params.gains[j].all_zero]
             if missing:
                 raise ControllerError(f"effort commands need gains: gains.<joint>.p/i/d are all zero for {missing}")
         elif "effort" in command:

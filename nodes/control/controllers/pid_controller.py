@@ -12,18 +12,14 @@ from dataclasses import dataclass
 
 from nodes.control.controller import Controller, ControllerError
 from nodes.control.messages import msg_type
-from nodes.control.pid import Pid
+from nodes.control.pid import Gains, Pid
 from nodes.core.param_schema import param, per_key
 
 
 @dataclass(frozen=True)
-class PidGains:
+class PidGains(Gains):
     """``gains.<joint>.*``, as control_toolbox's PID parameters."""
 
-    p: float = param(0.0, min_value=0.0, description="proportional gain")
-    i: float = param(0.0, min_value=0.0, description="integral gain")
-    d: float = param(0.0, min_value=0.0, description="derivative gain (on the measured velocity)")
-    i_clamp: float = param(0.0, min_value=0.0, description="symmetric integral limit (0: none)")
     i_clamp_max: float | None = param(None, allow_infinite=True,
                                       description="upper integral limit (default: i_clamp, else none)")
     i_clamp_min: float | None = param(None, allow_infinite=True,
@@ -68,7 +64,7 @@ class PidController(Controller):
             pid = gains.pid()
             if pid.i_min > pid.i_max or pid.u_min > pid.u_max:
                 raise ControllerError(f"gains.{joint}: a *_clamp_min is above its *_clamp_max")
-            if gains.p == 0.0 and gains.i == 0.0 and gains.d == 0.0:
+            if gains.all_zero:
                 raise ControllerError(f"gains.{joint}: p, i and d are all zero")
             self.pids.append(pid)
         self._reference: list[float] | None = None
@@ -83,17 +79,9 @@ class PidController(Controller):
         return [f"{j}/{k}" for j in self.joints for k in ("position", "velocity")]
 
     def _on_reference(self, msg) -> None:
-        data = list(msg.data)
-        if len(data) != len(self.joints):
-            self.rejected_count += 1
-            self.logger.error(f"{self.name}: reference rejected: data has {len(data)} values, expected "
-                              f"{len(self.joints)} (joints {self.joints})")
-            return
-        if not all(math.isfinite(v) for v in data):
-            self.rejected_count += 1
-            self.logger.error(f"{self.name}: reference rejected: data holds a NaN or infinity")
-            return
-        self._reference = data
+        data = self.one_value_per_joint(msg.data, "reference")
+        if data is not None:
+            self._reference = data
 
     def on_activate(self) -> None:
         _, state = self.loans_by_name()
