@@ -489,15 +489,6 @@ class JointTrajectoryController(Controller):
             header=_header(stamp=msgs.time_map(time)), joint_names=self.joints,
             reference=desired, feedback=actual, error=error, output=output, speed_scaling_factor=1.0))
 
-    # --- introspection for tests and the CLI --------------------------------------------------------
-    @property
-    def desired_positions(self) -> np.ndarray | None:
-        return None if self._desired_pos is None else self._desired_pos.copy()
-
-    @property
-    def has_active_trajectory(self) -> bool:
-        return self._active is not None
-
 
 def _violations(error: np.ndarray, tolerance: np.ndarray) -> list[int]:
     """Indices where a tolerance is set (> 0) and |error| exceeds it."""
