@@ -128,7 +128,7 @@ def run_once(source: str, seconds: float, port: int) -> dict:
         window = (time.time() - seconds, time.time())
         stop(viz)
         cpu = (cpu_after.user + cpu_after.system) - (cpu_before.user + cpu_before.system)
-        rows = [r for r in load(rrd)["plots/humanoid/joint_states/position"].rows
+        rows = [r for r in load(rrd)["plots/humanoid/joint_states/position/left_leg"].rows
                 if "log_time" in r and window[0] <= r["log_time"] <= window[1]]
         if len(rows) < 10:
             raise SystemExit(f"only {len(rows)} joint_states rows logged in the window; logs in {work}")

@@ -26,9 +26,9 @@ from nodes.core import graph as core_graph
 from nodes.core.latched import fetch_latched
 from nodes.urdf.model import UrdfError
 
-from .blueprint import build_blueprint
+from .blueprint import RobotLayout, build_blueprint
 from .ratelimit import RateLimiter
-from .scene import RobotScene, log_ground, parse_model
+from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, is_wall_stamp, log_ground, parse_model
 from .sink import Output, OutputPlan
 
 String = msgs.get_type("std_msgs/msg/String")
@@ -85,19 +85,28 @@ class Visualiser(Node):
                                            "(default: the URDF's leaf links)") if e]
         self.world_frames = [w for w in p("world_frames", ["world", "map", "odom"],
                                           description="tf frames drawn as the scene root") if w]
+        # Rates and batching come from measuring a software-rendered browser on a 2-core machine
+        # (bench/viz.py; README "Visualiser"): what it can take in while staying within 1 s of the simulation.
         self.rates = {
-            "joint_states": p("joint_states_rate", 100.0, description="Hz", min_value=0.0),
-            "tf": p("tf_rate", 30.0, description="Hz", min_value=0.0),
-            "model_states": p("model_states_rate", 30.0, description="Hz", min_value=0.0),
-            "controller_state": p("controller_state_rate", 25.0, description="Hz", min_value=0.0),
-            "humanoid_state": p("humanoid_state_rate", 20.0, description="Hz", min_value=0.0),
-            "markers": p("marker_rate", 10.0, description="Hz", min_value=0.0),
+            "joint_states": p("joint_states_rate", 10.0, description="Hz", min_value=0.0),
+            "tf": p("tf_rate", 10.0, description="Hz", min_value=0.0),
+            "model_states": p("model_states_rate", 10.0, description="Hz", min_value=0.0),
+            "controller_state": p("controller_state_rate", 5.0, description="Hz", min_value=0.0),
+            "humanoid_state": p("humanoid_state_rate", 5.0, description="Hz", min_value=0.0),
+            "markers": p("marker_rate", 2.0, description="Hz", min_value=0.0),
         }
+        self.slow_plots_rate = p("velocity_effort_rate", 2.0, min_value=0.0, description=(
+            "Hz of the velocity and effort plots (positions: joint_states_rate)"))
+        self.keyframe_period = p("keyframe_period", 2.0, min_value=0.1, description=(
+            "s between re-logs of every robot's model and frames (a late viewer gets only recent history)"))
+        flush_period = p("flush_period", 0.5, min_value=0.0, max_value=2.0, description=(
+            "s the recording batches rows before sending (fewer, larger chunks for the viewer to take in)"))
         self.show_ground = p("ground", True, description="draw the ground plane (off for joint_animation)")
         self.tf_fallback_after = p("tf_fallback_after", 1.0, min_value=0.0,
                                    description="s of joint_states without tf before frames come from our FK")
 
         self.sim_now = 0.0
+        self.sim_clock_seen = False
         # Subscriptions run inline on Zenoh's threads (no executor queue to lag behind) and check their rate
         # limit before decoding, so dropped samples cost almost nothing; this lock serialises the handlers.
         self.lock = threading.Lock()
@@ -105,11 +114,14 @@ class Visualiser(Node):
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()  # work from the discovery thread
         self.layout_key: tuple = ()
 
-        self.recording = rr.RecordingStream("zenroid_viz")
+        self.recording = rr.RecordingStream("zenroid_viz",
+                                            batcher_config=rr.ChunkBatcherConfig(flush_tick=flush_period))
         args = cli_args or argparse.Namespace(save=None, serve=False, spawn=False, headless=None,
-                                              web_port=9090, grpc_port=9876)
-        plan = OutputPlan.resolve(args.save, args.serve, args.spawn, args.headless, args.web_port, args.grpc_port)
-        self.output = Output(self.recording, plan, build_blueprint())
+                                              web_port=9090, grpc_port=9876, server_history=None)
+        plan = OutputPlan.resolve(args.save, args.serve, args.spawn, args.headless, args.web_port, args.grpc_port,
+                                  getattr(args, "server_history", None))
+        self.timeline = SIM_TIMELINE
+        self.output = Output(self.recording, plan, build_blueprint(timeline=self.timeline))
         for note in plan.notes:
             self.logger.info(note)
         if plan.save:
@@ -127,6 +139,7 @@ class Visualiser(Node):
         for namespace in self.robot_list:
             self.add_robot(namespace)
         self.create_timer(0.1, self.drain_inbox, sim_time=False)
+        self.create_timer(self.keyframe_period, self.keyframe, sim_time=False)
         self.discovery_stop = threading.Event()
         self.discovery = threading.Thread(target=self.discovery_loop, name="viz-discovery", daemon=True)
         self.discovery.start()
@@ -157,6 +170,7 @@ class Visualiser(Node):
         robot = RobotView(namespace)
         robot.limits = {stream: RateLimiter(hz) for stream, hz in self.rates.items()}
         robot.limits["fk"] = RateLimiter(self.rates["tf"])
+        robot.limits["slow_plots"] = RateLimiter(self.slow_plots_rate)
         robot.limits["balance_markers"] = RateLimiter(self.rates["markers"])
         self.robots[namespace] = robot
         sub, limits, ns = self.subscribe, robot.limits, namespace
@@ -227,12 +241,16 @@ class Visualiser(Node):
     # -- callbacks -----------------------------------------------------------------------------------
     def on_clock(self, msg: Any) -> None:
         self.sim_now = stamp_seconds(msg.clock)
+        self.sim_clock_seen = True
+        self.timeline = SIM_TIMELINE
 
     def stamp_or_now(self, stamp: Any) -> float:
         seconds = stamp_seconds(stamp)
         if seconds <= 0:
             return self.sim_now
         self.sim_now = seconds  # stamps keep sim time current between the (rate-limited) clock samples
+        if is_wall_stamp(seconds) and not self.sim_clock_seen:
+            self.timeline = WALL_TIMELINE  # no simulator: the time panel shows the wall clock
         return seconds
 
     def on_model_states(self, msg: Any) -> None:
@@ -297,7 +315,8 @@ class Visualiser(Node):
         if scene is None:
             return
         scene.positions.update(positions)
-        scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort)
+        scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort,
+                               all_quantities=robot.limits["slow_plots"].ready())
         if not robot.tf_seen and when >= self.tf_fallback_after and robot.limits["fk"].ready():
             scene.log_fk_transforms(when, scene.positions)
         if not scene.base_known and not robot.in_sim:
@@ -410,13 +429,28 @@ class Visualiser(Node):
                     self.on_tf(robot, item[2], static=True)
         self.update_layout()
 
+    def robot_layout(self, robot: RobotView) -> RobotLayout:
+        scene = robot.scene
+        if scene is None:
+            return RobotLayout(has_balance=robot.has_balance)
+        return RobotLayout(groups=list(scene.plot_groups), controllers={
+            c: scene.controller_groups[c] for c in sorted(robot.controllers) if c in scene.controller_groups},
+            has_balance=robot.has_balance)
+
     def update_layout(self) -> None:
-        """Re-send the blueprint when the set of robots, controllers or balance plots changes."""
-        layout = {ns: (sorted(r.controllers), r.has_balance) for ns, r in sorted(self.robots.items()) if r.present}
-        key = tuple((ns, tuple(c), b) for ns, (c, b) in layout.items())
+        """Re-send the blueprint when robots, plot groups, controllers, balance plots or the timeline change."""
+        layout = {ns: self.robot_layout(r) for ns, r in sorted(self.robots.items()) if r.present}
+        key = (self.timeline, tuple((ns, lay.key()) for ns, lay in layout.items()))
         if key != self.layout_key:
             self.layout_key = key
-            self.recording.send_blueprint(build_blueprint(layout))
+            self.recording.send_blueprint(build_blueprint(layout, self.timeline))
+
+    def keyframe(self) -> None:
+        """Every robot's model and frames again (see ``RobotScene.refresh``)."""
+        with self.lock:
+            for robot in self.robots.values():
+                if robot.scene is not None and robot.present:
+                    robot.scene.refresh(self.sim_now)
 
     def on_process_exit(self) -> None:
         self.discovery_stop.set()
@@ -432,5 +466,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                      help="never open a window even if a display is present")
     out.add_argument("--web-port", type=int, default=9090, help="web viewer HTTP port (0: any free port)")
     out.add_argument("--grpc-port", type=int, default=9876, help="Rerun gRPC port (0: any free port)")
+    out.add_argument("--server-history", metavar="SIZE", default=None,
+                     help="data the web viewer server keeps for viewers that connect later, e.g. 4MiB "
+                          "(default: a few seconds of this stream; a late viewer starts near the present)")
     out.add_argument("--robots", default="", help="comma-separated robot namespaces (same as robots:=[...])")
 

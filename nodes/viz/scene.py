@@ -3,21 +3,24 @@
 Entity layout (one subtree per robot namespace, so a deleted robot is one recursive Clear):
 
 - ``world/ground``                                   the ground plane
-- ``world/<ns>/links/<link>/visual_<i>``              URDF visual geometry, in named frame ``<ns>/<link>``
-- ``world/<ns>/frames/<child>``                      one frame relation each: tf, tf_static, and the
-                                                     root link in ``tf#/world`` from sim/model_states
+- ``world/<ns>/robot/{boxes,cylinders,spheres}``     the URDF's primitive visuals, one instance per visual,
+                                                     placed in the world through our tf tree (tf, tf_static,
+                                                     the root from sim/model_states, or our own FK)
+- ``world/<ns>/links/<link>/visual_<i>``              mesh visuals, one entity each with its world pose
 - ``world/<ns>/markers/{com,zmp,com_path,support_polygon,ee_paths,target}``
-- ``plots/<ns>/joint_states/{position,velocity,effort}``  one series per joint
-- ``plots/<ns>/<controller>/<joint>``                 commanded vs actual (the rqt_plot view)
+- ``plots/<ns>/joint_states/{position,velocity,effort}/<group>``  one plot per limb group (``joint_groups``),
+                                                     one series per joint
+- ``plots/<ns>/<controller>/<group>``                 commanded vs actual per joint (the rqt_plot view)
 - ``plots/<ns>/balance/{com,zmp,is_balanced}``
 
-Time: every call takes the sim time (``sim_time`` timeline, a duration) and stamps the wall clock
-(``wall_time`` timeline) itself.
+Time: every call takes the message stamp. Sim-time stamps go on the ``sim_time`` timeline (a duration from
+the start of the simulation); stamps from the wall clock (nodes that run without a simulator, like
+arm_viz's joint sweep: seconds since 1970) go on ``wall_time``, as timestamps, so no axis reads "+20780d".
+Rerun adds ``log_time`` (when each row was logged) to every row.
 """
 
 from __future__ import annotations
 
-import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -28,14 +31,21 @@ from nodes.kinematics import KinematicTree, matrix_to_quaternion, pose_matrix
 from nodes.urdf.model import RobotModel, UrdfError, Visual, parse_urdf
 from nodes.urdf.validate import validate
 
+from .ratelimit import RateLimiter
+
 SIM_TIMELINE = "sim_time"
 WALL_TIMELINE = "wall_time"
 WORLD_FRAME = "tf#/world"  # Rerun's implicit frame of the entity "world": the 3-D view's root
 SOLID = rr.components.FillMode.Solid
-PATH_LENGTH = 300  # points kept per marker path (30 s at the 10 Hz marker rate)
-TRANSLATION = rr.Transform3D.descriptor_translation()
-QUATERNION = rr.Transform3D.descriptor_quaternion()
-POSE_EPSILON = 1e-4  # m and quaternion units (~0.2 mrad): changes below this are invisible, not re-logged
+PATH_LENGTH = 40  # points kept per marker path (20 s at the 2 Hz marker rate)
+EPOCH_STAMP = 1e9  # s: a stamp past 2001-09-09 is the wall clock, not a simulation's time
+MAX_GROUP = 8  # joints per plot: more series than this make an unreadable legend
+LIMB_WORDS = {
+    "leg": ("leg", "hip", "knee", "ankle", "foot", "toe"),
+    "arm": ("arm", "shoulder", "elbow", "wrist", "hand", "finger", "gripper"),
+}
+SIDES = {"left": "left", "l": "left", "right": "right", "r": "right"}
+SHAPES = {"box": "boxes", "cylinder": "cylinders", "sphere": "spheres"}  # URDF primitive -> entity name
 
 
 def frame_name(namespace: str, frame: str, world_frames: Sequence[str] = ("world", "map", "odom")) -> str:
@@ -86,15 +96,86 @@ class PathBuffer:
         return np.concatenate((self.points[split:], self.points[:split]))
 
 
+def is_wall_stamp(stamp: float) -> bool:
+    return stamp >= EPOCH_STAMP
+
+
 class SceneTime:
-    """Sets both timelines on a recording before each log call."""
+    """Sets the timelines on a recording before each log call (see the module's docstring)."""
 
     def __init__(self, recording: rr.RecordingStream) -> None:
         self.recording = recording
 
-    def __call__(self, sim_time: float) -> None:
-        self.recording.set_time(SIM_TIMELINE, duration=max(0.0, sim_time))
-        self.recording.set_time(WALL_TIMELINE, timestamp=time.time())
+    def __call__(self, stamp: float) -> None:
+        if is_wall_stamp(stamp):
+            # Time context is per thread and sticky: a sim_time set earlier on this thread must not
+            # stay attached to wall-stamped rows.
+            self.recording.disable_timeline(SIM_TIMELINE)
+            self.recording.set_time(WALL_TIMELINE, timestamp=stamp)
+            return
+        # Sim stamps go on sim_time only: every timeline costs the viewer an index entry per row, and
+        # Rerun's own log_time already holds the wall clock of each row.
+        self.recording.disable_timeline(WALL_TIMELINE)
+        self.recording.set_time(SIM_TIMELINE, duration=max(0.0, stamp))
+
+
+def joint_groups(joint_names: Sequence[str]) -> dict[str, list[str]]:
+    """Joints in plot groups, for legends that can be read: by limb when the names say it
+    (``left_knee`` and ``l_leg_kny`` are both in "left leg"; waist, neck, back in "torso & head"),
+    in URDF order otherwise, at most ``MAX_GROUP`` per group. A small robot is one group."""
+    names = list(joint_names)
+    if len(names) <= MAX_GROUP:
+        return {"joints": names} if names else {}
+    groups: dict[str, list[str]] = {}
+    for name in names:
+        tokens = name.lower().replace("-", "_").split("_")
+        side = next((SIDES[t] for t in tokens[:1] if t in SIDES), "")
+        limb = next((limb for limb, words in LIMB_WORDS.items() if any(w in t for t in tokens for w in words)), "")
+        if side and limb:
+            key = f"{side} {limb}"
+        elif side:
+            key = f"{side} side"
+        else:
+            key = "torso & head" if limb == "" else limb
+        groups.setdefault(key, []).append(name)
+    order = ["left leg", "right leg", "left arm", "right arm", "torso & head"]
+    ordered = {k: groups[k] for k in order if k in groups}
+    ordered.update({k: v for k, v in groups.items() if k not in ordered})
+    result: dict[str, list[str]] = {}
+    for key, members in ordered.items():
+        chunks = [members[i:i + MAX_GROUP] for i in range(0, len(members), MAX_GROUP)]
+        for index, chunk in enumerate(chunks):
+            result[key if len(chunks) == 1 else f"{key} {index + 1}"] = chunk
+    return result
+
+
+QUANTITIES = ("position", "velocity", "effort")
+BALANCE_SERIES = ["CoM x", "CoM y", "CoM z", "ZMP x", "ZMP y", "balanced"]
+# Eight colours that stay apart on the viewer's dark background (one per joint of a group).
+PALETTE = [[230, 85, 70], [80, 160, 240], [250, 190, 50], [90, 200, 120], [200, 110, 230], [60, 210, 210],
+           [245, 130, 190], [170, 170, 170]]
+
+
+def lighter(color: Sequence[int]) -> list[int]:
+    return [int(c + (255 - c) * 0.55) for c in color]
+
+
+def short_labels(members: Sequence[str]) -> list[str]:
+    """Legend labels without the prefix every member shares (``left_knee`` -> ``knee`` in "left leg"), so
+    the legend stays narrow; full names when that would leave a label empty or ambiguous."""
+    if len(members) < 2:
+        return list(members)
+    split = [m.split("_") for m in members]
+    common = 0
+    while all(len(parts) > common + 1 and parts[common] == split[0][common] for parts in split):
+        common += 1
+    labels = ["_".join(parts[common:]) for parts in split]
+    return labels if len(set(labels)) == len(labels) else list(members)
+
+
+def group_entity(group: str) -> str:
+    """A plot group's entity path part (``left leg`` -> ``left_leg``)."""
+    return rr.escape_entity_path_part(group.replace(" & ", "_").replace(" ", "_"))
 
 
 def log_ground(recording: rr.RecordingStream, half_extent: float = 2.0) -> None:
@@ -135,7 +216,7 @@ class RobotScene:
 
     def __init__(self, recording: rr.RecordingStream, namespace: str, model: RobotModel,
                  end_effectors: Sequence[str] = (), world_frames: Sequence[str] = ("world", "map", "odom"),
-                 path_length: int = PATH_LENGTH) -> None:
+                 path_length: int = PATH_LENGTH, pose_limiter: RateLimiter | None = None) -> None:
         self.recording = recording
         self.namespace = namespace
         self.model = model
@@ -150,36 +231,51 @@ class RobotScene:
         self.world = f"world/{namespace}"
         self.plots = f"plots/{namespace}"
         self.root_frame = frame_name(namespace, model.root, self.world_frames)
-        self.relations: dict[str, tuple[str, list]] = {}  # child frame -> (parent frame, frame components)
-        self.last_pose: dict[str, tuple[float, ...]] = {}  # child frame -> last logged xyz + quaternion
+        # Our tf tree: child frame -> (parent frame, parent-from-child transform), from tf, tf_static, the
+        # simulator's base pose or our own forward kinematics.
+        self.frames: dict[str, tuple[str, np.ndarray]] = {}
+        self.pose_limiter = pose_limiter
+        self.parent_joint = {child: i for i, child in enumerate(self.fk.child_names)}  # link -> fk joint index
+        self.shapes: dict[str, list[tuple[str, Visual]]] = {}
+        self.meshes: list[tuple[str, np.ndarray, str, rr.AsComponents]] = []
         self.base_pose = np.eye(4)
         self.base_from_tf = False  # once tf names the root's parent, model_states no longer places it
         self.base_known = False  # no path points until the robot's place in the world is known
         self.positions: dict[str, float] = {}
         self.joint_series: tuple[str, ...] = ()
-        self.controller_series: set[tuple[str, str]] = set()
+        self.controller_series: set[tuple[str, tuple[str, ...]]] = set()
+        self.group_cache: dict[tuple[str, ...], list[tuple[str, np.ndarray, list[str]]]] = {}
+        # Entity parts of the plot groups, for the blueprint: joint_states, and each controller's.
+        self.plot_groups: list[str] = []
+        self.controller_groups: dict[str, list[str]] = {}
+        self.balance_named = False
         self.com_path = PathBuffer(path_length)
         self.ee_paths = {link: PathBuffer(path_length) for link in self.end_effectors}
         self.skipped_meshes: list[str] = []
 
     # -- model ---------------------------------------------------------------------------------------
     def log_model(self, sim_time: float, mesh_root: Path | None = None) -> int:
-        """Log every visual in its link frame; returns how many entities were logged."""
-        self.set_time(sim_time)
-        count = 0
+        """Prepare the robot's geometry and draw it (at the origin until a pose arrives); returns how many
+        visuals it has. Primitives of one kind are one entity (``world/<ns>/robot/{boxes,cylinders,spheres}``)
+        with an instance per visual placed in the world, so a moving robot costs the viewer three rows per
+        update rather than a row per link; meshes are an entity each (``world/<ns>/links/<link>/visual_<i>``)."""
+        self.shapes = {}
+        self.meshes = []
         for link, link_model in self.model.links.items():
-            frame = rr.CoordinateFrame(frame_name(self.namespace, link, self.world_frames))
             for index, visual in enumerate(link_model.visuals):
+                if visual.kind in SHAPES:
+                    self.shapes.setdefault(visual.kind, []).append((link, visual))
+                    continue
                 archetype = visual_archetype(visual, mesh_root)
                 if archetype is None:
                     self.skipped_meshes.append(visual.filename)
                     continue
-                self.recording.log(f"{self.world}/links/{link}/visual_{index}", archetype, frame)
-                count += 1
-        # Until a pose arrives, the robot stands at the origin rather than floating in no frame at all.
-        if not self.base_from_tf:
-            self._log_relation(WORLD_FRAME, self.root_frame, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0))
-        return count
+                self.meshes.append((link, visual.origin, f"{self.world}/links/{link}/visual_{index}", archetype))
+        if not self.base_from_tf and self.root_frame not in self.frames:
+            # Until a pose arrives, the robot stands at the origin rather than nowhere.
+            self.frames[self.root_frame] = (WORLD_FRAME, np.eye(4))
+        self.log_robot(sim_time, force=True)
+        return sum(len(v) for v in self.shapes.values()) + len(self.meshes)
 
     def clear(self, sim_time: float) -> None:
         """The robot was deleted: hide its whole subtree from this time on."""
@@ -190,13 +286,7 @@ class RobotScene:
     # -- frames --------------------------------------------------------------------------------------
     def log_transforms(self, sim_time: float,
                        transforms: Sequence[tuple[str, str, Sequence[float], Sequence[float]]]) -> None:
-        """``(parent, child, xyz, quat_xyzw)`` rows from a TFMessage (tf or tf_static).
-
-        One entity per child frame (``world/<ns>/frames/<child>``): the viewer resolves only one
-        frame relation per Transform3D row, and a relation may live on one entity only. The frame-name
-        components are built once per relation and reused, which halves the cost of a log call.
-        """
-        self.set_time(sim_time)
+        """``(parent, child, xyz, quat_xyzw)`` rows from a TFMessage (tf or tf_static): our tf tree."""
         for parent, child, xyz, quat in transforms:
             parent_frame = frame_name(self.namespace, parent, self.world_frames)
             child_frame = frame_name(self.namespace, child, self.world_frames)
@@ -205,30 +295,8 @@ class RobotScene:
             if child_frame == self.root_frame and parent_frame == WORLD_FRAME:
                 self.base_from_tf = self.base_known = True
                 self.base_pose = pose_matrix(xyz, quat)
-            self._log_relation(parent_frame, child_frame, xyz, quat)
-
-    def _log_relation(self, parent_frame: str, child_frame: str, xyz: Sequence[float],
-                      quat: Sequence[float]) -> None:
-        cached = self.relations.get(child_frame)
-        if cached is None or cached[0] != parent_frame:
-            frames = list(rr.Transform3D.from_fields(parent_frame=parent_frame,
-                                                     child_frame=child_frame).as_component_batches())
-            cached = (parent_frame, frames)
-            self.relations[child_frame] = cached
-            self.last_pose.pop(child_frame, None)
-        # Most joints of a moving robot are still at any instant: an unchanged frame is not logged again
-        # (the viewer holds the latest value), which removes most of the per-frame log calls.
-        pose = (*xyz, *quat)
-        last = self.last_pose.get(child_frame)
-        if last is not None and all(abs(a - b) < POSE_EPSILON for a, b in zip(pose, last, strict=True)):
-            return
-        self.last_pose[child_frame] = pose
-        entity = f"{self.world}/frames/{rr.escape_entity_path_part(child_frame.removeprefix(self.namespace + '/'))}"
-        self.recording.log(entity, [
-            *cached[1],
-            rr.components.Translation3DBatch([list(xyz)]).described(TRANSLATION),
-            rr.components.RotationQuatBatch([list(quat)]).described(QUATERNION),
-        ])
+            self.frames[child_frame] = (parent_frame, pose_matrix(xyz, quat))
+        self.log_robot(sim_time)
 
     def log_fk_transforms(self, sim_time: float, positions: Mapping[str, float]) -> None:
         """Fallback without a state publisher: link frames from our own forward kinematics."""
@@ -246,53 +314,150 @@ class RobotScene:
             return
         self.base_pose = pose_matrix(position, orientation_xyzw)
         self.base_known = True
+        self.frames[self.root_frame] = (WORLD_FRAME, self.base_pose)
+        self.log_robot(sim_time)
+
+    def world_pose(self, frame: str) -> np.ndarray | None:
+        """``frame`` (a Rerun frame name, see ``frame_name``) in the world through our tf tree; None when
+        the chain to the world is broken."""
+        pose = np.eye(4)
+        seen = 0
+        while frame != WORLD_FRAME:
+            link = self.frames.get(frame)
+            if link is None or seen > len(self.frames):
+                return None
+            pose = link[1] @ pose
+            frame = link[0]
+            seen += 1
+        return pose
+
+    def log_robot(self, sim_time: float, force: bool = False) -> None:
+        """Every visual at its link's world pose (rate-limited by ``pose_limiter`` unless ``force``)."""
+        if not force and self.pose_limiter is not None and not self.pose_limiter.ready():
+            return
         self.set_time(sim_time)
-        self._log_relation(WORLD_FRAME, self.root_frame, position, orientation_xyzw)
+        poses: dict[str, np.ndarray | None] = {}
+        local: list[np.ndarray] = []
+
+        def link_pose(link: str) -> np.ndarray | None:
+            if link not in poses:
+                pose = self.world_pose(frame_name(self.namespace, link, self.world_frames))
+                joint = self.parent_joint.get(link)
+                if pose is None and joint is not None:
+                    # Not (yet) in tf, e.g. a fixed joint before tf_static: its parent's pose and the URDF
+                    # joint at the last joint values.
+                    if not local:
+                        local.append(self.fk.local_transforms(self.fk.configuration(self.positions)))
+                    parent = link_pose(self.fk.parent_names[joint])
+                    pose = None if parent is None else parent @ local[0][joint]
+                poses[link] = pose
+            return poses[link]
+
+        for kind, visuals in self.shapes.items():
+            placed = [(link_pose(link), visual) for link, visual in visuals]
+            placed = [(pose @ visual.origin, visual) for pose, visual in placed if pose is not None]
+            entity = f"{self.world}/robot/{SHAPES[kind]}"
+            if not placed:
+                self.recording.log(entity, rr.Clear(recursive=False))
+                continue
+            matrices = np.stack([m for m, _ in placed])
+            centers = matrices[:, :3, 3]
+            quats = [matrix_to_quaternion(m[:3, :3]) for m in matrices]
+            colors = [rgba8(v.rgba) for _, v in placed]
+            if kind == "box":
+                archetype = rr.Boxes3D(half_sizes=[[x / 2 for x in v.size] for _, v in placed], centers=centers,
+                                       quaternions=quats, colors=colors, fill_mode=SOLID)
+            elif kind == "cylinder":  # URDF and Rerun cylinders both run along local z
+                archetype = rr.Cylinders3D(lengths=[v.length for _, v in placed], radii=[v.radius for _, v in placed],
+                                           centers=centers, quaternions=quats, colors=colors, fill_mode=SOLID)
+            else:
+                archetype = rr.Ellipsoids3D(half_sizes=[[v.radius] * 3 for _, v in placed], centers=centers,
+                                            quaternions=quats, colors=colors, fill_mode=SOLID)
+            self.recording.log(entity, archetype)
+        for link, origin, entity, archetype in self.meshes:
+            pose = link_pose(link)
+            if pose is None:
+                continue
+            world = pose @ origin
+            self.recording.log(entity, archetype, rr.Transform3D(
+                translation=world[:3, 3], quaternion=matrix_to_quaternion(world[:3, :3])))
 
     # -- plots ---------------------------------------------------------------------------------------
+    def _groups(self, names: tuple[str, ...]) -> list[tuple[str, np.ndarray, list[str]]]:
+        """``(entity part, indices into names, legend labels)`` per plot group of these joint names."""
+        cached = self.group_cache.get(names)
+        if cached is None:
+            index = {name: i for i, name in enumerate(names)}
+            cached = [(group_entity(group), np.array([index[j] for j in members]), short_labels(members))
+                      for group, members in joint_groups(names).items()]
+            self.group_cache[names] = cached
+        return cached
+
     def log_joint_states(self, sim_time: float, names: Sequence[str], position: Sequence[float],
-                         velocity: Sequence[float], effort: Sequence[float]) -> None:
-        """One Scalars batch per quantity (one series per joint), not one log call per joint."""
+                         velocity: Sequence[float], effort: Sequence[float], all_quantities: bool = True) -> None:
+        """One Scalars batch per quantity and limb group (one series per joint), not one call per joint;
+        positions only unless ``all_quantities`` (velocities and efforts are decimated further)."""
         names = tuple(names)
         self.positions.update(zip(names, position, strict=False))
+        groups = self._groups(names)
         if names != self.joint_series:
             self.joint_series = names
-            for quantity in ("position", "velocity", "effort"):
-                self.recording.log(f"{self.plots}/joint_states/{quantity}",
-                                   rr.SeriesLines(names=list(names)), static=True)
+            self.plot_groups = [g for g, _, _ in groups]
+            for quantity in QUANTITIES:
+                for group, _, labels in groups:
+                    self.recording.log(f"{self.plots}/joint_states/{quantity}/{group}",
+                                       rr.SeriesLines(names=labels, colors=PALETTE[:len(labels)]), static=True)
         self.set_time(sim_time)
-        for quantity, values in (("position", position), ("velocity", velocity), ("effort", effort)):
-            if len(values) == len(names) and names:
-                self.recording.log(f"{self.plots}/joint_states/{quantity}", rr.Scalars(np.asarray(values, float)))
+        for quantity, values in zip(QUANTITIES, (position, velocity, effort), strict=True):
+            if len(values) != len(names) or not names or (quantity != "position" and not all_quantities):
+                continue
+            array = np.asarray(values, float)
+            for group, indices, _ in groups:
+                self.recording.log(f"{self.plots}/joint_states/{quantity}/{group}", rr.Scalars(array[indices]))
 
     def log_controller_state(self, sim_time: float, controller: str, joint_names: Sequence[str],
                              commanded: Sequence[float], actual: Sequence[float]) -> None:
-        """Commanded vs actual position per joint: ``plots/<ns>/<controller>/<joint>``."""
+        """Commanded vs actual position per joint: ``plots/<ns>/<controller>/<group>``, a thin light line
+        (the reference) and a solid one (the measurement) in the joint's colour."""
+        names = tuple(joint_names)
+        groups = self._groups(names)
+        if (controller, names) not in self.controller_series:
+            self.controller_series.add((controller, names))
+            self.controller_groups[controller] = [g for g, _, _ in groups]
+            for group, _, labels in groups:
+                colors = [c for color in PALETTE[:len(labels)] for c in (lighter(color), color)]
+                series = [s for label in labels for s in (f"{label} ref", label)]
+                self.recording.log(f"{self.plots}/{controller}/{group}", rr.SeriesLines(
+                    names=series, colors=colors, widths=[1.0, 2.0] * len(labels)), static=True)
         self.set_time(sim_time)
-        for joint, cmd, act in zip(joint_names, commanded, actual, strict=False):
-            entity = f"{self.plots}/{controller}/{joint}"
-            if (controller, joint) not in self.controller_series:
-                self.controller_series.add((controller, joint))
-                self.recording.log(entity, rr.SeriesLines(names=["commanded", "actual"],
-                                                          colors=[[255, 140, 0], [40, 120, 255]]), static=True)
-            self.recording.log(entity, rr.Scalars([cmd, act]))
+        both = np.column_stack((np.asarray(commanded, float), np.asarray(actual, float)))
+        for group, indices, _ in groups:
+            self.recording.log(f"{self.plots}/{controller}/{group}", rr.Scalars(both[indices].ravel()))
+
+    def refresh(self, sim_time: float) -> None:
+        """A key frame: the whole robot again, so that a viewer which only gets the last seconds of the
+        stream (the server keeps a short history) draws it even while nothing moves."""
+        self.log_robot(sim_time, force=True)
 
     def log_balance(self, sim_time: float, com: Sequence[float], zmp: Sequence[float], is_balanced: bool,
                     support_polygon: Sequence[Sequence[float]], markers: bool = True) -> None:
         """Plots every call; the 3-D markers (CoM, ZMP, support polygon) only when ``markers``."""
+        if not self.balance_named:
+            self.balance_named = True
+            self.recording.log(f"{self.plots}/balance", rr.SeriesLines(names=BALANCE_SERIES, colors=PALETTE[:6]),
+                               static=True)
         self.set_time(sim_time)
-        self.recording.log(f"{self.plots}/balance/com", rr.Scalars(np.asarray(com, float)))
-        self.recording.log(f"{self.plots}/balance/zmp", rr.Scalars(np.asarray(zmp, float)))
-        self.recording.log(f"{self.plots}/balance/is_balanced", rr.Scalars([1.0 if is_balanced else 0.0]))
+        # One row for all six series (each row costs the viewer, whatever its width).
+        self.recording.log(f"{self.plots}/balance", rr.Scalars([*com, *zmp[:2], 1.0 if is_balanced else 0.0]))
         if not markers:
             return
         self.com_path.append(com)
         markers_path = f"{self.world}/markers"
         color = [60, 200, 90, 255] if is_balanced else [230, 60, 50, 255]
-        self.recording.log(f"{markers_path}/com", rr.Points3D([com, [com[0], com[1], 0.0]], radii=[0.03, 0.015],
-                                                          colors=[color, color]))
-        self.recording.log(f"{markers_path}/zmp", rr.Points3D([[zmp[0], zmp[1], 0.003]], radii=0.02,
-                                                          colors=[[250, 220, 40, 255]]))
+        # CoM, its ground projection and the ZMP (yellow) in one entity.
+        self.recording.log(f"{markers_path}/com", rr.Points3D(
+            [com, [com[0], com[1], 0.0], [zmp[0], zmp[1], 0.003]], radii=[0.03, 0.015, 0.02],
+            colors=[color, color, [250, 220, 40, 255]]))
         if len(support_polygon) >= 2:
             ring = [[p[0], p[1], max(p[2], 0.0) + 0.003] for p in support_polygon]
             self.recording.log(f"{markers_path}/support_polygon", rr.LineStrips3D(

