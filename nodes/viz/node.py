@@ -18,6 +18,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
 import rerun as rr
 
 import msgs
@@ -27,8 +28,9 @@ from nodes.core.latched import fetch_latched
 from nodes.urdf.model import UrdfError
 
 from .blueprint import RobotLayout, build_blueprint
+from .markers import MarkerError, MarkerLayer
 from .ratelimit import RateLimiter
-from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, is_wall_stamp, log_ground, parse_model
+from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, SceneTime, is_wall_stamp, log_ground, parse_model
 from .sink import Output, OutputPlan
 
 String = msgs.get_type("std_msgs/msg/String")
@@ -39,6 +41,12 @@ Clock = msgs.get_type("rosgraph_msgs/msg/Clock")
 ControllerState = msgs.get_type("control_msgs/msg/JointTrajectoryControllerState")
 JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
 HumanoidState = msgs.get_type("humanoid_msgs/msg/HumanoidState")
+Marker = msgs.get_type("visualization_msgs/msg/Marker")
+MarkerArray = msgs.get_type("visualization_msgs/msg/MarkerArray")
+MARKER_TYPES = {"visualization_msgs/msg/Marker": Marker, "visualization_msgs/msg/MarkerArray": MarkerArray}
+# RViz's default marker topics (global and per robot), and seed 002's trajectory marker topic.
+GLOBAL_MARKER_TOPICS = {"visualization_marker": Marker, "visualization_marker_array": MarkerArray,
+                        "visualization/trajectory": Marker}
 
 DISCOVERY_PERIOD = 2.0
 
@@ -132,6 +140,12 @@ class Visualiser(Node):
         if self.show_ground:
             log_ground(self.recording)
 
+        self.scene_time = SceneTime(self.recording)
+        self.markers = MarkerLayer(self.recording, self.marker_frame)
+        self.marker_topics: dict[str, Subscription] = {}
+        for topic, marker_type in GLOBAL_MARKER_TOPICS.items():
+            self.add_marker_topic(topic, marker_type)
+        self.create_timer(0.2, self.flush_markers, sim_time=False)
         self.clock_limit = RateLimiter(10.0)  # sim/clock runs at the physics rate: 10 Hz is plenty for us
         self.model_states_limit = RateLimiter(self.rates["model_states"])
         self.subscribe(Clock, "/sim/clock", self.on_clock, self.clock_limit)
@@ -186,6 +200,8 @@ class Visualiser(Node):
         ]
         for controller in self.controller_names:
             self.add_controller(robot, controller)
+        self.add_marker_topic(f"{ns}/visualization_marker", Marker)
+        self.add_marker_topic(f"{ns}/visualization_marker_array", MarkerArray)
         self.logger.info(f"showing robot '{namespace}'")
         return robot
 
@@ -200,6 +216,59 @@ class Visualiser(Node):
             self.subscribe(JointTrajectory, f"{base}/joint_trajectory",
                            lambda m, r=robot, c=controller: self.on_trajectory(r, c, m)),
         ]
+
+    # -- markers (visualization_msgs) ----------------------------------------------------------------
+    def add_marker_topic(self, topic: str, marker_type: Any) -> None:
+        if topic in self.marker_topics:
+            return
+        if marker_type is MarkerArray:
+            def handler(msg: Any, t: str = topic) -> None:
+                for index, marker in enumerate(msg.markers):
+                    self.on_marker(t, marker, f"markers[{index}] ")
+        else:
+            def handler(msg: Any, t: str = topic) -> None:
+                self.on_marker(t, msg)
+        # Not rate-limited before decoding: markers are events (a dropped DELETE would leave a ghost);
+        # the layer coalesces updates and logs at most every 0.2 s.
+        self.marker_topics[topic] = self.subscribe(marker_type, f"/{topic}", handler)
+
+    def on_marker(self, topic: str, msg: Any, where: str = "") -> None:
+        try:
+            self.markers.handle(topic, msg)
+        except MarkerError as exc:
+            self.logger.warn_throttle(5.0, f"{topic}: {where}marker '{msg.ns}' {msg.id} refused: {exc}",
+                                      key=f"marker:{topic}:{msg.ns}:{msg.id}:{str(exc)[:24]}")
+            return
+        self.stamp_or_now(msg.header.stamp)
+
+    def marker_frame(self, topic: str, frame_id: str) -> Any:
+        """A marker's frame in the world: world-like frames are the origin; ``<ns>/<link>`` or a link of the
+        robot whose namespace the topic is under, else of the one robot that has such a link."""
+        frame = frame_id.lstrip("/")
+        if frame in self.world_frames or frame == "":
+            return np.eye(4)
+        candidates = []
+        namespace, _, link = frame.partition("/")
+        if link and namespace in self.robots:
+            candidates.append((self.robots[namespace], link))
+        owner = topic.split("/", 1)[0]
+        if owner in self.robots:
+            candidates.append((self.robots[owner], frame))
+        candidates += [(r, frame) for r in self.robots.values()]
+        for robot, name in candidates:
+            if robot.scene is not None and robot.present:
+                pose = robot.scene.frame_pose(name)
+                if pose is not None:
+                    return pose
+        return None
+
+    def flush_markers(self, refresh: bool = False) -> None:
+        with self.lock:
+            self.scene_time(self.sim_now)
+            self.markers.flush(refresh=refresh)
+            for key, message in list(self.markers.unresolved.items()):
+                self.logger.warn_throttle(10.0, message, key=f"marker_frame:{key}")
+            self.markers.unresolved.clear()
 
     def on_description(self, robot: RobotView, xml_text: str) -> None:
         if xml_text == robot.description and robot.scene is not None:
@@ -387,6 +456,8 @@ class Visualiser(Node):
                     self.inbox.put(("robot", parts[0]))
                 elif len(parts) == 3 and parts[2] == "controller_state":
                     self.inbox.put(("controller", parts[0], parts[1]))
+                if entry.type_name in MARKER_TYPES:  # anyone publishing markers, as RViz lets you pick
+                    self.inbox.put(("markers", entry.name, entry.type_name))
         for namespace, robot in list(self.robots.items()):
             if robot.scene is None and robot.present:
                 self.fetch(namespace)
@@ -419,6 +490,8 @@ class Visualiser(Node):
                 self.add_robot(namespace)
             elif kind == "controller":
                 self.add_controller(self.add_robot(namespace), item[2])
+            elif kind == "markers":
+                self.add_marker_topic(namespace, MARKER_TYPES[item[2]])
             elif kind == "fetch":
                 threading.Thread(target=self.fetch, args=(namespace,), daemon=True).start()
             elif namespace in self.robots:
@@ -451,6 +524,7 @@ class Visualiser(Node):
             for robot in self.robots.values():
                 if robot.scene is not None and robot.present:
                     robot.scene.refresh(self.sim_now)
+        self.flush_markers(refresh=True)
 
     def on_process_exit(self) -> None:
         self.discovery_stop.set()

@@ -331,6 +331,15 @@ class RobotScene:
             seen += 1
         return pose
 
+    def frame_pose(self, frame: str) -> np.ndarray | None:
+        """A tf frame of this robot (``pelvis``, ``humanoid/pelvis``) in the world: tf, else the URDF."""
+        name = frame_name(self.namespace, frame, self.world_frames)
+        pose = self.world_pose(name)
+        link = name.removeprefix(f"{self.namespace}/")
+        if pose is None and link in self.fk.link_index:
+            pose = self.link_poses(self.positions)[self.fk.link_index[link]]
+        return pose
+
     def log_robot(self, sim_time: float, force: bool = False) -> None:
         """Every visual at its link's world pose (rate-limited by ``pose_limiter`` unless ``force``)."""
         if not force and self.pose_limiter is not None and not self.pose_limiter.ready():
