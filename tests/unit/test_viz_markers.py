@@ -68,6 +68,7 @@ def test_actions_lifetime_and_unknown_frames(tmp_path: Path) -> None:
     layer.flush()
     assert set(layer.unresolved) == {("t", "hand")}, "a frame tf does not know is reported, not drawn"
     now[0] = 103.0
+    recording.set_time("sim_time", duration=2.0)
     layer.handle("t", marker(action=3, ns="n"))  # DELETEALL of ns "n": 1, 3 and 4 (4 was never drawn)
     layer.flush()
     assert set(layer.live) == {("t", "other", 2)}
