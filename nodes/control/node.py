@@ -54,6 +54,9 @@ MAX_PARAMS_CHARS = 64 * 1024   # one controller's parameters as YAML
 # A forward jump of sim time between two hardware states larger than this (the simulator's default
 # command_timeout: it has started holding position) restarts the controllers (see _resync).
 RESYNC_GAP_S = 0.5
+# After an outage in realtime, frames that make sim time run this far ahead of the wall clock were buffered
+# in the link (stale) and also restart the controllers; watched for this long after the hardware returns.
+CATCH_UP_WATCH_S = 3.0
 _pack_command = msgs.packer("zenroid_msgs/msg/HardwareCommand")
 
 
@@ -162,6 +165,7 @@ class ControllerManagerNode(Node):
         self._last_time: float | None = None
         self._last_state_wall = 0.0
         self._lost = False
+        self._catch_up: tuple[float, float] | None = None  # (wall, sim time) of the first frame after an outage
         self._cycles = 0
         self._cycle_us: collections.deque[float] = collections.deque(maxlen=20_000)
         self._bad_frames = 0
@@ -294,11 +298,25 @@ class ControllerManagerNode(Node):
         manager = self.manager
         with manager.lock:
             self.hardware.read_state(names, positions, velocities, efforts)
+            wall = time.monotonic()
             if self._lost:
                 self._lost = False
                 self.logger.info("hardware is back")
+                # realtime: frames buffered in a link that was cut arrive late and in a burst; watch for it
+                self._catch_up = (wall, t) if self.realtime_hardware else None
             if self._last_time is not None and not 0.0 <= t - self._last_time <= RESYNC_GAP_S:
                 self._resync(t)
+                self._catch_up = None
+            elif self._catch_up is not None:
+                wall0, t0 = self._catch_up
+                if (t - t0) - (wall - wall0) > RESYNC_GAP_S:
+                    # sim time ran ahead of the wall clock: these were stale frames of an outage during which
+                    # the simulator held position (it got no commands), so the controllers must restart where
+                    # the joints are, exactly as after a gap
+                    self._resync(t, stale_s=(t - t0) - (wall - wall0))
+                    self._catch_up = None
+                elif wall - wall0 > CATCH_UP_WATCH_S:
+                    self._catch_up = None  # frames at the wall clock's pace: a pause ended, nothing was missed
             self._last_time = t
             self.control_time = t
             self.cycle_thread = threading.get_ident()
@@ -315,14 +333,18 @@ class ControllerManagerNode(Node):
         self._cycles += 1
         self._cycle_us.append((time.perf_counter() - started) * 1e6)
 
-    def _resync(self, t: float) -> None:
+    def _resync(self, t: float, stale_s: float = 0.0) -> None:
         """Sim time jumped: restart the controllers so they hold the joints where they are measured now.
 
         Back in time: a reset or a new simulator (its old commands mean nothing). Forward by more than
         RESYNC_GAP_S: states were lost (a network partition, a stalled link) while the simulator held
         position; a trajectory controller would otherwise jump to where its old trajectory has got to, or
         replay points meant for the time it missed. New trajectories resume from the measured position."""
-        if t < self._last_time:
+        if stale_s:
+            self.logger.warn(f"hardware/state frames arrived {stale_s:.3f} s late after an outage (buffered in the "
+                             "link): holding the measured position")
+            reason = "hardware states late"
+        elif t < self._last_time:
             self.logger.warn(f"sim time went back from {self._last_time:.3f} to {t:.3f} s (reset or a new "
                              "simulator)")
             reason = "hardware reset"

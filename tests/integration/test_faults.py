@@ -405,7 +405,7 @@ def test_network_partition_of_a_viewer_and_cli_host_does_not_stall_the_robot(hos
     observer = hosts.run_in(hosts.a, "-c", OBSERVER, endpoint, str(rows_path), name="observer")
     viewer = hosts.run_in(hosts.b, "-m", "nodes.viz", "--robots", "humanoid", "--serve", name="viewer", env=env)
     echo = hosts.run_in(hosts.b, "-m", "nodes.tools", "topic", "echo", "humanoid/joint_states", "--json",
-                        name="echo", env=env)
+                        "--wait", "120", name="echo", env=env)  # started with the launch: wait for it
 
     def logs() -> str:
         return "\n".join(f"--- {name}\n{hosts.output(p)[-2000:]}" for name, p in
