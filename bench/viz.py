@@ -1,6 +1,16 @@
-"""Visualiser cost: CPU share of ``python -m nodes.viz`` and the lag from a joint_states stamp to its logging.
+"""The viewer's lag as a person sees it, and the visualiser's own cost.
 
-    python bench/viz.py [--source humanoid|feeder] [--seconds 10] [--repeat 3] [--zenoh-port N]
+    python bench/viz.py [--mode browser|node] [--seconds 60] [--open-after 20] [--renderer llvmpipe|swiftshader]
+    python bench/viz.py --mode node [--source humanoid|feeder] [--seconds 10] [--repeat 3]
+
+``browser`` (default): the main job (``launch/humanoid.yaml``, realtime, its viewer served as a web page) and a
+real headless Chromium (software rendering: Mesa llvmpipe, or SwiftShader) that opens the page ``--open-after``
+seconds into the run (a late viewer) and is read over the remote-debugging protocol (``nodes.viz.browser``):
+every second, the viewer's time cursor on ``sim_time`` (what its views show) against the simulator's
+``sim/clock`` at that instant. Prints a table and one JSON line: ``lag_p50_s``, ``lag_p95_s``, ``lag_max_s``,
+``lag_last_s`` (sim s the page is behind the simulation), ``first_view_s`` (page opened -> first data shown),
+``first_view_lag_s`` (how far from the present a late viewer starts), ``frames_per_s`` and
+``chromium_cpu_percent`` (of one core), ``load_avg_1min``. Goal: lag < 1 s for the whole run.
 
 ``humanoid`` (default): the main job (``launch/humanoid.yaml``, realtime, 1 kHz controller manager,
 joint_states at 100 Hz, the joint commander) plus the visualiser saving an .rrd. Its stamps are sim time
@@ -144,13 +154,105 @@ def run_once(source: str, seconds: float, port: int) -> dict:
             "load_avg_1min": os.getloadavg()[0]}
 
 
+def run_browser(seconds: float, open_after: float, port: int, renderer: str) -> dict:
+    """The main job with its served viewer, and a headless Chromium reading the page (see the docstring)."""
+    import re
+
+    from nodes.viz.browser import HeadlessBrowser, ViewerProbe
+
+    work = Path(tempfile.mkdtemp(prefix="bench_viz_browser_"))
+    env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
+    for name in ("ZENOH_CONFIG", "ZENOH_CONNECT", "DISPLAY", "WAYLAND_DISPLAY"):
+        env.pop(name, None)
+    log = work / "launch.log"
+    launch = subprocess.Popen([sys.executable, "-m", "launch", "humanoid.yaml", "mode:=realtime", f"zenoh_port:={port}",
+                               "viewer_args:=--serve --web-port 0 --grpc-port 0"], cwd=ROOT, env=env,
+                              stdout=open(log, "wb"), stderr=subprocess.STDOUT, start_new_session=True)
+    probe = None
+    try:
+        wait_for(log, "Rerun web viewer: ", 90)
+        url = re.search(r"Rerun web viewer: (\S+)", log.read_text()).group(1)
+        import msgs
+        from nodes.core import Node
+
+        sim = {"now": 0.0}
+        probe = Node("bench_viz_clock", connect=[f"tcp/127.0.0.1:{port}"])
+        probe.create_subscription(msgs.get_type("rosgraph_msgs/msg/Clock"), "/sim/clock",
+                                  lambda m: sim.__setitem__("now", m.clock.sec + m.clock.nanosec * 1e-9),
+                                  inline=True)
+        wait_for(log, "started 'joint_commander'", 90)
+        time.sleep(open_after)
+        with HeadlessBrowser(timeout=120, renderer=renderer) as browser:
+            opened = time.monotonic()
+            page = ViewerProbe(browser, url)
+            page.wait_ready(120)
+            browser.evaluate("window.__frames = 0; (function f() { window.__frames++; requestAnimationFrame(f); })(); 1")
+            tree = psutil.Process(browser.proc.pid)
+
+            def chromium_cpu() -> float:
+                total = 0.0
+                for proc in [tree, *tree.children(recursive=True)]:
+                    try:
+                        times = proc.cpu_times()
+                        total += times.user + times.system
+                    except psutil.Error:
+                        pass
+                return total
+
+            first_view = first_lag = None
+            lags: list[float] = []
+            cpu0, wall0 = chromium_cpu(), time.monotonic()
+            deadline = time.monotonic() + seconds
+            while time.monotonic() < deadline or first_view is None and time.monotonic() < deadline + 120:
+                recording = page.recording()
+                now = sim["now"]  # read right after the page answered: the lag is never underestimated
+                if recording is not None and recording.cursor_timeline == "sim_time" and recording.cursor_ns:
+                    lag = now - recording.cursor_ns * 1e-9
+                    if first_view is None:
+                        first_view, first_lag = time.monotonic() - opened, lag
+                        cpu0, wall0, deadline = chromium_cpu(), time.monotonic(), time.monotonic() + seconds
+                    else:
+                        lags.append(lag)
+                time.sleep(1.0)
+            frames = browser.evaluate("window.__frames") or 0
+            cpu1, wall1 = chromium_cpu(), time.monotonic()
+            shot = work / "viewer.png"
+            browser.screenshot(shot)
+    finally:
+        if probe is not None:
+            probe.destroy()
+        stop(launch, 30)
+    if not lags:
+        raise SystemExit(f"the page never showed sim_time data; logs in {work}")
+    array = np.array(lags)
+    return {"lag_p50_s": float(np.percentile(array, 50)), "lag_p95_s": float(np.percentile(array, 95)),
+            "lag_max_s": float(array.max()), "lag_last_s": float(array[-1]), "first_view_s": first_view,
+            "first_view_lag_s": first_lag, "frames_per_s": frames / max(wall1 - opened, 1e-9),
+            "chromium_cpu_percent": 100.0 * (cpu1 - cpu0) / max(wall1 - wall0, 1e-9),
+            "load_avg_1min": os.getloadavg()[0], "screenshot": str(shot)}
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--source", choices=("humanoid", "feeder"), default="humanoid")
-    parser.add_argument("--seconds", type=float, default=10.0, help="measurement window per run")
-    parser.add_argument("--repeat", type=int, default=3, help="runs; the JSON line has the medians")
+    parser.add_argument("--mode", choices=("browser", "node"), default="browser")
+    parser.add_argument("--source", choices=("humanoid", "feeder"), default="humanoid", help="node mode's source")
+    parser.add_argument("--seconds", type=float, default=None,
+                        help="measurement window (browser: 60 s after the first view; node: 10 s per run)")
+    parser.add_argument("--repeat", type=int, default=3, help="node mode: runs; the JSON line has the medians")
+    parser.add_argument("--open-after", type=float, default=20.0, help="browser mode: s of run before the page opens")
+    parser.add_argument("--renderer", choices=("llvmpipe", "swiftshader"), default="llvmpipe")
     parser.add_argument("--zenoh-port", type=int, default=0)
     args = parser.parse_args()
+    if args.mode == "browser":
+        result = run_browser(args.seconds or 60.0, args.open_after, args.zenoh_port or free_port(), args.renderer)
+        print(f"{'metric':<24}{'value':>12}{'goal':>8}")
+        for metric, value in result.items():
+            if metric != "screenshot":
+                print(f"{metric:<24}{value:>12.2f}{'< 1' if metric.startswith('lag') else '':>8}")
+        print(json.dumps({"mode": "browser", "renderer": args.renderer, "open_after_s": args.open_after,
+                          **{k: (round(v, 2) if isinstance(v, float) else v) for k, v in result.items()}}))
+        return 0
+    args.seconds = args.seconds or 10.0
     runs = [run_once(args.source, args.seconds, args.zenoh_port or free_port()) for _ in range(args.repeat)]
     metrics = list(runs[0])
     print(f"{'metric':<24}" + "".join(f"{'run ' + str(i + 1):>10}" for i in range(len(runs)))

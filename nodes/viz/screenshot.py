@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import http.server
 import os
-import shutil
 import subprocess
 import sys
 import threading
@@ -23,17 +22,10 @@ from pathlib import Path
 
 from nodes.core.session import loopback_endpoint, open_router
 from nodes.share import robot_file
+from nodes.viz.browser import RENDERERS, find_browser
 from nodes.viz.sink import free_port
 
-BROWSERS = ("chromium", "chromium-browser", "google-chrome")
-
-
-def find_browser() -> str | None:
-    for name in BROWSERS:
-        path = shutil.which(name)
-        if path:
-            return path
-    return None
+__all__ = ["find_browser", "take"]
 
 
 def delayed_page_server(viewer_url: str, render_seconds: float) -> http.server.ThreadingHTTPServer:
@@ -110,8 +102,7 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800", source
         page = delayed_page_server(viewer_url, render)
         out.parent.mkdir(parents=True, exist_ok=True)
         result = subprocess.run(
-            [browser, "--headless=new", "--no-sandbox", "--enable-unsafe-swiftshader", "--use-angle=swiftshader",
-             "--hide-scrollbars", f"--window-size={size}", f"--screenshot={out}",
+            [browser, "--headless=new", "--no-sandbox", *RENDERERS["llvmpipe"], "--hide-scrollbars", f"--window-size={size}", f"--screenshot={out}",
              f"http://127.0.0.1:{page.server_address[1]}/"],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=render + 90, check=False)
         page.shutdown()
