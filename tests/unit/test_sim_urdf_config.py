@@ -61,6 +61,12 @@ def test_without_ros2_control_every_movable_joint_gets_position_control():
     (lambda x: x.replace('<mass value="0.5"/>', '<mass value="-1"/>'), "negative"),
     (lambda x: x.replace('<box size="0.2 0.2 0.1"/></geometry></collision>',
                          '<mesh filename="package://arm/x.stl"/></geometry></collision>'), "package://"),
+    (lambda x: x.replace('<box size="0.2 0.2 0.1"/></geometry></collision>',
+                         '<mesh filename="../../etc/passwd"/></geometry></collision>'), "no '..'"),
+    (lambda x: x.replace('<box size="0.2 0.2 0.1"/></geometry></collision>',
+                         '<mesh filename="/dev/zero"/></geometry></collision>'), "not an absolute path"),
+    (lambda x: x.replace('<box size="0.2 0.2 0.1"/></geometry></collision>',
+                         '<mesh filename="file:///etc/passwd"/></geometry></collision>'), "not an absolute path"),
     (lambda x: "", "empty"),
 ])
 def test_bad_urdf_errors_name_line_and_reason(mutate, expected):
@@ -152,3 +158,18 @@ def test_hardware_command_parsing_names_the_field():
         with pytest.raises(CommandError) as info:
             parse_command(payload)
         assert field in str(info.value)
+
+
+@pytest.mark.parametrize("star", [False, True])
+def test_models_beyond_the_link_limit_are_refused_before_dart(star: bool) -> None:
+    from nodes.sim.urdf_info import MAX_LINKS
+
+    n = 10_000
+    inertial = ('<inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>'
+                '</inertial>')
+    links = "".join(f'<link name="l{i}">{inertial}</link>' for i in range(n + 1))
+    joints = "".join(f'<joint name="j{i}" type="revolute"><parent link="l{0 if star else i}"/><child link="l{i + 1}"/>'
+                     '<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="10" velocity="1"/></joint>'
+                     for i in range(n))
+    with pytest.raises(UrdfError, match=f"10001 links, over the simulator's limit of {MAX_LINKS}"):
+        parse_urdf(f'<robot name="chain">{links}{joints}</robot>')
