@@ -21,6 +21,8 @@ from typing import Any
 
 import yaml
 
+from nodes.core.params import load_untrusted_yaml
+
 # a controller type as ros2_controllers spells it: <package>/<Class> (looked up in a registry, never imported)
 TYPE_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*/[A-Za-z][A-Za-z0-9_]*")
 
@@ -117,7 +119,7 @@ def load_config_file(path: str | Path, manager_name: str = "controller_manager")
 def parse_controller_yaml(text: str, source: str = "<yaml>") -> dict[str, Any]:
     """A controller's parameters sent over the wire as YAML (spawner ``--param-file``)."""
     try:
-        data = yaml.safe_load(text) if text.strip() else {}
+        data = load_untrusted_yaml(text) if text.strip() else {}
     except yaml.YAMLError as exc:
         raise ConfigError(f"{source}: invalid YAML: {exc}") from None
     if not isinstance(data, dict):

@@ -28,6 +28,7 @@ from nodes.core.params import ParameterError
 
 BEST_EFFORT = 1
 STRICT = 2
+MAX_CONFIGURED = 256   # controllers with a configuration (requests add them; each costs memory for good)
 
 
 class ManagerError(RuntimeError):
@@ -80,12 +81,15 @@ class ControllerManager:
     def set_controller_params(self, name: str, params: dict[str, Any]) -> None:
         """Parameters (and optionally ``type``) for a controller not loaded yet (spawner --param-file)."""
         with self.lock:
-            cfg = self.config.controllers.setdefault(name, ControllerConfig(name))
             params = dict(params)
             type_name = params.pop("type", None)
+            if type_name is not None and (not isinstance(type_name, str) or not TYPE_NAME.fullmatch(type_name)):
+                raise ManagerError(f"controller '{name}': type must be 'package/Class', got {type_name!r:.200}")
+            if name not in self.config.controllers and len(self.config.controllers) >= MAX_CONFIGURED:
+                raise ManagerError(f"controller '{name}': {MAX_CONFIGURED} controllers are configured already "
+                                   "(the limit)")
+            cfg = self.config.controllers.setdefault(name, ControllerConfig(name))
             if type_name is not None:
-                if not isinstance(type_name, str) or not TYPE_NAME.fullmatch(type_name):
-                    raise ManagerError(f"controller '{name}': type must be 'package/Class', got {type_name!r:.200}")
                 cfg.type = type_name
             cfg.params.update(params)
             self._changed()

@@ -35,10 +35,38 @@ def type_of_default(value: Any) -> type:
     return {bool: bool, int: int, float: float, str: str, list: list, tuple: list, dict: dict}.get(type(value), object)
 
 
-def parse_value(text: str) -> Any:
-    """A command-line parameter value: YAML scalars/lists (``1``, ``true``, ``[a, b]``), else the string."""
+MAX_YAML_DEPTH = 32   # nested lists/maps in a value that came over the wire
+
+
+class UntrustedYamlError(yaml.YAMLError):
+    """YAML from a request that we refuse to build: aliases (self-reference, "billion laughs") or deep nesting."""
+
+
+def load_untrusted_yaml(text: str, max_depth: int = MAX_YAML_DEPTH) -> Any:
+    """``yaml.safe_load`` for text a request carries: no anchors/aliases (a ``&a [*a]`` value is a cycle that
+    breaks whatever walks it, and aliases multiply a small text into a huge document), at most ``max_depth``
+    nested collections (PyYAML builds them recursively). Raises ``yaml.YAMLError``."""
+    depth = 0
     try:
+        for event in yaml.parse(text, Loader=yaml.SafeLoader):
+            if isinstance(event, yaml.AliasEvent) or getattr(event, "anchor", None):
+                raise UntrustedYamlError("YAML anchors and aliases (&name, *name) are not accepted here")
+            if isinstance(event, (yaml.MappingStartEvent, yaml.SequenceStartEvent)):
+                depth += 1
+                if depth > max_depth:
+                    raise UntrustedYamlError(f"YAML nested deeper than {max_depth} levels")
+            elif isinstance(event, (yaml.MappingEndEvent, yaml.SequenceEndEvent)):
+                depth -= 1
         return yaml.safe_load(text)
+    except RecursionError:
+        raise UntrustedYamlError("YAML nested too deeply") from None
+
+
+def parse_value(text: str) -> Any:
+    """A command-line or ``set_parameters`` value: YAML scalars/lists (``1``, ``true``, ``[a, b]``), else the
+    string (also when the YAML uses aliases or nests deeper than MAX_YAML_DEPTH)."""
+    try:
+        return load_untrusted_yaml(text)
     except yaml.YAMLError:
         return text
 

@@ -84,3 +84,36 @@ def test_single_sender_keeps_the_first_source_until_it_falls_silent() -> None:
     assert guard.admit(respawned, 10.9)          # the owner was silent for 0.6 s: a respawned sender takes over
     assert not guard.admit(sim, 11.0) and guard.owner == respawned
     assert source_label(sim) == f"source {sim[:6].hex()}" and "without" in source_label(None)
+
+
+@pytest.mark.parametrize("text, reason", [
+    ("a: &a [*a]", "aliases"),                                    # a cycle
+    ("a: &x [1, 2]\nb: [*x, *x, *x]", "aliases"),                 # the billion-laughs construction
+    ("a: " + "[" * 100 + "]" * 100, "deeper than 32"),
+])
+def test_yaml_from_requests_refuses_aliases_and_deep_nesting(text: str, reason: str) -> None:
+    from nodes.control.config import ConfigError, parse_controller_yaml
+    from nodes.core.params import parse_value
+
+    with pytest.raises(ConfigError, match=reason):
+        parse_controller_yaml(text)
+    assert parse_value(text) == text   # a node parameter value: kept as the plain string, never built
+
+
+def test_configured_controllers_are_bounded() -> None:
+    import yaml
+
+    from nodes.control.config import parse_config
+    from nodes.control.manager import MAX_CONFIGURED, ControllerManager, ManagerError
+    from tests.support.control import ListLogger, make_hardware
+
+    manager = ControllerManager(make_hardware(["a"], ("position",)), parse_config(yaml.safe_load("{}")), 100,
+                                lambda name: None, ListLogger())
+    with pytest.raises(ManagerError, match="package/Class"):
+        manager.set_controller_params("evil", {"type": "this:Nope"})
+    assert "evil" not in manager.config.controllers
+    for i in range(MAX_CONFIGURED):
+        manager.set_controller_params(f"c{i}", {"joints": ["a"]})
+    with pytest.raises(ManagerError, match="the limit"):
+        manager.set_controller_params("one_more", {})
+    manager.set_controller_params("c0", {"joints": []})   # an existing one can still change
