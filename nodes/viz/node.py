@@ -127,7 +127,7 @@ class Visualiser(Node):
         args = cli_args or argparse.Namespace(save=None, serve=False, spawn=False, headless=None,
                                               web_port=9090, grpc_port=9876, server_history=None)
         plan = OutputPlan.resolve(args.save, args.serve, args.spawn, args.headless, args.web_port, args.grpc_port,
-                                  getattr(args, "server_history", None))
+                                  getattr(args, "server_history", None), getattr(args, "bind", "127.0.0.1"))
         self.timeline = SIM_TIMELINE
         self.output = Output(self.recording, plan, build_blueprint(timeline=self.timeline))
         for note in plan.notes:
@@ -540,6 +540,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                      help="never open a window even if a display is present")
     out.add_argument("--web-port", type=int, default=9090, help="web viewer HTTP port (0: any free port)")
     out.add_argument("--grpc-port", type=int, default=9876, help="Rerun gRPC port (0: any free port)")
+    out.add_argument("--bind", default="127.0.0.1", metavar="ADDRESS",
+                     help="address the web viewer's servers listen on (default loopback only; 0.0.0.0 inside a "
+                          "container whose ports are published)")
     out.add_argument("--server-history", metavar="SIZE", default=None,
                      help="data the web viewer server keeps for viewers that connect later, e.g. 4MiB "
                           "(default: a few seconds of this stream; a late viewer starts near the present)")

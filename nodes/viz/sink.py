@@ -95,13 +95,15 @@ class OutputPlan:
     web_port: int = 9090
     grpc_port: int = 9876
     server_history: str = SERVER_HISTORY
+    bind: str = "127.0.0.1"   # the web server's listening address (a container publishing it: 0.0.0.0)
     notes: list[str] = field(default_factory=list)
 
     @classmethod
     def resolve(cls, save: str | None, serve: bool, spawn: bool, headless: bool | None,
-                web_port: int, grpc_port: int, server_history: str | None = None) -> OutputPlan:
+                web_port: int, grpc_port: int, server_history: str | None = None,
+                bind: str = "127.0.0.1") -> OutputPlan:
         plan = cls(save=Path(save) if save else None, serve=serve, spawn=spawn, web_port=web_port,
-                   grpc_port=grpc_port, server_history=server_history or SERVER_HISTORY)
+                   grpc_port=grpc_port, server_history=server_history or SERVER_HISTORY, bind=bind)
         display = has_display() if headless is None else not headless
         if plan.spawn and not display:
             # rr.spawn() without a display silently loses the data (FACTS): serve instead.
@@ -151,7 +153,7 @@ class Output:
         grpc_port = self.plan.grpc_port or free_port()
         web_port = self.plan.web_port or free_port()
         self.server = subprocess.Popen(
-            [*rerun_cli(), "--serve-web", "--bind", "127.0.0.1", "--port", str(grpc_port),
+            [*rerun_cli(), "--serve-web", "--bind", self.plan.bind, "--port", str(grpc_port),
              "--web-viewer-port", str(web_port), "--server-memory-limit", self.plan.server_history],
             # Same process group as the visualiser: a launcher that kills the group also stops the server;
             # on Linux the server also gets SIGTERM if the visualiser dies without cleaning up (kill -9).
