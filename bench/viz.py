@@ -154,7 +154,7 @@ def run_once(source: str, seconds: float, port: int) -> dict:
             "load_avg_1min": os.getloadavg()[0]}
 
 
-def run_browser(seconds: float, open_after: float, port: int, renderer: str) -> dict:
+def run_browser(seconds: float, open_after: float, port: int, renderer: str, viewer_args: str = "") -> dict:
     """The main job with its served viewer, and a headless Chromium reading the page (see the docstring)."""
     import re
 
@@ -166,7 +166,7 @@ def run_browser(seconds: float, open_after: float, port: int, renderer: str) -> 
         env.pop(name, None)
     log = work / "launch.log"
     launch = subprocess.Popen([sys.executable, "-m", "launch", "humanoid.yaml", "mode:=realtime", f"zenoh_port:={port}",
-                               "viewer_args:=--serve --web-port 0 --grpc-port 0"], cwd=ROOT, env=env,
+                               "viewer_args:=--serve --web-port 0 --grpc-port 0 " + viewer_args], cwd=ROOT, env=env,
                               stdout=open(log, "wb"), stderr=subprocess.STDOUT, start_new_session=True)
     probe = None
     try:
@@ -242,9 +242,12 @@ def main() -> int:
     parser.add_argument("--open-after", type=float, default=20.0, help="browser mode: s of run before the page opens")
     parser.add_argument("--renderer", choices=("llvmpipe", "swiftshader"), default="llvmpipe")
     parser.add_argument("--zenoh-port", type=int, default=0)
+    parser.add_argument("--viewer-args", default="",
+                        help="browser mode: extra visualiser options, e.g. \"--param flush_period:=1.0\"")
     args = parser.parse_args()
     if args.mode == "browser":
-        result = run_browser(args.seconds or 60.0, args.open_after, args.zenoh_port or free_port(), args.renderer)
+        result = run_browser(args.seconds or 60.0, args.open_after, args.zenoh_port or free_port(), args.renderer,
+                             args.viewer_args)
         print(f"{'metric':<24}{'value':>12}{'goal':>8}")
         for metric, value in result.items():
             if metric != "screenshot":
