@@ -73,6 +73,8 @@ def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFA
             max_array_len=limits.max_array_length, max_map_len=limits.max_array_length,
         )
     except (msgpack.ExtraData, msgpack.FormatError, msgpack.StackError, ValueError, TypeError) as exc:
+        if isinstance(exc, ValueError) and "exceeds max_" in str(exc):   # a size limit: say which field
+            raise DecodeError(type_name, _oversized_field(data, limits), f"too long ({exc})") from None
         raise DecodeError(type_name, "", f"not a valid msgpack payload ({type(exc).__name__}: {exc})") from None
     fast = _fast_default_decoders.get(type_name) if limits is DEFAULT_LIMITS else None
     if fast is None:  # unpackb bounded every string and array with these limits
@@ -84,6 +86,25 @@ def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFA
         return fast(obj)
     except compiled.Reject:
         return _precise(cls, obj, limits)
+
+
+def _oversized_field(data: bytes | bytearray | memoryview, limits: Limits) -> str:
+    """The top-level field whose value broke a size limit while unpacking ("" when it cannot be told): the map
+    is unpacked again value by value under the same limits (``skip`` would not check them), stopping there."""
+    unpacker = msgpack.Unpacker(raw=False, strict_map_key=False, max_buffer_size=max(1, len(data)),
+                                max_bin_len=limits.max_message_bytes, max_str_len=limits.max_string_length,
+                                max_array_len=limits.max_array_length, max_map_len=limits.max_array_length)
+    unpacker.feed(data)
+    try:
+        for _ in range(unpacker.read_map_header()):
+            key = unpacker.unpack()
+            try:
+                unpacker.unpack()
+            except ValueError:
+                return str(key)[:200]
+    except Exception:  # noqa: BLE001 - not a map, or the key itself is the problem
+        return ""
+    return ""
 
 
 def from_dict(cls: Any, obj: Any, limits: Limits = DEFAULT_LIMITS) -> Any:
