@@ -133,6 +133,7 @@ def execute(plan: LaunchPlan, log_dir: Path) -> int:
     from launch.readiness import NodeReadiness
     from launch.reaper import Reaper
     from launch.supervisor import Supervisor
+    from nodes.core import memory
     from nodes.core import session as zsession
 
     port = zenoh_port_of(plan)
@@ -156,6 +157,8 @@ def execute(plan: LaunchPlan, log_dir: Path) -> int:
                       f"(is another launch running? pick another with zenoh_port:=N)", flush=True)
                 return 1
             where = f"embedded router on {endpoint}"
+            # the router relays every payload without Python seeing it: give its buffers back after floods
+            memory.trim_periodically()
         print(f"[launch] [INFO] zenoh: {where}", flush=True)
         readiness = NodeReadiness(session)
         environment = child_environment(endpoint, ros2_wire_of(plan))

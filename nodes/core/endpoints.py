@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import itertools
 import os
 import struct
@@ -15,6 +16,7 @@ import zenoh
 
 import msgs
 from msgs import DecodeError
+from nodes.core import memory
 from nodes.core.graph import parse_key
 from nodes.core.log import truncate
 from nodes.core.runtime import NodeRuntime
@@ -182,6 +184,7 @@ class Subscription:
 
     def handle_sample(self, sample: zenoh.Sample) -> None:
         size = len(sample.payload)
+        memory.after_payload(size)
         if size > self.max_payload:   # before copying or decoding anything
             self.node.logger.warn_throttle(
                 1.0, f"dropped a message on '{sample.key_expr}': payload: {size} bytes, over the "
@@ -192,7 +195,7 @@ class Subscription:
             msg: Any = payload
         else:
             try:
-                msg = msgs.decode(self.msg_type, payload)
+                msg = msgs.decode(self.msg_type, payload, decode_limits())
             except DecodeError as exc:
                 self.node.logger.warn_throttle(
                     1.0, f"dropped a message on '{sample.key_expr}': {exc}", key=f"decode:{self.key}")
@@ -217,6 +220,19 @@ class Subscription:
         self._sub.undeclare()
 
 
+# Elements per array in a message from the network (every list: points, names, positions ...; a JointTrajectory
+# controller takes up to 100,000 points). msgpack refuses a longer array before building any of it: a 4 MB
+# payload could otherwise hold four million tiny elements, a Python object each.
+MAX_ARRAY_LENGTH = 100_000
+
+
+@functools.cache
+def decode_limits(max_bytes: int | None = None) -> msgs.Limits:
+    """The limits our endpoints decode with (one instance per size, so compiled decoders are shared)."""
+    size = max_payload_bytes() if max_bytes is None else max_bytes
+    return msgs.Limits(max_message_bytes=size, max_array_length=MAX_ARRAY_LENGTH, max_string_length=size)
+
+
 def _error_payload(reason: str) -> bytes:
     return msgpack.packb({"error": truncate(reason)}, use_bin_type=True)
 
@@ -230,11 +246,13 @@ def decode_request(node: NodeRuntime, query: zenoh.Query, cls: Any, what: str,
     and return None. The size is checked before the payload is copied or decoded."""
     limit = max_payload_bytes() if max_payload is None else max_payload
     size = len(query.payload) if query.payload is not None else 0
+    memory.after_payload(size)
     try:
         if size > limit:
             raise DecodeError(cls._type, "", f"request is {size} bytes, over the {limit}-byte limit")
         payload = query.payload.to_bytes() if query.payload is not None else b""
-        return msgs.decode(cls, payload or _EMPTY_MAP)  # no payload: a request without fields
+        # no payload: a request without fields
+        return msgs.decode(cls, payload or _EMPTY_MAP, decode_limits(limit))
     except DecodeError as exc:
         node.logger.warn_throttle(1.0, f"{what}: bad request: {exc}", key=f"bad request:{what}")
         query.reply_err(_error_payload(str(exc)))
@@ -277,6 +295,8 @@ class ServiceServer:
             self.node.logger.error(f"service '{self.key}' failed: {reason}")
             query.reply_err(_error_payload(reason))
         finally:
+            # a large request's garbage exists only now that its handler (maybe on another thread) is done
+            memory.after_payload(len(query.payload) if query.payload is not None else 0)
             query.drop()
 
     def destroy(self) -> None:
