@@ -77,7 +77,9 @@ class Ros2Node:
         return next(self._state.ids)
 
     def warn(self, text: str) -> None:
-        self.node.logger.warn_throttle(5.0, text, key=f"ros2:{text[:60]}")
+        # throttled per what and where ("ROS 2 wire: bad request on /humanoid/x"), not per reason, so every
+        # endpoint's rejections show up even while another endpoint is flooded
+        self.node.logger.warn_throttle(5.0, text, key="ros2:" + ": ".join(text.split(": ", 2)[:2])[:300])
 
     def mirror(self, endpoint: Any) -> Any | None:
         """The ROS 2 twin of one of our endpoints, or None (internal, wildcard, raw or not expressible)."""
