@@ -437,7 +437,8 @@ class ControllerManagerNode(Node):
                 reasons.append("")
             except (ConfigError, ManagerError) as exc:
                 ok.append(False)
-                reasons.append(str(exc))
+                reasons.append(truncate(str(exc), MAX_REPLY_CHARS))
+                self.logger.error(f"set_controller_parameters refused: values_yaml[{i}]: {exc}")
         return SetParameters.Response(successful=ok, reasons=reasons)
 
     def _srv_statistics(self, _request: Any) -> Any:
