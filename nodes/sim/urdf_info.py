@@ -10,6 +10,7 @@ names other than position/velocity/effort) and the derived per-joint bounds.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 
 from nodes.urdf.model import Joint, RobotModel, UrdfError
@@ -126,10 +127,18 @@ def _joint_info(joint: Joint) -> JointInfo:
     return info
 
 
+_LINK_TAG = re.compile(r"<link[\s/>]")
+
+
 def parse_urdf(xml: str) -> RobotInfo:
     """Parse and check a URDF string; raises ``UrdfError`` naming the offending line."""
     if not isinstance(xml, str) or not xml.strip():
         raise UrdfError("empty robot description")
+    # before building anything of a huge model (parsing 10,000 links costs ~80 MB that is never returned)
+    links = len(_LINK_TAG.findall(xml))
+    if links > MAX_LINKS:
+        raise UrdfError(f"the robot description has {links} <link> elements, over the simulator's limit of "
+                        f"{MAX_LINKS}")
     try:
         model = parse_model(xml)
     except UrdfError as exc:

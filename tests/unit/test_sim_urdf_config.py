@@ -171,5 +171,5 @@ def test_models_beyond_the_link_limit_are_refused_before_dart(star: bool) -> Non
     joints = "".join(f'<joint name="j{i}" type="revolute"><parent link="l{0 if star else i}"/><child link="l{i + 1}"/>'
                      '<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="10" velocity="1"/></joint>'
                      for i in range(n))
-    with pytest.raises(UrdfError, match=f"10001 links, over the simulator's limit of {MAX_LINKS}"):
+    with pytest.raises(UrdfError, match=f"10001 <link> elements, over the simulator.s limit of {MAX_LINKS}"):
         parse_urdf(f'<robot name="chain">{links}{joints}</robot>')
