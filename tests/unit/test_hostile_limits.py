@@ -117,3 +117,15 @@ def test_configured_controllers_are_bounded() -> None:
     with pytest.raises(ManagerError, match="the limit"):
         manager.set_controller_params("one_more", {})
     manager.set_controller_params("c0", {"joints": []})   # an existing one can still change
+
+
+def test_an_array_over_the_network_limit_is_refused_before_it_is_built_naming_the_field() -> None:
+    import msgpack
+
+    from nodes.core.endpoints import MAX_ARRAY_LENGTH, decode_limits
+
+    trajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
+    payload = msgpack.packb({"joint_names": ["a"], "points": [{"positions": [0]}] * (MAX_ARRAY_LENGTH + 1)})
+    with pytest.raises(msgs.DecodeError) as info:
+        msgs.decode(trajectory, payload, decode_limits())
+    assert info.value.path == "points" and "exceeds max_array_len" in info.value.reason
