@@ -277,10 +277,17 @@ def discover(session: zenoh.Session) -> list[Target]:
                 key = f"{entry.name}/{part}"
                 targets[key] = Target("service", key, request._type, entry.node)
     seen = set()
-    for reply in session.liveliness().get(f"{ros2_names.ADMIN_SPACE}/**", timeout=2.0):
-        if reply.ok is None:
-            continue
-        endpoint = ros2_names.parse_endpoint_token(str(reply.ok.key_expr))
+    tokens: list[str] = []
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline:   # a fresh session may see none or part of the tokens: until stable
+        found = sorted(str(r.ok.key_expr) for r in session.liveliness().get(f"{ros2_names.ADMIN_SPACE}/**",
+                                                                              timeout=2.0) if r.ok is not None)
+        if found and found == tokens:
+            break
+        tokens = found
+        time.sleep(0.2)
+    for token in tokens:
+        endpoint = ros2_names.parse_endpoint_token(token)
         if endpoint is None or endpoint.data_key in seen:
             continue
         if endpoint.kind == ros2_names.SUBSCRIPTION:
@@ -777,6 +784,7 @@ def check(job: Job, processes: dict[str, psutil.Process], started_before: Counte
     with job.lock:
         lines = [(lvl, node, text) for t, lvl, node, text in job.rosout if t >= fuzz_start]
     out["rosout_lines"] = len(lines)
+    out["launch_output_mb"] = round(job.out_path.stat().st_size / 1e6, 2)   # every node's stdout, prefixed
     out["rosout_longest_chars"] = max((len(text) for _, _, text in lines), default=0)
     unlogged = []
     for target in targets:
@@ -833,6 +841,7 @@ def table(report: dict) -> str:
             ("trajectory followed after", report.get("trajectory_followed")),
             ("targets without a rosout line", len(report.get("unlogged_targets", []))),
             ("rosout lines / longest (chars)", f"{report.get('rosout_lines')} / {report.get('rosout_longest_chars')}"),
+            ("launch output (MB)", report.get("launch_output_mb")),
             ("service replies ok / error / none / dropped by Zenoh",
              " / ".join(str(report.get("replies", {}).get(k, 0)) for k in ("ok", "error", "none", "dropped by Zenoh")))]
     width = max(len(r[0]) for r in rows)

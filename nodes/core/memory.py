@@ -32,7 +32,7 @@ def _load_trim() -> Callable[[int], int] | None:
 
 _trim = _load_trim()
 M_MMAP_THRESHOLD = -3          # mallopt parameter (malloc.h)
-MMAP_THRESHOLD_BYTES = 256 * 1024
+MMAP_THRESHOLD_BYTES = 64 * 1024
 
 
 def _fix_mmap_threshold() -> None:

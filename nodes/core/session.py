@@ -63,6 +63,10 @@ def _base_config() -> zenoh.Config:
 
 def _limit_message_size(config: zenoh.Config) -> None:
     config.insert_json5("transport/link/rx/max_message_size", str(max_transport_message_bytes()))
+    # No shared-memory transport: with it, every sender on the host puts payloads over 3 KB in a 16 MiB pool
+    # that each receiving node maps (a stranger's pool in our address space, 16 MiB more RSS per sender);
+    # our messages are small, and TCP on loopback is what the benches measure.
+    config.insert_json5("transport/shared_memory/enabled", "false")
 
 
 def _local_addresses_toward(endpoints: list[str]) -> list[str]:
