@@ -89,7 +89,7 @@ def peer(port: int) -> zenoh.Session:
 class Job:
     """The launched main job and a plain Zenoh peer watching joint_states, model_states and rosout."""
 
-    def __init__(self, log_dir: Path, mode: str = "realtime") -> None:
+    def __init__(self, log_dir: Path, mode: str = "realtime", commander: str = "none") -> None:
         self.port = free_port()
         self.log_dir = log_dir
         self.out_path = log_dir / "launch.out"
@@ -99,7 +99,7 @@ class Job:
         env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
         with open(self.out_path, "wb") as out:
             self.proc = subprocess.Popen(
-                [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", "commander:=none", f"mode:={mode}",
+                [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", f"commander:={commander}", f"mode:={mode}",
                  f"zenoh_port:={self.port}", "--log-dir", str(log_dir / "logs")],
                 cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
         self.lock = threading.Lock()
