@@ -670,7 +670,7 @@ def run(payloads: int, seconds: float, seed: int, big: int, log_dir: Path, mode:
         by_key = {t.key: t for t in targets}
         report["targets"] = len(targets)
         report["target_kinds"] = dict(Counter(t.kind for t in targets))
-        processes = job.processes()
+        processes = {n: p for n, p in job.processes().items() if not n.startswith("spawner")}
         started_before = job.started()
         controllers_before = job.controllers()
         physics_before = job.physics()

@@ -103,7 +103,8 @@ def run(minutes: float, mode: str, sample_s: float, log_dir: Path, progress=prin
                                                             if p))
         sub_proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--subscriber", str(job.port),
                                      str(duration)], stdout=subprocess.PIPE, text=True, env=env)
-        processes = job.processes()
+        time.sleep(3.0)   # the spawners have activated the controllers and exit: only long-running processes
+        processes = {n: p for n, p in job.processes().items() if not n.startswith("spawner")}
         started = job.started()
         samples: list[dict[str, Any]] = []
         t0 = time.monotonic()
