@@ -11,6 +11,7 @@ from __future__ import annotations
 import collections
 import gc
 import json
+import os
 import sys
 import threading
 import time
@@ -54,6 +55,8 @@ MAX_PARAMS_CHARS = 64 * 1024   # one controller's parameters as YAML
 # A forward jump of sim time between two hardware states larger than this (the simulator's default
 # command_timeout: it has started holding position) restarts the controllers (see _resync).
 RESYNC_GAP_S = 0.5
+# A control cycle running this long is stuck (the watchdog ends the process; the launcher respawns it).
+STUCK_CYCLE_S = 5.0
 # After an outage in realtime, frames that make sim time run this far ahead of the wall clock were buffered
 # in the link (stale) and also restart the controllers; watched for this long after the hardware returns.
 CATCH_UP_WATCH_S = 3.0
@@ -169,6 +172,7 @@ class ControllerManagerNode(Node):
         self._cycles = 0
         self._cycle_us: collections.deque[float] = collections.deque(maxlen=20_000)
         self._bad_frames = 0
+        self._cycle_since: float | None = None
         threading.Thread(target=self._discover, daemon=True, name="hardware-discovery").start()
 
     def _load_config(self, cli_args: Any) -> ManagerConfig:
@@ -296,6 +300,7 @@ class ControllerManagerNode(Node):
         velocities, efforts = state.velocity, state.effort
         t = state.stamp.sec + state.stamp.nanosec * 1e-9
         manager = self.manager
+        self._cycle_since = time.monotonic()   # the watchdog's view of a cycle that never ends
         with manager.lock:
             self.hardware.read_state(names, positions, velocities, efforts)
             wall = time.monotonic()
@@ -324,6 +329,7 @@ class ControllerManagerNode(Node):
             manager.tick(t)
             cmd_names, cmd_kinds, cmd_values = manager.command()
             self._last_state_wall = time.monotonic()
+        self._cycle_since = None
         self._cmd_pub.publish_raw(_pack_command(step=step, update_rate=self.update_rate, name=cmd_names,
                                                 interface=cmd_kinds, value=cmd_values),
                                   droppable=self.realtime_hardware)
@@ -356,6 +362,14 @@ class ControllerManagerNode(Node):
         self.manager.reset_clock()
 
     def _watchdog(self) -> None:
+        since = self._cycle_since
+        if since is not None and time.monotonic() - since > STUCK_CYCLE_S:
+            # A control cycle (normally well under a millisecond) that never ends - a controller's update
+            # stuck, a lock never released - leaves the robot without commands while the node still answers
+            # every service: end the process so the launcher respawns it (its controllers are restored).
+            self.logger.fatal(f"a control cycle has not ended for {time.monotonic() - since:.1f} s (a controller "
+                              "stuck in update?): exiting to be respawned")
+            os._exit(1)
         silent = time.monotonic() - self._last_state_wall
         if not self._lost and silent > self.hardware_timeout:
             self._lost = True

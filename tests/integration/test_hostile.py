@@ -31,3 +31,41 @@ def test_reduced_fuzz_leaves_the_main_job_standing_and_every_rejection_logged(tm
     assert report["rosout_longest_chars"] < 3000 and report["longest_reply_bytes"] < 5000
     assert report["launch_output_mb"] < 5, "rejections flood the output (not rate-limited)"
     assert report["rss_ok"], summary
+
+
+def test_a_control_cycle_that_never_ends_ends_the_controller_manager(processes, router, tmp_path: Path) -> None:
+    """A controller stuck in update() wedges the hardware loop while every service still answers: the manager's
+    watchdog ends the process (exit status 1) so that a launcher respawns it."""
+    from tests.conftest import ROOT, wait_until
+    from tests.integration.test_control_lab import Lab
+    from tests.support.control import plugin_dir
+
+    extra = tmp_path / "hanger.yaml"
+    extra.write_text("controller_manager: {ros__parameters: {hanger: {type: test_controllers/HangingController}}}\n"
+                     "hanger: {ros__parameters: {hang_after: 0.5}}\n")
+    plugins = plugin_dir(tmp_path / "plugins", {"test_controllers/HangingController":
+                                                "tests.support.control:HangingController"})
+    lab = Lab(processes, router, activate=("joint_state_broadcaster", "joint_trajectory_controller"),
+              manager_args=("--params-file", str(extra)),
+              manager_env={"PYTHONPATH": f"{ROOT}:{plugins}"})
+    try:
+        assert lab.manager.poll() is None
+        result = _cli_switch(router, "hanger")
+        assert result.returncode == 0, result.stdout + result.stderr
+        wait_until(lambda: lab.manager.poll() is not None, timeout=30, message="the stuck manager to exit")
+        assert lab.manager.returncode == 1
+        assert "a control cycle has not ended for" in processes.output(lab.manager)
+    finally:
+        lab.close()
+
+
+def _cli_switch(router: str, name: str):  # noqa: ANN202 - a CompletedProcess
+    import os
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    env = dict(os.environ, ZENOH_CONNECT=router, PYTHONPATH=str(ROOT))
+    return subprocess.run([sys.executable, "-m", "nodes.tools", "control", "spawner", name, "--ns", "simple_robot"],
+                          capture_output=True, text=True, env=env, timeout=60, cwd=ROOT)

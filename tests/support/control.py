@@ -4,6 +4,7 @@ plant) and a controller that crashes on purpose: the controller tests drive cont
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -235,3 +236,29 @@ def plugin_dir(root: Path, controllers: dict[str, str]) -> Path:
     lines = ["[zenroid.controllers]", *(f"{name} = {target}" for name, target in controllers.items())]
     (info / "entry_points.txt").write_text("\n".join(lines) + "\n")
     return root
+
+
+@dataclass(frozen=True)
+class HangingParameters:
+    hang_after: float = param(0.5, min_value=0.0, description="s of sim time before update never returns")
+
+
+class HangingController(Controller):
+    """A controller whose ``update`` never returns after ``hang_after`` s of sim time (type
+    ``test_controllers/HangingController``, registered with ``plugin_dir``): a control cycle that never ends."""
+
+    type_name = "test_controllers/HangingController"
+    Params = HangingParameters
+    params: HangingParameters
+
+    def on_activate(self) -> None:
+        self.started: float | None = None
+
+    def command_interface_configuration(self) -> list[str]:
+        return []
+
+    def update(self, time: float, period: float) -> None:
+        if self.started is None:
+            self.started = time
+        if time - self.started > self.params.hang_after:
+            threading.Event().wait()   # forever
