@@ -58,6 +58,9 @@ class _ContextHost:
         self.node = node
         self.control_time = 0.0
         self.logger = node.logger
+        self.deferred_publications = None   # controllers publish at once (no hardware cycle to follow)
+        self.cycle_thread = None
+        self.realtime_hardware = True
 
     def __getattr__(self, name: str):
         return getattr(self.node, name)
@@ -99,6 +102,9 @@ def bench_update(endpoint: str, cycles: int) -> dict[str, float]:
             t += dt
     finally:
         node.destroy()
+    inactive = [n for n, e in manager.controllers.items() if e.state != "active"]
+    if inactive:
+        raise RuntimeError(f"controllers deactivated during the measurement: {inactive} (see the log above)")
     warm = samples[len(samples) // 10:]
     cpu = cpu_samples[len(cpu_samples) // 10:]
     return {"p50": pct(cpu, 50), "p99": pct(cpu, 99), "wall_p50": pct(warm, 50), "wall_p99": pct(warm, 99),
