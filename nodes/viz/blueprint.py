@@ -2,8 +2,11 @@
 
 Plots are grouped so a 22-joint robot reads well: one plot per limb group (``scene.joint_groups``), a tab
 per quantity (positions, velocities, efforts, commanded vs actual, balance), and only the open tab is drawn,
-which also keeps a software-rendered browser fast. Each plot shows the last ``PLOT_SECONDS`` up to the time
-cursor plus ``LEGEND_SECONDS`` of empty "future" on the right, where the legend sits: it never covers data.
+which also keeps a software-rendered browser fast. All of a robot's plots read columns of one entity (see
+``scene.py``): each plot maps the time series' scalars to its own column (``position:left_leg``) and names
+its series here, so a 22-joint robot costs the viewer no more chunks than a one-joint one. Each plot shows
+the last ``PLOT_SECONDS`` up to the time cursor, the newest on the right as in rqt_plot, after
+``LEGEND_SECONDS`` of empty axis on the left where the legend sits (the default corner): it never covers data.
 The time panel follows the newest data (``play_state="following"``), so a viewer opened late shows the
 present, not the start.
 """
@@ -13,20 +16,23 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
+import rerun as rr
 import rerun.blueprint as rrb
+from rerun.blueprint.encodings import ComponentSourceKind, VisualizerComponentMapping
 
-from .scene import SIM_TIMELINE
+from .scene import BALANCE_SERIES, PALETTE, SIM_TIMELINE, PlotGroup, lighter, robot_entity, series_component
 
 PLOT_SECONDS = 8.0  # history shown in a plot, up to the time cursor
-LEGEND_SECONDS = 3.5  # empty time right of the cursor, under the legend
+LEGEND_SECONDS = 4.0  # empty time before that history, under the legend (Rerun 0.41's default corner: bottom left)
+CURSOR_MARGIN = 0.3  # s of axis past the cursor, so the newest point is not on the plot's edge
 
 
 @dataclass
 class RobotLayout:
     """What the blueprint needs to know about one robot's plots."""
 
-    groups: Sequence[str] = ()  # joint_states plot groups (entity parts)
-    controllers: Mapping[str, Sequence[str]] = field(default_factory=dict)  # controller -> its plot groups
+    groups: Sequence[PlotGroup] = ()  # joint_states plot groups
+    controllers: Mapping[str, Sequence[PlotGroup]] = field(default_factory=dict)  # controller -> its plot groups
     has_balance: bool = False
 
     def key(self) -> tuple:
@@ -38,18 +44,37 @@ def title(group: str) -> str:
     return group.replace("_", " ")
 
 
-def time_series(name: str, origin: str, timeline: str) -> rrb.TimeSeriesView:
+def series(entity: str, component: str, names: Sequence[str], colors: Sequence[Sequence[int]],
+           widths: Sequence[float] | None = None) -> dict:
+    """A view's overrides: the time series of ``entity`` read from ``component``, with these legend names."""
+    return {entity: [rr.SeriesLines(names=list(names), colors=[list(c) for c in colors], widths=widths).visualizer(
+        mappings=[VisualizerComponentMapping(target="Scalars:scalars", source_kind=ComponentSourceKind.SourceComponent,
+                                             source_component=component)])]}
+
+
+def joint_series(entity: str, kind: str, group: PlotGroup) -> dict:
+    return series(entity, series_component(kind, group.part), group.labels, PALETTE[:len(group.labels)])
+
+
+def controller_series(entity: str, controller: str, group: PlotGroup) -> dict:
+    """A light thin "<joint> ref" line (the reference) and a solid one (the measurement) per joint."""
+    colors = [c for color in PALETTE[:len(group.labels)] for c in (lighter(color), color)]
+    names = [name for label in group.labels for name in (f"{label} ref", label)]
+    return series(entity, series_component(controller, group.part), names, colors, [1.0, 2.0] * len(group.labels))
+
+
+def time_series(name: str, origin: str, timeline: str, overrides: dict | None = None) -> rrb.TimeSeriesView:
     return rrb.TimeSeriesView(
-        name=name, origin=origin,
+        name=name, origin=origin, overrides=overrides,
         # Only the recent past is queried and drawn (cheap at any run length) ...
         time_ranges=rrb.VisibleTimeRange(
             timeline, start=rrb.TimeRangeBoundary.cursor_relative(seconds=-PLOT_SECONDS),
             end=rrb.TimeRangeBoundary.cursor_relative(seconds=0)),
-        # ... and the x axis runs a little past the cursor, where the legend sits.
+        # ... and the x axis starts earlier, leaving empty room on the left where the legend sits (the
+        # default corner: no legend property to send, a chunk less per plot for every viewer).
         axis_x=rrb.TimeAxis(view_range=rrb.TimeRange(
-            start=rrb.TimeRangeBoundary.cursor_relative(seconds=-PLOT_SECONDS),
-            end=rrb.TimeRangeBoundary.cursor_relative(seconds=LEGEND_SECONDS))),
-        plot_legend=rrb.PlotLegend(corner="RightTop", visible=True),
+            start=rrb.TimeRangeBoundary.cursor_relative(seconds=-PLOT_SECONDS - LEGEND_SECONDS),
+            end=rrb.TimeRangeBoundary.cursor_relative(seconds=CURSOR_MARGIN))),
     )
 
 
@@ -62,34 +87,40 @@ def grid(views: list[rrb.View], name: str) -> rrb.Container:
 def robot_plots(namespace: str, layout: RobotLayout, timeline: str = SIM_TIMELINE,
                 with_namespace: bool = False) -> rrb.Container:
     """One robot's plots: a tab per quantity, a plot per limb group."""
-    plots = f"plots/{namespace}"
+    entity = robot_entity(namespace)
     prefix = f"{namespace}: " if with_namespace else ""
     tabs: list[rrb.Container] = []
     groups = list(layout.groups)
     for quantity, label in (("position", "positions"), ("velocity", "velocities"), ("effort", "efforts")):
         if groups:
-            views = [time_series(f"{prefix}{title(g)} {quantity} ", f"{plots}/joint_states/{quantity}/{g}",
-                                 timeline) for g in groups]
-        else:  # nothing received yet: everything under the quantity, grouped or not
-            views = [time_series(f"{prefix}{label}", f"{plots}/joint_states/{quantity}", timeline)]
+            views = [time_series(f"{prefix}{title(g.part)} {quantity} ", entity, timeline,
+                                 joint_series(entity, quantity, g)) for g in groups]
+        else:  # nothing received yet: an empty plot until the joints are known
+            views = [time_series(f"{prefix}{label}", entity, timeline)]
         tabs.append(grid(views, label))
     for controller, controller_groups in layout.controllers.items():
-        views = [time_series(f"{prefix}{controller}: {title(g)} commanded vs actual", f"{plots}/{controller}/{g}",
-                             timeline) for g in controller_groups]
+        views = [time_series(f"{prefix}{controller}: {title(g.part)} commanded vs actual", entity, timeline,
+                             controller_series(entity, controller, g)) for g in controller_groups]
         if views:
             tabs.append(grid(views, f"{controller}"))
     if layout.has_balance:
-        tabs.append(rrb.Vertical(time_series(f"{prefix}CoM, ZMP (m), balanced (1/0)", f"{plots}/balance", timeline),
+        tabs.append(rrb.Vertical(time_series(f"{prefix}CoM, ZMP (m), balanced (1/0)", entity, timeline,
+                                             series(entity, "balance:values", BALANCE_SERIES, PALETTE[:6])),
                                  name="balance"))
     return rrb.Tabs(*tabs, active_tab=0, name=namespace)
 
 
-def build_blueprint(robots: Mapping[str, RobotLayout] | None = None, timeline: str = SIM_TIMELINE) -> rrb.Blueprint:
-    """``robots``: namespace -> its plot layout; ``timeline``: the one the time panel follows."""
+def build_blueprint(robots: Mapping[str, RobotLayout] | None = None, timeline: str = SIM_TIMELINE,
+                    ground: bool = True) -> rrb.Blueprint:
+    """``robots``: namespace -> its plot layout; ``timeline``: the one the time panel follows; ``ground``: draw
+    the ground grid."""
     robots = robots or {}
     scene = rrb.Spatial3DView(
         name="scene", origin="world",
-        line_grid=rrb.LineGrid3D(visible=False),  # we log our own ground with a 0.5 m grid
+        # The ground: the viewer's own grid (0.5 m, z = 0), like RViz's Grid display. It is part of the
+        # layout, not of the data, so the web server never drops it from a short history.
+        line_grid=rrb.LineGrid3D(visible=ground, spacing=0.5, plane=rr.components.Plane3D.XY,
+                                 color=[150, 155, 160, 255], stroke_width=1.5),
         # A three-quarter view from the front left of a standing humanoid, like RViz's default orbit.
         eye_controls=rrb.EyeControls3D(position=[1.9, 1.4, 1.3], look_target=[0.0, 0.0, 0.55],
                                        eye_up=[0.0, 0.0, 1.0]),

@@ -30,7 +30,7 @@ from nodes.urdf.model import UrdfError
 from .blueprint import RobotLayout, build_blueprint
 from .markers import MarkerError, MarkerLayer
 from .ratelimit import RateLimiter
-from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, SceneTime, is_wall_stamp, log_ground, parse_model
+from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, SceneTime, is_wall_stamp, parse_model
 from .sink import Output, OutputPlan
 
 String = msgs.get_type("std_msgs/msg/String")
@@ -49,6 +49,17 @@ GLOBAL_MARKER_TOPICS = {"visualization_marker": Marker, "visualization_marker_ar
                         "visualization/trajectory": Marker}
 
 DISCOVERY_PERIOD = 2.0
+LATEST_FRESH = 1.0  # s a controller_state or humanoid_state stays in the plot rows after it stops coming
+LAYOUT_SETTLE = 1.0  # s the plot layout must stay the same before the blueprint is sent again
+
+
+@dataclass
+class Latest:
+    """The newest message on a stream, kept undecoded until a plot row needs it (most are never decoded)."""
+
+    arrived: float  # monotonic
+    payload: bytes
+    decoded: Any = None
 
 
 def stamp_seconds(stamp: Any) -> float:
@@ -70,6 +81,7 @@ class RobotView:
     tf_seen: bool = False
     pending_static: list = field(default_factory=list)  # tf_static rows that came before the scene
     limits: dict[str, RateLimiter] = field(default_factory=dict)
+    latest: dict[str, Latest] = field(default_factory=dict)  # "humanoid_state", "controller:<name>"
     last_positions: dict[str, float] = field(default_factory=dict)
     first_state: float = 0.0  # monotonic time of the first joint_states with a model
 
@@ -96,20 +108,18 @@ class Visualiser(Node):
         # Rates and batching come from measuring a software-rendered browser on a 2-core machine
         # (bench/viz.py; README "Visualiser"): what it can take in while staying within 1 s of the simulation.
         self.rates = {
-            "joint_states": p("joint_states_rate", 10.0, description="Hz", min_value=0.0),
+            "joint_states": p("joint_states_rate", 10.0, min_value=0.0, description=(
+                "Hz of the plot rows: positions, velocities, efforts, the latest commanded vs actual and balance")),
             "tf": p("tf_rate", 10.0, description="Hz", min_value=0.0),
             "model_states": p("model_states_rate", 10.0, description="Hz", min_value=0.0),
-            "controller_state": p("controller_state_rate", 5.0, description="Hz", min_value=0.0),
-            "humanoid_state": p("humanoid_state_rate", 5.0, description="Hz", min_value=0.0),
-            "markers": p("marker_rate", 2.0, description="Hz", min_value=0.0),
+            "markers": p("marker_rate", 2.0, description="Hz of the markers (paths, CoM, support polygon)",
+                         min_value=0.0),
         }
-        self.slow_plots_rate = p("velocity_effort_rate", 2.0, min_value=0.0, description=(
-            "Hz of the velocity and effort plots (positions: joint_states_rate)"))
         self.keyframe_period = p("keyframe_period", 2.0, min_value=0.1, description=(
             "s between re-logs of every robot's model and frames (a late viewer gets only recent history)"))
         flush_period = p("flush_period", 0.5, min_value=0.0, max_value=2.0, description=(
             "s the recording batches rows before sending (fewer, larger chunks for the viewer to take in)"))
-        self.show_ground = p("ground", True, description="draw the ground plane (off for joint_animation)")
+        self.show_ground = p("ground", True, description="draw the ground grid (off for joint_animation)")
         self.tf_fallback_after = p("tf_fallback_after", 1.0, min_value=0.0,
                                    description="s of joint_states without tf before frames come from our FK")
 
@@ -121,6 +131,7 @@ class Visualiser(Node):
         self.robots: dict[str, RobotView] = {}
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()  # work from the discovery thread
         self.layout_key: tuple = ()
+        self.pending_layout: tuple[tuple, float] = ((), 0.0)  # the newest layout key and since when
 
         self.recording = rr.RecordingStream("zenroid_viz",
                                             batcher_config=rr.ChunkBatcherConfig(flush_tick=flush_period))
@@ -129,7 +140,7 @@ class Visualiser(Node):
         plan = OutputPlan.resolve(args.save, args.serve, args.spawn, args.headless, args.web_port, args.grpc_port,
                                   getattr(args, "server_history", None), getattr(args, "bind", "127.0.0.1"))
         self.timeline = SIM_TIMELINE
-        self.output = Output(self.recording, plan, build_blueprint(timeline=self.timeline))
+        self.output = Output(self.recording, plan, build_blueprint(timeline=self.timeline, ground=self.show_ground))
         for note in plan.notes:
             self.logger.info(note)
         if plan.save:
@@ -137,10 +148,8 @@ class Visualiser(Node):
         if self.output.viewer_url:
             self.logger.info(f"web viewer: open {self.output.viewer_url}")
             print(f"Rerun web viewer: {self.output.viewer_url}", flush=True)
-        if self.show_ground:
-            log_ground(self.recording)
-
         self.scene_time = SceneTime(self.recording)
+
         self.markers = MarkerLayer(self.recording, self.marker_frame)
         self.marker_topics: dict[str, Subscription] = {}
         for topic, marker_type in GLOBAL_MARKER_TOPICS.items():
@@ -177,6 +186,33 @@ class Visualiser(Node):
 
         return self.create_subscription(msg_type, key, on_payload, inline=True, raw=True)
 
+    def latch(self, robot: RobotView, slot: str, key: str, on_arrival=None) -> Subscription:
+        """A raw subscription that only keeps the newest payload in ``robot.latest[slot]``: controller_state
+        and humanoid_state come at the control rate and are decoded only when a plot row takes them, so their
+        values share the row (and the viewer's chunk) of the joint_states sample they go with."""
+
+        def on_payload(payload: bytes) -> None:
+            # No lock: replacing a dict entry is atomic, and the reader copes with either payload.
+            robot.latest[slot] = Latest(time.monotonic(), payload)
+            if on_arrival is not None:
+                on_arrival()
+
+        msg_type = HumanoidState if slot == "humanoid_state" else ControllerState
+        return self.create_subscription(msg_type, key, on_payload, inline=True, raw=True)
+
+    def latest(self, robot: RobotView, slot: str, msg_type: Any, key: str) -> Any:
+        """The newest message of a latched stream, decoded once; None when stale, absent or undecodable."""
+        entry = robot.latest.get(slot)
+        if entry is None or time.monotonic() - entry.arrived > LATEST_FRESH:
+            return None
+        if entry.decoded is None:
+            try:
+                entry.decoded = msgs.decode(msg_type, entry.payload)
+            except msgs.DecodeError as exc:
+                self.logger.warn_throttle(5.0, f"dropped a message on '{key}': {exc}", key=f"dec:/{key}")
+                entry.decoded = False
+        return None if entry.decoded is False else entry.decoded
+
     # -- robots --------------------------------------------------------------------------------------
     def add_robot(self, namespace: str) -> RobotView:
         if namespace in self.robots:
@@ -184,8 +220,6 @@ class Visualiser(Node):
         robot = RobotView(namespace)
         robot.limits = {stream: RateLimiter(hz) for stream, hz in self.rates.items()}
         robot.limits["fk"] = RateLimiter(self.rates["tf"])
-        robot.limits["slow_plots"] = RateLimiter(self.slow_plots_rate)
-        robot.limits["balance_markers"] = RateLimiter(self.rates["markers"])
         self.robots[namespace] = robot
         sub, limits, ns = self.subscribe, robot.limits, namespace
         robot.subscriptions += [
@@ -195,8 +229,8 @@ class Visualiser(Node):
             sub(TFMessage, f"/{ns}/tf_static", lambda m, r=robot: self.on_tf(r, m, static=True)),
             sub(JointState, f"/{ns}/joint_states", lambda m, r=robot: self.on_joint_states(r, m),
                 limits["joint_states"]),
-            sub(HumanoidState, f"/{ns}/humanoid_state", lambda m, r=robot: self.on_humanoid_state(r, m),
-                limits["humanoid_state"], on_arrival=lambda r=robot: setattr(r, "has_balance", True)),
+            self.latch(robot, "humanoid_state", f"/{ns}/humanoid_state",
+                       on_arrival=lambda r=robot: setattr(r, "has_balance", True)),
         ]
         for controller in self.controller_names:
             self.add_controller(robot, controller)
@@ -210,9 +244,7 @@ class Visualiser(Node):
             return
         base = f"/{robot.namespace}/{controller}"
         robot.controllers[controller] = [
-            self.subscribe(ControllerState, f"{base}/controller_state",
-                           lambda m, r=robot, c=controller: self.on_controller_state(r, c, m),
-                           RateLimiter(self.rates["controller_state"])),
+            self.latch(robot, f"controller:{controller}", f"{base}/controller_state"),
             self.subscribe(JointTrajectory, f"{base}/joint_trajectory",
                            lambda m, r=robot, c=controller: self.on_trajectory(r, c, m)),
         ]
@@ -384,32 +416,50 @@ class Visualiser(Node):
         if scene is None:
             return
         scene.positions.update(positions)
-        scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort,
-                               all_quantities=robot.limits["slow_plots"].ready())
         if not robot.tf_seen and when >= self.tf_fallback_after and robot.limits["fk"].ready():
             scene.log_fk_transforms(when, scene.positions)
         if not scene.base_known and not robot.in_sim:
             # No simulator places this robot (arm_viz): after a second, its root is the world origin.
             robot.first_state = robot.first_state or time.monotonic()
             scene.base_known = time.monotonic() - robot.first_state > 1.0
+        balance = self.balance(robot)
         if robot.limits["markers"].ready():
-            scene.log_paths(when)
+            if balance is not None:
+                scene.update_balance(*balance[1])
+            scene.update_paths()
+        # The robot's row: its pose, markers and every plotted value (controllers, balance: the latest).
+        scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort,
+                               controllers=self.controller_values(robot), balance=balance[0] if balance else None)
 
-    def on_controller_state(self, robot: RobotView, controller: str, msg: Any) -> None:
-        scene = robot.scene
-        if scene is None:
-            return
-        # control_msgs (Jazzy) JointTrajectoryControllerState: reference (commanded) and feedback (measured).
-        commanded = msg.reference.positions
-        actual = msg.feedback.positions
-        n = len(msg.joint_names)
-        if len(commanded) != n or len(actual) != n:
-            self.logger.warn_throttle(5.0, f"{robot.namespace}/{controller}/controller_state: {n} joints but "
-                                      f"{len(commanded)} commanded / {len(actual)} actual positions: ignored",
-                                      key=f"cs:{robot.namespace}/{controller}")
-            return
-        scene.log_controller_state(self.stamp_or_now(msg.header.stamp), controller, msg.joint_names, commanded,
-                                   actual)
+    def controller_values(self, robot: RobotView) -> dict[str, tuple[list[str], list[float], list[float]]]:
+        """Each controller's latest (joint names, reference, actual positions), for the plot row."""
+        values = {}
+        for controller in robot.controllers:
+            key = f"{robot.namespace}/{controller}/controller_state"
+            msg = self.latest(robot, f"controller:{controller}", ControllerState, key)
+            if msg is None:
+                continue
+            # control_msgs (Jazzy) JointTrajectoryControllerState: reference (commanded) and feedback (measured).
+            commanded, actual, n = msg.reference.positions, msg.feedback.positions, len(msg.joint_names)
+            if len(commanded) != n or len(actual) != n or len(set(msg.joint_names)) != n:
+                self.logger.warn_throttle(5.0, f"{key}: {n} joints but {len(commanded)} commanded / {len(actual)} "
+                                          "actual positions (or duplicate names): ignored", key=f"cs:{key}")
+                continue
+            values[controller] = (list(msg.joint_names), list(commanded), list(actual))
+        return values
+
+    def balance(self, robot: RobotView) -> tuple[list[float], tuple] | None:
+        """The latest humanoid_state as the balance plot's values (CoM x y z, ZMP x y, is_balanced) and the
+        balance markers' arguments; None without a fresh, finite one."""
+        msg = self.latest(robot, "humanoid_state", HumanoidState, f"{robot.namespace}/humanoid_state")
+        if msg is None:
+            return None
+        com = (msg.center_of_mass.x, msg.center_of_mass.y, msg.center_of_mass.z)
+        if not all(math.isfinite(v) for v in com + (msg.zmp_x, msg.zmp_y)):
+            return None
+        polygon = [(p.x, p.y, p.z) for p in msg.support_polygon]
+        return ([*com, msg.zmp_x, msg.zmp_y, 1.0 if msg.is_balanced else 0.0],
+                (com, (msg.zmp_x, msg.zmp_y), msg.is_balanced, polygon))
 
     def on_trajectory(self, robot: RobotView, controller: str, msg: Any) -> None:
         """The target pose of a trajectory sent on the topic: its last point."""
@@ -425,16 +475,6 @@ class Visualiser(Node):
             self.logger.warn(f"{robot.namespace}/{controller}/joint_trajectory: unknown joints {unknown[:3]}")
         robot.scene.log_target(self.stamp_or_now(msg.header.stamp), controller,
                                {j: v for j, v in zip(msg.joint_names, last, strict=True) if j not in unknown})
-
-    def on_humanoid_state(self, robot: RobotView, msg: Any) -> None:
-        if robot.scene is None:
-            return
-        com = (msg.center_of_mass.x, msg.center_of_mass.y, msg.center_of_mass.z)
-        polygon = [(p.x, p.y, p.z) for p in msg.support_polygon]
-        if not all(math.isfinite(v) for v in com + (msg.zmp_x, msg.zmp_y)):
-            return
-        robot.scene.log_balance(self.stamp_or_now(msg.header.stamp), com, (msg.zmp_x, msg.zmp_y),
-                                msg.is_balanced, polygon, markers=robot.limits["balance_markers"].ready())
 
     # -- discovery (a thread: graph queries block) -----------------------------------------------------
     def discovery_loop(self) -> None:
@@ -511,19 +551,24 @@ class Visualiser(Node):
             has_balance=robot.has_balance)
 
     def update_layout(self) -> None:
-        """Re-send the blueprint when robots, plot groups, controllers, balance plots or the timeline change."""
+        """Re-send the blueprint when robots, plot groups, controllers, balance plots or the timeline change,
+        once the change has settled for ``LAYOUT_SETTLE``: the server keeps every blueprint for the viewers
+        that open later, and each one costs them about a hundred chunks to take in."""
         layout = {ns: self.robot_layout(r) for ns, r in sorted(self.robots.items()) if r.present}
         key = (self.timeline, tuple((ns, lay.key()) for ns, lay in layout.items()))
-        if key != self.layout_key:
+        now = time.monotonic()
+        if key != self.pending_layout[0]:
+            self.pending_layout = (key, now)
+        if key != self.layout_key and now - self.pending_layout[1] >= LAYOUT_SETTLE:
             self.layout_key = key
-            self.recording.send_blueprint(build_blueprint(layout, self.timeline))
+            self.recording.send_blueprint(build_blueprint(layout, self.timeline, self.show_ground))
 
     def keyframe(self) -> None:
-        """Every robot's model and frames again (see ``RobotScene.refresh``)."""
+        """Every idle robot's model and markers again (see ``RobotScene.refresh``), and the user markers."""
         with self.lock:
             for robot in self.robots.values():
                 if robot.scene is not None and robot.present:
-                    robot.scene.refresh(self.sim_now)
+                    robot.scene.refresh(self.sim_now, self.keyframe_period)
         self.flush_markers(refresh=True)
 
     def on_process_exit(self) -> None:
@@ -544,7 +589,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                      help="address the web viewer's servers listen on (default loopback only; 0.0.0.0 inside a "
                           "container whose ports are published)")
     out.add_argument("--server-history", metavar="SIZE", default=None,
-                     help="data the web viewer server keeps for viewers that connect later, e.g. 4MiB "
-                          "(default: a few seconds of this stream; a late viewer starts near the present)")
+                     help="what the web viewer server keeps for viewers that connect later, e.g. 4MiB (default "
+                          "384KiB: the layout and a few seconds of this stream; a late viewer starts at the present)")
     out.add_argument("--robots", default="", help="comma-separated robot namespaces (same as robots:=[...])")
 

@@ -1,17 +1,27 @@
 """Everything the visualiser writes to Rerun, with plain numbers in (no Zenoh, no messages).
 
-Entity layout (one subtree per robot namespace, so a deleted robot is one recursive Clear):
+Entity layout (one subtree per robot namespace, so a deleted robot is one recursive Clear). A browser viewer
+takes in a bounded number of *chunks* per second, whatever their size, and the SDK batches one chunk per
+entity and flush for rows with the same components (README "Visualiser"). So everything of a robot that
+changes is one row of one entity, logged with each joint_states sample:
 
-- ``world/ground``                                   the ground plane
-- ``world/<ns>/robot/{boxes,cylinders,spheres}``     the URDF's primitive visuals, one instance per visual,
-                                                     placed in the world through our tf tree (tf, tf_static,
-                                                     the root from sim/model_states, or our own FK)
+- ``world/<ns>/robot``                               the robot: its URDF primitive visuals (Boxes3D,
+                                                     Cylinders3D, Ellipsoids3D side by side, one instance per
+                                                     visual, placed in the world through our tf tree: tf,
+                                                     tf_static, the root from sim/model_states, or our own
+                                                     FK); its built-in markers (Points3D: CoM, its ground
+                                                     projection, ZMP, the target's end effectors;
+                                                     LineStrips3D: end-effector and CoM paths, support polygon,
+                                                     the target pose's skeleton); and every plotted value as
+                                                     columns the blueprint maps to its plots (``blueprint.py``):
+                                                     ``position:<group>``, ``velocity:<group>``,
+                                                     ``effort:<group>`` (one value per joint of the limb group),
+                                                     ``<controller>:<group>`` (reference and actual per joint,
+                                                     the latest controller_state) and ``balance:values``
+                                                     (CoM x y z, ZMP x y, is_balanced)
 - ``world/<ns>/links/<link>/visual_<i>``              mesh visuals, one entity each with its world pose
-- ``world/<ns>/markers/{com,zmp,com_path,support_polygon,ee_paths,target}``
-- ``plots/<ns>/joint_states/{position,velocity,effort}/<group>``  one plot per limb group (``joint_groups``),
-                                                     one series per joint
-- ``plots/<ns>/<controller>/<group>``                 commanded vs actual per joint (the rqt_plot view)
-- ``plots/<ns>/balance/{com,zmp,is_balanced}``
+
+The ground is the viewer's own line grid (a blueprint setting: no data, never dropped by the web server).
 
 Time: every call takes the message stamp. Sim-time stamps go on the ``sim_time`` timeline (a duration from
 the start of the simulation); stamps from the wall clock (nodes that run without a simulator, like
@@ -21,7 +31,9 @@ Rerun adds ``log_time`` (when each row was logged) to every row.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +49,7 @@ SIM_TIMELINE = "sim_time"
 WALL_TIMELINE = "wall_time"
 WORLD_FRAME = "tf#/world"  # Rerun's implicit frame of the entity "world": the 3-D view's root
 SOLID = rr.components.FillMode.Solid
+PLOT_ROWS_DRIVE = 0.5  # s after a row with plotted values during which only such rows are logged
 PATH_LENGTH = 40  # points kept per marker path (20 s at the 2 Hz marker rate)
 EPOCH_STAMP = 1e9  # s: a stamp past 2001-09-09 is the wall clock, not a simulation's time
 MAX_GROUP = 8  # joints per plot: more series than this make an unreadable legend
@@ -173,20 +186,33 @@ def short_labels(members: Sequence[str]) -> list[str]:
     return labels if len(set(labels)) == len(labels) else list(members)
 
 
-def group_entity(group: str) -> str:
-    """A plot group's entity path part (``left leg`` -> ``left_leg``)."""
-    return rr.escape_entity_path_part(group.replace(" & ", "_").replace(" ", "_"))
+def group_part(group: str) -> str:
+    """A plot group's name in component names (``left leg`` -> ``left_leg``)."""
+    return "".join(c if c.isalnum() or c in "_-" else "_" for c in group.replace(" & ", "_").replace(" ", "_"))
 
 
-def log_ground(recording: rr.RecordingStream, half_extent: float = 2.0) -> None:
-    recording.log("world/ground", rr.Boxes3D(
-        half_sizes=[[half_extent, half_extent, 0.002]], centers=[[0.0, 0.0, -0.002]],
-        colors=[[90, 95, 100, 255]], fill_mode=SOLID), static=True)
-    ticks = np.arange(-half_extent, half_extent + 1e-9, 0.5)
-    lines = [[[x, -half_extent, 0.001], [x, half_extent, 0.001]] for x in ticks]
-    lines += [[[-half_extent, y, 0.001], [half_extent, y, 0.001]] for y in ticks]
-    recording.log("world/ground/grid", rr.LineStrips3D(lines, colors=[[140, 145, 150, 255]], radii=0.002),
-                  static=True)
+@dataclass(frozen=True)
+class PlotGroup:
+    """One plot: its component name part (``left_leg``), the joints it plots and their legend labels."""
+
+    part: str
+    joints: tuple[str, ...]
+    labels: tuple[str, ...]
+
+
+def plot_groups(joint_names: Sequence[str]) -> list[PlotGroup]:
+    return [PlotGroup(group_part(group), tuple(members), tuple(short_labels(members)))
+            for group, members in joint_groups(joint_names).items()]
+
+
+def robot_entity(namespace: str) -> str:
+    """The entity of a robot: its primitives, markers and every plotted value."""
+    return f"world/{namespace}/robot"
+
+
+def series_component(kind: str, part: str) -> str:
+    """The column a plot reads in ``plots/<ns>/joints``: ``position:left_leg``, ``<controller>:left_leg``."""
+    return f"{kind}:{part}"
 
 
 def visual_archetype(visual: Visual, mesh_root: Path | None = None) -> rr.AsComponents | None:
@@ -229,7 +255,7 @@ class RobotScene:
             raise ValueError(f"end_effectors: unknown links {unknown} in robot '{model.name}'")
         self.end_effectors = wanted or model.leaf_links()
         self.world = f"world/{namespace}"
-        self.plots = f"plots/{namespace}"
+        self.entity = robot_entity(namespace)
         self.root_frame = frame_name(namespace, model.root, self.world_frames)
         # Our tf tree: child frame -> (parent frame, parent-from-child transform), from tf, tf_static, the
         # simulator's base pose or our own forward kinematics.
@@ -242,23 +268,24 @@ class RobotScene:
         self.base_from_tf = False  # once tf names the root's parent, model_states no longer places it
         self.base_known = False  # no path points until the robot's place in the world is known
         self.positions: dict[str, float] = {}
-        self.joint_series: tuple[str, ...] = ()
-        self.controller_series: set[tuple[str, tuple[str, ...]]] = set()
-        self.group_cache: dict[tuple[str, ...], list[tuple[str, np.ndarray, list[str]]]] = {}
-        # Entity parts of the plot groups, for the blueprint: joint_states, and each controller's.
-        self.plot_groups: list[str] = []
-        self.controller_groups: dict[str, list[str]] = {}
-        self.balance_named = False
+        self.last_row = 0.0  # monotonic time of the last row of the robot entity
+        self.last_plot_row = -PLOT_ROWS_DRIVE  # ... and of the last one with plotted values
+        self.group_cache: dict[tuple[str, ...], list[tuple[PlotGroup, np.ndarray]]] = {}
+        # The plot groups, for the blueprint: joint_states', and each controller's.
+        self.plot_groups: list[PlotGroup] = []
+        self.controller_groups: dict[str, list[PlotGroup]] = {}
         self.com_path = PathBuffer(path_length)
         self.ee_paths = {link: PathBuffer(path_length) for link in self.end_effectors}
+        # The markers' current parts (name -> points or strips), drawn with every row.
+        self.marker_points: dict[str, tuple[np.ndarray, list[float], list[list[int]]]] = {}
+        self.marker_strips: dict[str, tuple[list[np.ndarray], float, list[int]]] = {}
         self.skipped_meshes: list[str] = []
 
     # -- model ---------------------------------------------------------------------------------------
     def log_model(self, sim_time: float, mesh_root: Path | None = None) -> int:
         """Prepare the robot's geometry and draw it (at the origin until a pose arrives); returns how many
-        visuals it has. Primitives of one kind are one entity (``world/<ns>/robot/{boxes,cylinders,spheres}``)
-        with an instance per visual placed in the world, so a moving robot costs the viewer three rows per
-        update rather than a row per link; meshes are an entity each (``world/<ns>/links/<link>/visual_<i>``)."""
+        visuals it has. The primitives are instances of the robot entity (see the module docstring); meshes
+        are an entity each (``world/<ns>/links/<link>/visual_<i>``)."""
         self.shapes = {}
         self.meshes = []
         for link, link_model in self.model.links.items():
@@ -281,7 +308,6 @@ class RobotScene:
         """The robot was deleted: hide its whole subtree from this time on."""
         self.set_time(sim_time)
         self.recording.log(self.world, rr.Clear(recursive=True))
-        self.recording.log(self.plots, rr.Clear(recursive=True))
 
     # -- frames --------------------------------------------------------------------------------------
     def log_transforms(self, sim_time: float,
@@ -340,10 +366,17 @@ class RobotScene:
             pose = self.link_poses(self.positions)[self.fk.link_index[link]]
         return pose
 
-    def log_robot(self, sim_time: float, force: bool = False) -> None:
-        """Every visual at its link's world pose (rate-limited by ``pose_limiter`` unless ``force``)."""
-        if not force and self.pose_limiter is not None and not self.pose_limiter.ready():
-            return
+    def log_robot(self, sim_time: float, force: bool = False,
+                  plots: Mapping[str, Mapping[str, np.ndarray]] | None = None) -> None:
+        """One row of the robot entity: every visual at its link's world pose, the markers, and the plotted
+        values when given (``plots``: column kind -> group -> values). Without plotted values, and unless
+        ``force``, nothing is logged while joint_states rows come (the next one draws the new pose: one kind
+        of row, one chunk per flush), and at most at ``pose_limiter``'s rate otherwise."""
+        if plots is None and not force:
+            if time.monotonic() - self.last_plot_row < PLOT_ROWS_DRIVE:
+                return
+            if self.pose_limiter is not None and not self.pose_limiter.ready():
+                return
         self.set_time(sim_time)
         poses: dict[str, np.ndarray | None] = {}
         local: list[np.ndarray] = []
@@ -362,133 +395,122 @@ class RobotScene:
                 poses[link] = pose
             return poses[link]
 
+        # Every kind on every row, empty when nothing of it is placed: rows with the same components are
+        # batched into one chunk per flush.
+        archetypes = []
         for kind, visuals in self.shapes.items():
             placed = [(link_pose(link), visual) for link, visual in visuals]
             placed = [(pose @ visual.origin, visual) for pose, visual in placed if pose is not None]
-            entity = f"{self.world}/robot/{SHAPES[kind]}"
-            if not placed:
-                self.recording.log(entity, rr.Clear(recursive=False))
-                continue
-            matrices = np.stack([m for m, _ in placed])
+            matrices = np.stack([m for m, _ in placed]) if placed else np.zeros((0, 4, 4))
             centers = matrices[:, :3, 3]
             quats = [matrix_to_quaternion(m[:3, :3]) for m in matrices]
             colors = [rgba8(v.rgba) for _, v in placed]
             if kind == "box":
-                archetype = rr.Boxes3D(half_sizes=[[x / 2 for x in v.size] for _, v in placed], centers=centers,
-                                       quaternions=quats, colors=colors, fill_mode=SOLID)
+                archetypes.append(rr.Boxes3D(half_sizes=[[x / 2 for x in v.size] for _, v in placed] or np.zeros((0, 3)),
+                                             centers=centers, quaternions=quats, colors=colors, fill_mode=SOLID))
             elif kind == "cylinder":  # URDF and Rerun cylinders both run along local z
-                archetype = rr.Cylinders3D(lengths=[v.length for _, v in placed], radii=[v.radius for _, v in placed],
-                                           centers=centers, quaternions=quats, colors=colors, fill_mode=SOLID)
+                archetypes.append(rr.Cylinders3D(lengths=[v.length for _, v in placed], radii=[v.radius for _, v in placed],
+                                                 centers=centers, quaternions=quats, colors=colors, fill_mode=SOLID))
             else:
-                archetype = rr.Ellipsoids3D(half_sizes=[[v.radius] * 3 for _, v in placed], centers=centers,
-                                            quaternions=quats, colors=colors, fill_mode=SOLID)
-            self.recording.log(entity, archetype)
+                archetypes.append(rr.Ellipsoids3D(half_sizes=[[v.radius] * 3 for _, v in placed] or np.zeros((0, 3)),
+                                                  centers=centers, quaternions=quats, colors=colors, fill_mode=SOLID))
+        archetypes += self.marker_archetypes()
+        archetypes += [rr.DynamicArchetype(kind, components=parts) for kind, parts in (plots or {}).items()]
+        self.recording.log(self.entity, *archetypes)
+        self.last_row = time.monotonic()
+        if plots:
+            self.last_plot_row = self.last_row
         for link, origin, entity, archetype in self.meshes:
             pose = link_pose(link)
             if pose is None:
                 continue
             world = pose @ origin
-            self.recording.log(entity, archetype, rr.Transform3D(
+            # The mesh itself only with the model and key frames (``refresh``), not with every pose.
+            parts = [archetype] if force and plots is None else []
+            self.recording.log(entity, *parts, rr.Transform3D(
                 translation=world[:3, 3], quaternion=matrix_to_quaternion(world[:3, :3])))
 
     # -- plots ---------------------------------------------------------------------------------------
-    def _groups(self, names: tuple[str, ...]) -> list[tuple[str, np.ndarray, list[str]]]:
-        """``(entity part, indices into names, legend labels)`` per plot group of these joint names."""
+    def _groups(self, names: tuple[str, ...]) -> list[tuple[PlotGroup, np.ndarray]]:
+        """``(plot group, indices into names)`` per plot group of these joint names."""
         cached = self.group_cache.get(names)
         if cached is None:
             index = {name: i for i, name in enumerate(names)}
-            cached = [(group_entity(group), np.array([index[j] for j in members]), short_labels(members))
-                      for group, members in joint_groups(names).items()]
+            cached = [(group, np.array([index[j] for j in group.joints])) for group in plot_groups(names)]
             self.group_cache[names] = cached
         return cached
 
     def log_joint_states(self, sim_time: float, names: Sequence[str], position: Sequence[float],
-                         velocity: Sequence[float], effort: Sequence[float], all_quantities: bool = True) -> None:
-        """One Scalars batch per quantity and limb group (one series per joint), not one call per joint;
-        positions only unless ``all_quantities`` (velocities and efforts are decimated further)."""
+                         velocity: Sequence[float], effort: Sequence[float],
+                         controllers: Mapping[str, tuple[Sequence[str], Sequence[float], Sequence[float]]] | None = None,
+                         balance: Sequence[float] | None = None) -> None:
+        """The robot's row for this joint_states sample, with every plotted value: positions, velocities and
+        efforts per limb group, each controller's reference and actual position per joint of its groups
+        (``controllers``: name -> (joint names, reference, actual)), and the balance values (CoM x y z, ZMP
+        x y, is_balanced)."""
         names = tuple(names)
         self.positions.update(zip(names, position, strict=False))
         groups = self._groups(names)
-        if names != self.joint_series:
-            self.joint_series = names
-            self.plot_groups = [g for g, _, _ in groups]
-            for quantity in QUANTITIES:
-                for group, _, labels in groups:
-                    self.recording.log(f"{self.plots}/joint_states/{quantity}/{group}",
-                                       rr.SeriesLines(names=labels, colors=PALETTE[:len(labels)]), static=True)
-        self.set_time(sim_time)
+        self.plot_groups = [g for g, _ in groups]
+        columns: dict[str, dict[str, np.ndarray]] = {}
         for quantity, values in zip(QUANTITIES, (position, velocity, effort), strict=True):
-            if len(values) != len(names) or not names or (quantity != "position" and not all_quantities):
+            if len(values) != len(names) or not names:
                 continue
             array = np.asarray(values, float)
-            for group, indices, _ in groups:
-                self.recording.log(f"{self.plots}/joint_states/{quantity}/{group}", rr.Scalars(array[indices]))
+            columns[quantity] = {group.part: array[indices] for group, indices in groups}
+        for controller, (joints, commanded, actual) in sorted((controllers or {}).items()):
+            controller_groups = self._groups(tuple(joints))
+            self.controller_groups[controller] = [g for g, _ in controller_groups]
+            both = np.column_stack((np.asarray(commanded, float), np.asarray(actual, float)))
+            columns[controller] = {group.part: both[indices].ravel() for group, indices in controller_groups}
+        if balance is not None:
+            columns["balance"] = {"values": np.asarray(balance, float)}
+        self.log_robot(sim_time, force=True, plots=columns)
 
-    def log_controller_state(self, sim_time: float, controller: str, joint_names: Sequence[str],
-                             commanded: Sequence[float], actual: Sequence[float]) -> None:
-        """Commanded vs actual position per joint: ``plots/<ns>/<controller>/<group>``, a thin light line
-        (the reference) and a solid one (the measurement) in the joint's colour."""
-        names = tuple(joint_names)
-        groups = self._groups(names)
-        if (controller, names) not in self.controller_series:
-            self.controller_series.add((controller, names))
-            self.controller_groups[controller] = [g for g, _, _ in groups]
-            for group, _, labels in groups:
-                colors = [c for color in PALETTE[:len(labels)] for c in (lighter(color), color)]
-                series = [s for label in labels for s in (f"{label} ref", label)]
-                self.recording.log(f"{self.plots}/{controller}/{group}", rr.SeriesLines(
-                    names=series, colors=colors, widths=[1.0, 2.0] * len(labels)), static=True)
-        self.set_time(sim_time)
-        both = np.column_stack((np.asarray(commanded, float), np.asarray(actual, float)))
-        for group, indices, _ in groups:
-            self.recording.log(f"{self.plots}/{controller}/{group}", rr.Scalars(both[indices].ravel()))
+    def refresh(self, sim_time: float, period: float) -> None:
+        """A key frame when nothing was logged for ``period`` s (a paused simulation): the robot and its
+        markers again, so that a viewer which only gets the last seconds of the stream (the server keeps a
+        short history) still draws them."""
+        if time.monotonic() - self.last_row >= period or self.meshes:
+            self.log_robot(sim_time, force=True)
 
-    def refresh(self, sim_time: float) -> None:
-        """A key frame: the whole robot again, so that a viewer which only gets the last seconds of the
-        stream (the server keeps a short history) draws it even while nothing moves."""
-        self.log_robot(sim_time, force=True)
+    # -- markers -------------------------------------------------------------------------------------
+    def marker_archetypes(self) -> list:
+        """Every built-in marker: points and line strips, each with its own radius and colour (both always
+        present, empty or not, so that every row of the robot has the same components)."""
+        points = [p for p, _, _ in self.marker_points.values()]
+        strips = [(strip, radius, color) for parts, radius, color in self.marker_strips.values() for strip in parts]
+        return [rr.Points3D(np.concatenate(points) if points else np.zeros((0, 3)),
+                            radii=[r for _, radii, _ in self.marker_points.values() for r in radii],
+                            colors=[c for _, _, colors in self.marker_points.values() for c in colors]),
+                rr.LineStrips3D([strip for strip, _, _ in strips], radii=[r for _, r, _ in strips],
+                                colors=[c for _, _, c in strips])]
 
-    def log_balance(self, sim_time: float, com: Sequence[float], zmp: Sequence[float], is_balanced: bool,
-                    support_polygon: Sequence[Sequence[float]], markers: bool = True) -> None:
-        """Plots every call; the 3-D markers (CoM, ZMP, support polygon) only when ``markers``."""
-        if not self.balance_named:
-            self.balance_named = True
-            self.recording.log(f"{self.plots}/balance", rr.SeriesLines(names=BALANCE_SERIES, colors=PALETTE[:6]),
-                               static=True)
-        self.set_time(sim_time)
-        # One row for all six series (each row costs the viewer, whatever its width).
-        self.recording.log(f"{self.plots}/balance", rr.Scalars([*com, *zmp[:2], 1.0 if is_balanced else 0.0]))
-        if not markers:
-            return
+    def update_balance(self, com: Sequence[float], zmp: Sequence[float], is_balanced: bool,
+                       support_polygon: Sequence[Sequence[float]]) -> None:
+        """The balance markers (drawn from the next row on): CoM, its ground projection and the ZMP
+        (yellow), the support polygon on the ground, and a point of the CoM path."""
         self.com_path.append(com)
-        markers_path = f"{self.world}/markers"
         color = [60, 200, 90, 255] if is_balanced else [230, 60, 50, 255]
-        # CoM, its ground projection and the ZMP (yellow) in one entity.
-        self.recording.log(f"{markers_path}/com", rr.Points3D(
-            [com, [com[0], com[1], 0.0], [zmp[0], zmp[1], 0.003]], radii=[0.03, 0.015, 0.02],
-            colors=[color, color, [250, 220, 40, 255]]))
+        self.marker_points["com"] = (np.array([com, [com[0], com[1], 0.0], [zmp[0], zmp[1], 0.003]], float),
+                                     [0.03, 0.015, 0.02], [color, color, [250, 220, 40, 255]])
         if len(support_polygon) >= 2:
             ring = [[p[0], p[1], max(p[2], 0.0) + 0.003] for p in support_polygon]
-            self.recording.log(f"{markers_path}/support_polygon", rr.LineStrips3D(
-                [ring + [ring[0]]], colors=[color], radii=0.006))
+            self.marker_strips["support_polygon"] = ([np.array(ring + [ring[0]], float)], 0.006, color)
+        if len(self.com_path) >= 2:
+            self.marker_strips["com_path"] = ([self.com_path.array()], 0.004, [60, 200, 90, 255])
 
-    def log_paths(self, sim_time: float) -> None:
-        """End-effector (from forward kinematics on the latest joint positions) and CoM paths as line strips."""
+    def update_paths(self) -> None:
+        """A point of each end-effector path (forward kinematics on the latest joint positions), once the
+        robot's place in the world is known."""
         if not self.base_known:
             return
         poses = self.link_poses(self.positions)
         for link, path in self.ee_paths.items():
             path.append(poses[self.fk.link_index[link], :3, 3])
-        self.set_time(sim_time)
-        markers = f"{self.world}/markers"
         strips = [path.array() for path in self.ee_paths.values() if len(path) >= 2]
         if strips:
-            self.recording.log(f"{markers}/ee_paths", rr.LineStrips3D(
-                strips, radii=0.004, colors=[[230, 60, 200, 255]]))
-        if len(self.com_path) >= 2:
-            self.recording.log(f"{markers}/com_path", rr.LineStrips3D([self.com_path.array()],
-                                                                       radii=0.004,
-                                                                       colors=[[60, 200, 90, 255]]))
+            self.marker_strips["ee_paths"] = (strips, 0.004, [230, 60, 200, 255])
 
     def log_target(self, sim_time: float, controller: str, target: Mapping[str, float]) -> None:
         """The target pose of the active trajectory: a skeleton of the robot at the target joint values."""
@@ -496,11 +518,9 @@ class RobotScene:
         positions.update(target)
         points = self.link_poses(positions)[:, :3, 3]
         index = self.fk.link_index
-        segments = [[points[index[parent]].tolist(), points[index[child]].tolist()]
+        segments = [np.array([points[index[parent]], points[index[child]]])
                     for parent, child in zip(self.fk.parent_names, self.fk.child_names, strict=True)]
-        self.set_time(sim_time)
-        entity = f"{self.world}/markers/target"
-        self.recording.log(entity, rr.LineStrips3D(segments, radii=0.006, colors=[[255, 140, 0, 160]]))
-        self.recording.log(f"{entity}/end_effectors", rr.Points3D(
-            [points[index[link]].tolist() for link in self.end_effectors], radii=0.025,
-            colors=[[255, 140, 0, 255]]))
+        self.marker_strips["target"] = (segments, 0.006, [255, 140, 0, 160])
+        self.marker_points["target"] = (np.array([points[index[link]] for link in self.end_effectors], float),
+                                        [0.025] * len(self.end_effectors), [[255, 140, 0, 255]] * len(self.end_effectors))
+        self.log_robot(sim_time)

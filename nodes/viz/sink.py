@@ -77,12 +77,13 @@ def wait_for_port(port: int, timeout: float) -> bool:
     return False
 
 
-# What the web viewer server keeps for viewers that connect later. Rerun's server drops the oldest
-# temporal data beyond this (static data, like series names and the ground, stays), and a new viewer
-# receives all of it before it can show the present: a few seconds of our stream (bench/viz.py measures
-# the bytes per second), not the whole run. The visualiser re-logs every robot's model and frames every
-# keyframe_period, so those few seconds always hold a complete scene.
-SERVER_HISTORY = "4MiB"
+# What the web viewer server keeps for viewers that connect later; a new viewer takes all of it in before it
+# shows the present, and a software-rendered page takes in only a few chunks per second (bench/viz.py). The
+# server never drops blueprints (each one the visualiser sends, ~250 KiB for a humanoid's, counts toward the
+# limit) and drops the oldest data beyond it, static data last. Nothing the visualiser logs is static: the
+# ground is the layout's grid, and every robot row holds the whole robot, its markers and its plotted values,
+# so the last seconds (or, with more blueprints, just the next row) always draw a complete scene.
+SERVER_HISTORY = "384KiB"
 
 
 @dataclass

@@ -15,11 +15,20 @@ import pytest
 
 from nodes.viz.readback import load
 from nodes.viz.scene import parse_model as parse_urdf
+from nodes.viz.scene import plot_groups
 from tests.conftest import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 HUMANOID = ROOT / "robots" / "humanoid.urdf"
-JOINT_STATES = "plots/humanoid/joint_states/position/left_leg"
+ROBOT = "world/humanoid/robot"  # the robot's primitives, markers and plotted values, one row per sample
+EE_PATH, TARGET = 0xE63CC8FF, 0xFF8C00A0  # marker colours (packed RGBA)
+
+
+def strips(row: dict, rgba: int, radius: float | None = None) -> list:
+    """The line strips of one colour (and radius) in a row of a robot entity."""
+    return [strip for strip, color, r in zip(row["LineStrips3D:strips"], row["LineStrips3D:colors"],
+                                             row["LineStrips3D:radii"], strict=True)
+            if color == rgba and (radius is None or abs(r - radius) < 1e-6)]
 
 
 def start_stack(processes, rrd: Path, robots: list[str], feeder_params: list[str] = ()) -> tuple:
@@ -53,44 +62,45 @@ def test_headless_launch_records_model_frames_plots_and_markers(processes, tmp_p
 
     # Geometry for every visual link: one instance per visual, grouped by primitive kind, URDF colours.
     model = parse_urdf(HUMANOID.read_text())
-    shapes = {kind: data[f"world/humanoid/robot/{kind}"] for kind in ("boxes", "cylinders", "spheres")}
-    counts = {kind: len(next(v for k, v in e.rows[-1].items() if k.endswith(":centers"))) for kind, e in shapes.items()}
+    robot = data[ROBOT]
+    assert not [name for name in data if name.startswith("plots")], "plots are columns of the robot entity"
+    last = robot.rows[-1]
+    counts = {kind: len(last[f"{kind}:centers"]) for kind in ("Boxes3D", "Cylinders3D", "Ellipsoids3D")}
     assert sum(counts.values()) == sum(len(model.links[link].visuals) for link in model.visual_links())
-    assert 0x3366CCFF in shapes["boxes"].rows[-1]["Boxes3D:colors"], "torso colour from the URDF material 'blue'"
+    assert 0x3366CCFF in last["Boxes3D:colors"], "torso colour from the URDF material 'blue'"
 
     # The robot moves: the shins (cylinders) follow the knee bends of joint_states.
-    states = data[JOINT_STATES]
-    names = states.static["SeriesLines:names"]
-    knee = states.column("Scalars:scalars")
-    assert max(v[names.index("knee")] for _, v in knee) > 0.5, "the left knee bends (short legend label 'knee')"
-    heights = [min(c[2] for c in row["Cylinders3D:centers"]) for row in shapes["cylinders"].rows
-               if "Cylinders3D:centers" in row]
+    groups = {g.part: g for g in plot_groups([j.name for j in model.movable_joints()])}
+    knee = robot.column("position:left_leg")
+    assert max(v[groups["left_leg"].labels.index("knee")] for _, v in knee) > 0.5, "the left knee bends"
+    heights = [min(c[2] for c in centers) for _, centers in robot.column("Cylinders3D:centers")]
     assert max(heights) - min(heights) > 0.03, "the lowest cylinder (a shin) never moved with the knees"
 
-    # Joint plots: one per limb group, every moving joint in exactly one, all three quantities.
-    plotted = []
-    for group in ("left_leg", "right_leg", "left_arm", "right_arm", "torso_head"):
-        entity = data[f"plots/humanoid/joint_states/position/{group}"]
-        plotted += entity.static["SeriesLines:names"]
-        assert len(entity.column("Scalars:scalars")) > 20
+    # Plotted values: a column per limb group, every moving joint in exactly one, all three quantities.
+    assert sorted(groups) == ["left_arm", "left_leg", "right_arm", "right_leg", "torso_head"]
+    assert sum(len(last[f"position:{part}"]) for part in groups) == len(model.movable_joints())
+    for part in groups:
+        assert len(robot.column(f"position:{part}")) > 20
         for quantity in ("velocity", "effort"):
-            assert data[f"plots/humanoid/joint_states/{quantity}/{group}"].column("Scalars:scalars")
-    assert len(plotted) == len(model.movable_joints())
-    # Commanded vs actual per joint of the trajectory controller (the feeder's 6 leg joints: one group).
-    cmd_actual = data["plots/humanoid/joint_trajectory_controller/joints"]
-    assert cmd_actual.static["SeriesLines:names"][:2] == ["left_knee ref", "left_knee"]
-    assert len(cmd_actual.column("Scalars:scalars")) > 10
-    assert len(data["plots/humanoid/balance"].column("Scalars:scalars")[-1][1]) == 6
+            assert robot.column(f"{quantity}:{part}")
+    # Commanded vs actual per joint of the trajectory controller (the feeder's 6 leg joints: one group), in the
+    # rows of the joint_states samples: reference and actual per joint.
+    cmd_actual = robot.column("joint_trajectory_controller:joints")
+    assert len(cmd_actual) > 10 and len(cmd_actual[-1][1]) == 12
+    assert len(robot.column("balance:values")[-1][1]) == 6
+    # A row per sample, nothing else in between: the viewer gets one chunk per flush.
+    times = [r["sim_time"] for r in robot.rows if r.get("position:left_leg") is None]
+    assert len(times) <= 3, f"rows without plotted values (only before the first sample): {times}"
 
     # Markers: paths as line strips that grow, support polygon on the ground, the trajectory target.
-    ee_paths = data["world/humanoid/markers/ee_paths"].column("LineStrips3D:strips")
-    assert len(ee_paths[-1][1]) == 5, "one path per leaf link (head, hands, feet)"
-    assert len(ee_paths[-1][1][0]) > len(ee_paths[0][1][0])
-    assert len(data["world/humanoid/markers/com_path"].column("LineStrips3D:strips")[-1][1][0]) > 3
-    polygon = data["world/humanoid/markers/support_polygon"].column("LineStrips3D:strips")[-1][1][0]
+    first_paths = strips(next(r for r in robot.rows if strips(r, EE_PATH)), EE_PATH)
+    assert len(strips(last, EE_PATH)) == 5, "one path per leaf link (head, hands, feet)"
+    assert len(strips(last, EE_PATH)[0]) > len(first_paths[0])
+    balance_colors = (0x3CC85AFF, 0xE63C32FF)
+    assert len(next(s for c in balance_colors for s in strips(last, c, 0.004))) > 3, "the CoM path"
+    polygon = next(s for c in balance_colors for s in strips(last, c, 0.006))
     assert len(polygon) == 5 and all(0.0 <= p[2] < 0.01 for p in polygon), polygon
-    assert data["world/humanoid/markers/target"].column("LineStrips3D:strips")
-    assert data["world/humanoid/markers/target/end_effectors"].column("Points3D:positions")
+    assert strips(last, TARGET), "the target pose's skeleton"
 
 
 @pytest.mark.slow
@@ -105,19 +115,19 @@ def test_robots_appear_and_disappear_under_their_namespaces(processes, tmp_path:
     log = stop(processes, viz)
     data = load(rrd)
     assert "robot 'humanoid2': model 'humanoid' with 23 links" in log
-    assert data["world/humanoid2/robot/boxes"].rows, "the second robot was drawn"
+    assert data["world/humanoid2/robot"].rows, "the second robot was drawn"
     clears = data["world/humanoid2"].column("Clear:is_recursive")
     assert clears and clears[0][1] == [True], "the deleted robot's subtree is cleared"
     cleared_at = clears[0][0]
     assert 3.5 <= cleared_at <= 6.0, cleared_at
     # Its pose sits 0.6 m to the side of the first robot, from sim/model_states through tf.
-    torso_y = [c[1] for c in data["world/humanoid2/robot/boxes"].column("Boxes3D:centers")[-1][1]]
+    torso_y = [c[1] for c in data["world/humanoid2/robot"].column("Boxes3D:centers")[-1][1]]
     assert any(abs(y - 0.6) < 1e-3 for y in torso_y), torso_y
     # A trajectory controller with another name is found in the node graph and plotted.
-    assert data["plots/humanoid/legs_controller/joints"].column("Scalars:scalars")
-    assert "plots/humanoid/joint_trajectory_controller/joints" not in data
+    assert data[ROBOT].column("legs_controller:joints")
+    assert not data[ROBOT].column("joint_trajectory_controller:joints")
     # The first robot keeps going after the deletion.
-    last = data["world/humanoid/robot/cylinders"].column("Cylinders3D:centers")[-1][0]
+    last = data[ROBOT].column("Cylinders3D:centers")[-1][0]
     assert last > cleared_at + 0.3
 
 
@@ -150,8 +160,7 @@ def test_bad_input_is_reported_and_the_visualiser_keeps_running(processes, route
     log = stop(processes, viz)
     assert "joint 'j': unknown type 'hinge'" in log
     data = load(rrd)
-    assert data["world/badbot/robot/boxes"].rows, "the valid description was drawn"
-    assert "world/ground" not in data, "ground:=false (the joint_animation tutorial has no ground)"
+    assert data["world/badbot/robot"].rows, "the valid description was drawn"
 
 
 def test_headless_default_serves_the_web_viewer_on_loopback_only(processes) -> None:

@@ -20,7 +20,7 @@ from nodes.urdf.model import rpy_matrix as rpy_to_matrix
 from nodes.viz.blueprint import build_blueprint
 from nodes.viz.ratelimit import RateLimiter
 from nodes.viz.readback import load
-from nodes.viz.scene import WORLD_FRAME, RobotScene, frame_name, log_ground
+from nodes.viz.scene import WORLD_FRAME, RobotScene, frame_name
 from nodes.viz.scene import parse_model as parse_urdf
 from nodes.viz.sink import OutputPlan
 
@@ -191,50 +191,74 @@ def record(tmp_path: Path, body) -> dict:
     return load(path)
 
 
-def test_scene_logs_model_frames_plots_and_clear(tmp_path: Path) -> None:
+def _strips(row: dict, rgba: int) -> list:
+    """The line strips of one colour (packed RGBA) in a row of the robot entity."""
+    return [strip for strip, color in zip(row["LineStrips3D:strips"], row["LineStrips3D:colors"], strict=True)
+            if color == rgba]
+
+
+def test_scene_logs_one_row_per_sample_with_pose_markers_and_plots(tmp_path: Path) -> None:
     def body(recording: rr.RecordingStream) -> None:
-        log_ground(recording)
         scene = RobotScene(recording, "leg", parse_urdf(LEG))
         assert scene.log_model(0.5) == 3
         scene.log_transforms(1.0, [("hip", "thigh", (0, 0, 0), (0, math.sin(0.15), 0, math.cos(0.15))),
                                    ("world", "hip", (1, 2, 3), (0, 0, 0, 1))])
         scene.log_base_pose(1.0, (9, 9, 9), (0, 0, 0, 1))  # ignored: tf already places the root
         scene.log_joint_states(1.0, ["hip_pitch"], [0.2], [0.1], [])
+        scene.update_paths()
         scene.log_joint_states(1.1, ["hip_pitch"], [0.3], [0.1], [])
-        scene.log_paths(1.1)
-        scene.log_paths(1.2)
-        scene.log_controller_state(1.2, "jtc", ["hip_pitch"], [0.4], [0.35])
-        scene.log_target(1.2, "jtc", {"hip_pitch": 1.0})
+        scene.update_paths()
+        scene.log_transforms(1.15, [("hip", "thigh", (0, 0, 0), (0, math.sin(0.15), 0, math.cos(0.15)))])
+        scene.log_target(1.2, "jtc", {"hip_pitch": 1.0})  # both drawn with the next joint_states row
+        scene.log_joint_states(1.2, ["hip_pitch"], [0.3], [0.1], [],
+                               controllers={"jtc": (["hip_pitch"], [0.4], [0.35])}, balance=[0, 0, 0.5, 0, 0, 1])
         scene.clear(2.0)
 
     data = record(tmp_path, body)
-    # One entity per primitive kind, each visual an instance placed in the world through the tf tree.
-    cylinders = data["world/leg/robot/cylinders"]
-    assert cylinders.rows[0]["Cylinders3D:colors"] == [0x0000FF80]
-    assert [r["sim_time"] for r in cylinders.rows] == [0.5, 1.0]
-    first, moved = (r["Cylinders3D:centers"][0] for r in cylinders.rows)
+    assert not [name for name in data if name.startswith("plots")], "no plot entities: plots are robot columns"
+    robot = data["world/leg/robot"]
+    # One row per call that draws: the model, the first tf, then only the joint_states samples (a tf update
+    # or a new target in between waits for the next sample: one kind of row, one chunk per flush).
+    assert [r["sim_time"] for r in robot.rows] == [0.5, 1.0, 1.0, 1.1, 1.2]
+    # Each primitive an instance of its archetype, placed in the world through the tf tree, URDF colours.
+    assert robot.rows[0]["Cylinders3D:colors"] == [0x0000FF80]
+    first, moved = (robot.rows[i]["Cylinders3D:centers"][0] for i in (0, 1))
     assert np.allclose(first, [0, 0, -0.2], atol=1e-6), "at the origin until a pose arrives"
     # hip at (1, 2, 3), thigh pitched 0.3 rad: the cylinder's centre 0.2 m down the pitched thigh
     assert np.allclose(moved, [1 - 0.2 * math.sin(0.3), 2, 3 - 0.2 * math.cos(0.3)], atol=1e-5)
-    foot = data["world/leg/robot/spheres"].rows[-1]["Ellipsoids3D:centers"][0]
-    assert np.allclose(foot, [1 - 0.4 * math.sin(0.3), 2, 3 - 0.4 * math.cos(0.3)], atol=1e-5)
-    assert data["world/leg/robot/boxes"].rows[-1]["Boxes3D:centers"][0] == pytest.approx([1.0, 2.0, 3.0])
-    # Plots: one entity per quantity and joint group (a small robot is one group), short legend labels.
-    positions = data["plots/leg/joint_states/position/joints"]
-    assert positions.static["SeriesLines:names"] == ["hip_pitch"]
-    assert [v for _, v in positions.column("Scalars:scalars")] == [[0.2], [0.3]]
-    effort = data.get("plots/leg/joint_states/effort/joints")
-    assert effort is None or not effort.rows
-    commanded = data["plots/leg/jtc/joints"]
-    assert commanded.static["SeriesLines:names"] == ["hip_pitch ref", "hip_pitch"]
-    assert commanded.column("Scalars:scalars") == [(1.2, [0.4, 0.35])]
-    # The foot path starts at the world pose of the hip (1, 2, 3) + the pitched leg.
-    strips = data["world/leg/markers/ee_paths"].column("LineStrips3D:strips")[-1][1]
-    assert len(strips) == 1 and len(strips[0]) == 2
-    assert np.allclose(strips[0][-1], [1 - 0.4 * math.sin(0.3), 2, 3 - 0.4 * math.cos(0.3)], atol=1e-5)
-    target = data["world/leg/markers/target/end_effectors"].column("Points3D:positions")[-1][1]
-    assert np.allclose(target[0], [1 - 0.4 * math.sin(1.0), 2, 3 - 0.4 * math.cos(1.0)], atol=1e-5)
+    last = robot.rows[-1]
+    assert np.allclose(last["Ellipsoids3D:centers"][0], [1 - 0.4 * math.sin(0.3), 2, 3 - 0.4 * math.cos(0.3)],
+                       atol=1e-5)
+    assert last["Boxes3D:centers"][0] == pytest.approx([1.0, 2.0, 3.0])
+    # Plotted values: columns per quantity and joint group (a small robot is one group, "joints").
+    assert robot.column("position:joints") == [(1.0, [0.2]), (1.1, [0.3]), (1.2, [0.3])]
+    assert robot.column("velocity:joints")[-1] == (1.2, [0.1])
+    assert robot.column("effort:joints") == [], "no efforts in the message: no column"
+    assert robot.column("jtc:joints") == [(1.2, [0.4, 0.35])], "reference, actual per joint"
+    assert robot.column("balance:values") == [(1.2, [0.0, 0.0, 0.5, 0.0, 0.0, 1.0])]
+    # Markers in the same row: the foot path from the world pose of the hip (1, 2, 3) + the pitched leg, and
+    # the target pose's skeleton with its end effector.
+    [path] = _strips(last, 0xE63CC8FF)
+    assert len(path) == 2
+    assert np.allclose(path[-1], [1 - 0.4 * math.sin(0.3), 2, 3 - 0.4 * math.cos(0.3)], atol=1e-5)
+    assert len(_strips(last, 0xFF8C00A0)) == 2, "target skeleton: a segment per joint"
+    assert np.allclose(last["Points3D:positions"][-1], [1 - 0.4 * math.sin(1.0), 2, 3 - 0.4 * math.cos(1.0)],
+                       atol=1e-5)
     assert data["world/leg"].column("Clear:is_recursive") == [(2.0, [True])]
+
+
+def test_an_idle_robot_is_drawn_again_at_key_frames(tmp_path: Path) -> None:
+    """Without joint_states rows (a paused simulation), a key frame re-logs the robot for late viewers."""
+    def body(recording: rr.RecordingStream) -> None:
+        scene = RobotScene(recording, "leg", parse_urdf(LEG))
+        scene.log_model(0.5)
+        scene.refresh(0.6, period=60.0)  # drawn just now: nothing
+        scene.refresh(0.7, period=0.0)
+        scene.log_joint_states(0.8, ["hip_pitch"], [0.2], [], [])
+        scene.refresh(0.9, period=60.0)
+
+    rows = record(tmp_path, body)["world/leg/robot"].rows
+    assert [r["sim_time"] for r in rows] == [0.5, 0.7, 0.8]
 
 
 def test_wall_clock_stamps_go_on_the_wall_time_timeline(tmp_path: Path) -> None:
@@ -244,9 +268,9 @@ def test_wall_clock_stamps_go_on_the_wall_time_timeline(tmp_path: Path) -> None:
         scene.log_joint_states(3.0, ["hip_pitch"], [0.1], [], [])
         scene.log_joint_states(1_795_000_000.5, ["hip_pitch"], [0.2], [], [])
 
-    rows = record(tmp_path, body)["plots/leg/joint_states/position/joints"].rows
-    [sim_row] = [r for r in rows if r["Scalars:scalars"] == [0.1]]
-    [wall_row] = [r for r in rows if r["Scalars:scalars"] == [0.2]]
+    rows = record(tmp_path, body)["world/leg/robot"].rows
+    [sim_row] = [r for r in rows if r["position:joints"] == [0.1]]
+    [wall_row] = [r for r in rows if r["position:joints"] == [0.2]]
     assert sim_row["sim_time"] == 3.0
     assert "sim_time" not in wall_row and wall_row["wall_time"] == pytest.approx(1_795_000_000.5)
 
@@ -284,15 +308,16 @@ def test_scene_rejects_unknown_end_effectors() -> None:
 def test_balance_markers_sit_on_the_ground(tmp_path: Path) -> None:
     def body(recording: rr.RecordingStream) -> None:
         scene = RobotScene(recording, "leg", parse_urdf(LEG))
-        scene.log_balance(1.0, (0.01, 0.0, 0.8), (0.02, 0.0), False,
-                          [(0.1, 0.1, 0.0), (0.1, -0.1, 0.0), (-0.1, -0.1, 0.0)])
+        scene.update_balance((0.01, 0.0, 0.8), (0.02, 0.0), False,
+                             [(0.1, 0.1, 0.0), (0.1, -0.1, 0.0), (-0.1, -0.1, 0.0)])
+        scene.log_joint_states(1.0, ["hip_pitch"], [0.0], [], [], balance=[0.01, 0.0, 0.8, 0.02, 0.0, 0.0])
 
-    data = record(tmp_path, body)
-    ring = data["world/leg/markers/support_polygon"].column("LineStrips3D:strips")[0][1][0]
+    row = record(tmp_path, body)["world/leg/robot"].rows[0]
+    [ring] = _strips(row, 0xE63C32FF)  # red: not balanced
     assert len(ring) == 4 and ring[0] == ring[-1], "closed polygon"
-    assert data["plots/leg/balance"].column("Scalars:scalars")[0][1][5] == 0.0, "is_balanced is the 6th series"
-    points = data["world/leg/markers/com"].column("Points3D:positions")[0][1]
-    assert np.allclose(points[2], [0.02, 0.0, 0.003], atol=1e-6), "the ZMP on the ground"
+    assert all(0.0 < p[2] < 0.01 for p in ring), "on the ground"
+    assert row["balance:values"][5] == 0.0, "is_balanced is the 6th series"
+    assert np.allclose(row["Points3D:positions"][2], [0.02, 0.0, 0.003], atol=1e-6), "the ZMP on the ground"
 
 
 # -- outputs and layout ---------------------------------------------------------------------------------
@@ -327,31 +352,63 @@ def _blueprint_views(item: Any) -> list[Any]:
     return [view for child in children or [] for view in _blueprint_views(child)]
 
 
+def _mapping(view: Any) -> tuple[str, str, list[str]]:
+    """(entity, source column, legend names) of a time series view's one visualizer."""
+    [(entity, [visualizer])] = view.visualizer_overrides.items()
+    [mapping] = visualizer.mappings
+    names = next(b.as_arrow_array().to_pylist() for b in visualizer.overrides
+                 if str(b.component_descriptor()).endswith("names"))
+    return str(entity), mapping.source_component, names
+
+
 def test_blueprint_has_a_plot_per_limb_group_and_follows_the_newest_data() -> None:
     import rerun.blueprint as rrb
 
+    from nodes.share import robot_file
     from nodes.viz.blueprint import RobotLayout
+    from nodes.viz.scene import plot_groups
 
     empty = _blueprint_side(build_blueprint())  # nothing seen yet: one plot of everything logged
     assert isinstance(empty, rrb.TimeSeriesView) and empty.origin == "plots"
 
-    groups = ["left_leg", "right_leg", "left_arm", "right_arm", "torso_head"]
+    names = [j.name for j in parse_urdf(robot_file("humanoid").read_text()).movable_joints()]
+    groups = plot_groups(names)
+    legs = [g for g in groups if g.part.endswith("leg")]
     one = _blueprint_side(build_blueprint({"humanoid": RobotLayout(
-        groups, {"joint_trajectory_controller": ["left_leg", "right_leg"]}, True)}))
+        groups, {"joint_trajectory_controller": legs}, True)}))
     assert one.name == "humanoid" and isinstance(one, rrb.Tabs)
     tabs = {tab.name: _blueprint_views(tab) for tab in one.contents}
     assert list(tabs) == ["positions", "velocities", "efforts", "joint_trajectory_controller", "balance"]
-    assert [str(v.origin) for v in tabs["positions"]] == [f"plots/humanoid/joint_states/position/{g}" for g in groups]
-    assert len(tabs["joint_trajectory_controller"]) == 2 and len(tabs["balance"]) == 1
+    parts = ["left_leg", "right_leg", "left_arm", "right_arm", "torso_head"]
+    # Every plot reads a column of the robot entity and names its series (short labels, <= 8 per plot).
+    assert [_mapping(v)[:2] for v in tabs["positions"]] == [("world/humanoid/robot", f"position:{p}") for p in parts]
+    assert _mapping(tabs["positions"][0])[2] == ["hip_yaw", "hip_roll", "hip_pitch", "knee", "ankle_pitch",
+                                                 "ankle_roll"]
+    assert [_mapping(v)[1] for v in tabs["efforts"]] == [f"effort:{p}" for p in parts]
+    controller = [_mapping(v) for v in tabs["joint_trajectory_controller"]]
+    assert [c[1] for c in controller] == ["joint_trajectory_controller:left_leg", "joint_trajectory_controller:right_leg"]
+    assert controller[0][2][:2] == ["hip_yaw ref", "hip_yaw"]
+    assert _mapping(tabs["balance"][0])[1:] == ("balance:values", ["CoM x", "CoM y", "CoM z", "ZMP x", "ZMP y",
+                                                                   "balanced"])
 
-    two = _blueprint_side(build_blueprint({"a": RobotLayout(), "b": RobotLayout(["joints"], {"jtc": ["joints"]}, True)}))
+    two = _blueprint_side(build_blueprint({"a": RobotLayout(), "b": RobotLayout(
+        plot_groups(["j"]), {"jtc": plot_groups(["j"])}, True)}))
     assert isinstance(two, rrb.Tabs)
     tabs = {tab.name: _blueprint_views(tab) for tab in two.contents}
     assert set(tabs) == {"a", "b"}
     for ns, views in tabs.items():
-        assert views and all(str(v.origin).startswith(f"plots/{ns}") for v in views), (ns, [v.origin for v in views])
+        assert views and all(str(v.origin) == f"world/{ns}/robot" for v in views), (ns, [v.origin for v in views])
     a_titles = " | ".join(str(v.name) for v in tabs["a"])
     assert "jtc" not in a_titles and "balance" not in a_titles, a_titles  # only what robot a has
+
+
+def test_the_ground_is_the_viewers_grid_in_the_layout() -> None:
+    """No ground data for the web server to drop from a short history: the 3-D view draws its own grid."""
+    for ground in (True, False):
+        scene = build_blueprint(ground=ground).root_container.contents[0]
+        grid = scene.properties["LineGrid3D"]
+        assert grid.visible.as_arrow_array().to_pylist() == [ground]
+        assert grid.spacing.as_arrow_array().to_pylist() == [0.5]
 
 
 def test_path_buffer_keeps_the_newest_points_in_order() -> None:
