@@ -156,9 +156,12 @@ class Output:
         self.server = subprocess.Popen(
             [*rerun_cli(), "--serve-web", "--bind", self.plan.bind, "--port", str(grpc_port),
              "--web-viewer-port", str(web_port), "--server-memory-limit", self.plan.server_history],
-            # Same process group as the visualiser: a launcher that kills the group also stops the server;
-            # on Linux the server also gets SIGTERM if the visualiser dies without cleaning up (kill -9).
+            # Its own session: a Ctrl-C (SIGINT to the terminal's process group) or a launcher stopping the
+            # group reaches the visualiser only, which sends what it still holds and then stops the server
+            # (``close``); were the server stopped first, the SDK would log "gRPC connection severed" errors.
+            # On Linux the server also gets SIGTERM if the visualiser dies without cleaning up (kill -9).
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=_die_with_parent,
+            start_new_session=True,
         )
         if not wait_for_port(grpc_port, 20.0) or self.server.poll() is not None:
             self.close()
@@ -170,6 +173,9 @@ class Output:
     def close(self) -> None:
         try:
             self.recording.flush()
+            if self.server is not None:
+                # Let go of the gRPC sink before its server stops (rows logged later are buffered, not sent).
+                self.recording.disconnect()
         except Exception:  # noqa: BLE001 - shutting down: nothing useful to do with a flush error
             pass
         if self.server is not None and self.server.poll() is None:
