@@ -77,6 +77,11 @@ def run_node(factory: Callable[..., Any], argv: list[str] | None = None, *,
     except (ParameterError, ValueError, FileNotFoundError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        # Ctrl-C while the node was still starting (a slow machine, a long import or wait): a short line,
+        # not a traceback; the half-built node has closed its session on the way out
+        print(f"{default_name}: interrupted while starting", file=sys.stderr)
+        return 130
 
     def stop(signum: int, _frame: Any) -> None:
         node.logger.info(f"received {signal.Signals(signum).name}, shutting down")

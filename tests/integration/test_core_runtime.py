@@ -264,6 +264,39 @@ def test_bad_parameter_exits_2_with_the_reason_and_no_hang(router) -> None:
     assert "parameter 'rate': 1.0 is below the minimum 2.0" in result.stderr
 
 
+SLOW_START_NODE = """
+import time
+from nodes.core import Node, run_node
+class SlowStart(Node):
+    def __init__(self, **kw):
+        super().__init__("slow_start", **kw)
+        print("starting", flush=True)
+        time.sleep(60)   # still in the constructor when Ctrl-C comes
+raise SystemExit(run_node(SlowStart))
+"""
+
+
+def test_ctrl_c_while_a_node_starts_ends_it_quietly(router, client) -> None:
+    """Ctrl-C during a slow start (the README test's streaming examples on a loaded machine) ends the process
+    with a short line and status 130, no traceback, and the half-built node leaves the graph."""
+    env = dict(os.environ, ZENOH_CONNECT=router, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, "-c", SLOW_START_NODE], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=env, cwd=ROOT)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline().strip() == "starting"
+        wait_until(lambda: "/slow_start" in graph.node_names(client.session, 0.3), timeout=10,
+                   message="slow_start in the graph")
+        proc.send_signal(signal.SIGINT)
+        _, stderr = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr and "interrupted while starting" in stderr, stderr
+    wait_until(lambda: "/slow_start" not in graph.node_names(client.session, 0.3), timeout=5,
+               message="slow_start gone from the graph")
+
+
 def test_publisher_knows_whether_anyone_listens(router, client) -> None:
     JointState = msgs.get_type("sensor_msgs/msg/JointState")
     pub = client.create_publisher(JointState, "/lonely/joint_states")
