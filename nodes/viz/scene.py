@@ -211,7 +211,7 @@ def robot_entity(namespace: str) -> str:
 
 
 def series_component(kind: str, part: str) -> str:
-    """The column a plot reads in ``plots/<ns>/joints``: ``position:left_leg``, ``<controller>:left_leg``."""
+    """The column a plot reads in ``world/<ns>/robot``: ``position:left_leg``, ``<controller>:left_leg``."""
     return f"{kind}:{part}"
 
 
