@@ -62,6 +62,15 @@ class Latest:
     decoded: Any = None
 
 
+@dataclass
+class LatchedStream:
+    """A stream of which only the newest message is kept (``Visualiser.latch``)."""
+
+    msg_type: Any
+    key: str  # for log lines, without the leading slash
+    newest: Latest | None = None
+
+
 def stamp_seconds(stamp: Any) -> float:
     return stamp.sec + stamp.nanosec * 1e-9
 
@@ -81,7 +90,7 @@ class RobotView:
     tf_seen: bool = False
     pending_static: list = field(default_factory=list)  # tf_static rows that came before the scene
     limits: dict[str, RateLimiter] = field(default_factory=dict)
-    latest: dict[str, Latest] = field(default_factory=dict)  # "humanoid_state", "controller:<name>"
+    latest: dict[str, LatchedStream] = field(default_factory=dict)  # "humanoid_state", "controller:<name>"
     last_positions: dict[str, float] = field(default_factory=dict)
     first_state: float = 0.0  # monotonic time of the first joint_states with a model
 
@@ -186,30 +195,32 @@ class Visualiser(Node):
 
         return self.create_subscription(msg_type, key, on_payload, inline=True, raw=True)
 
-    def latch(self, robot: RobotView, slot: str, key: str, on_arrival=None) -> Subscription:
+    def latch(self, robot: RobotView, slot: str, msg_type: Any, key: str, on_arrival=None) -> Subscription:
         """A raw subscription that only keeps the newest payload in ``robot.latest[slot]``: controller_state
         and humanoid_state come at the control rate and are decoded only when a plot row takes them, so their
         values share the row (and the viewer's chunk) of the joint_states sample they go with."""
+        stream = robot.latest[slot] = LatchedStream(msg_type, key.lstrip("/"))
 
         def on_payload(payload: bytes) -> None:
-            # No lock: replacing a dict entry is atomic, and the reader copes with either payload.
-            robot.latest[slot] = Latest(time.monotonic(), payload)
+            # No lock: replacing an attribute is atomic, and the reader copes with either payload.
+            stream.newest = Latest(time.monotonic(), payload)
             if on_arrival is not None:
                 on_arrival()
 
-        msg_type = HumanoidState if slot == "humanoid_state" else ControllerState
         return self.create_subscription(msg_type, key, on_payload, inline=True, raw=True)
 
-    def latest(self, robot: RobotView, slot: str, msg_type: Any, key: str) -> Any:
+    def latest(self, robot: RobotView, slot: str) -> Any:
         """The newest message of a latched stream, decoded once; None when stale, absent or undecodable."""
-        entry = robot.latest.get(slot)
+        stream = robot.latest.get(slot)
+        entry = stream.newest if stream is not None else None
         if entry is None or time.monotonic() - entry.arrived > LATEST_FRESH:
             return None
         if entry.decoded is None:
             try:
-                entry.decoded = msgs.decode(msg_type, entry.payload)
+                entry.decoded = msgs.decode(stream.msg_type, entry.payload)
             except msgs.DecodeError as exc:
-                self.logger.warn_throttle(5.0, f"dropped a message on '{key}': {exc}", key=f"dec:/{key}")
+                self.logger.warn_throttle(5.0, f"dropped a message on '{stream.key}': {exc}",
+                                          key=f"dec:/{stream.key}")
                 entry.decoded = False
         return None if entry.decoded is False else entry.decoded
 
@@ -229,7 +240,7 @@ class Visualiser(Node):
             sub(TFMessage, f"/{ns}/tf_static", lambda m, r=robot: self.on_tf(r, m, static=True)),
             sub(JointState, f"/{ns}/joint_states", lambda m, r=robot: self.on_joint_states(r, m),
                 limits["joint_states"]),
-            self.latch(robot, "humanoid_state", f"/{ns}/humanoid_state",
+            self.latch(robot, "humanoid_state", HumanoidState, f"/{ns}/humanoid_state",
                        on_arrival=lambda r=robot: setattr(r, "has_balance", True)),
         ]
         for controller in self.controller_names:
@@ -244,7 +255,7 @@ class Visualiser(Node):
             return
         base = f"/{robot.namespace}/{controller}"
         robot.controllers[controller] = [
-            self.latch(robot, f"controller:{controller}", f"{base}/controller_state"),
+            self.latch(robot, f"controller:{controller}", ControllerState, f"{base}/controller_state"),
             self.subscribe(JointTrajectory, f"{base}/joint_trajectory",
                            lambda m, r=robot, c=controller: self.on_trajectory(r, c, m)),
         ]
@@ -436,7 +447,7 @@ class Visualiser(Node):
         values = {}
         for controller in robot.controllers:
             key = f"{robot.namespace}/{controller}/controller_state"
-            msg = self.latest(robot, f"controller:{controller}", ControllerState, key)
+            msg = self.latest(robot, f"controller:{controller}")
             if msg is None:
                 continue
             # control_msgs (Jazzy) JointTrajectoryControllerState: reference (commanded) and feedback (measured).
@@ -451,7 +462,7 @@ class Visualiser(Node):
     def balance(self, robot: RobotView) -> tuple[list[float], tuple] | None:
         """The latest humanoid_state as the balance plot's values (CoM x y z, ZMP x y, is_balanced) and the
         balance markers' arguments; None without a fresh, finite one."""
-        msg = self.latest(robot, "humanoid_state", HumanoidState, f"{robot.namespace}/humanoid_state")
+        msg = self.latest(robot, "humanoid_state")
         if msg is None:
             return None
         com = (msg.center_of_mass.x, msg.center_of_mass.y, msg.center_of_mass.z)
