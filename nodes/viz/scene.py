@@ -237,6 +237,19 @@ def visual_archetype(visual: Visual, mesh_root: Path | None = None) -> rr.AsComp
     return rr.Asset3D(path=path, albedo_factor=color[0])
 
 
+def shape_fields(visuals: Sequence[tuple[str, Visual]]) -> dict[str, np.ndarray]:
+    """What every row repeats about these primitive visuals (one kind): their origins in their links, sizes
+    and colours, as arrays indexed like ``visuals``."""
+    return {
+        "origins": np.array([v.origin for _, v in visuals], float).reshape(-1, 4, 4),
+        "colors": np.array([rgba8(v.rgba) for _, v in visuals], np.uint8).reshape(-1, 4),
+        "half_sizes": np.array([[x / 2 for x in v.size] if v.kind == "box" else [v.radius] * 3
+                                for _, v in visuals], float).reshape(-1, 3),
+        "lengths": np.array([v.length if v.kind == "cylinder" else 0.0 for _, v in visuals], float),
+        "radii": np.array([v.radius if v.kind == "cylinder" else 0.0 for _, v in visuals], float),
+    }
+
+
 class RobotScene:
     """The Rerun side of one robot: geometry, frames, plots and markers under its namespace."""
 
@@ -263,6 +276,7 @@ class RobotScene:
         self.pose_limiter = pose_limiter
         self.parent_joint = {child: i for i, child in enumerate(self.fk.child_names)}  # link -> fk joint index
         self.shapes: dict[str, list[tuple[str, Visual]]] = {}
+        self.shape_fields: dict[str, dict[str, np.ndarray]] = {}  # per kind: each visual's origin, size, colour
         self.meshes: list[tuple[str, np.ndarray, str, rr.AsComponents]] = []
         self.base_pose = np.eye(4)
         self.base_from_tf = False  # once tf names the root's parent, model_states no longer places it
@@ -298,6 +312,7 @@ class RobotScene:
                     self.skipped_meshes.append(visual.filename)
                     continue
                 self.meshes.append((link, visual.origin, f"{self.world}/links/{link}/visual_{index}", archetype))
+        self.shape_fields = {kind: shape_fields(visuals) for kind, visuals in self.shapes.items()}
         if not self.base_from_tf and self.root_frame not in self.frames:
             # Until a pose arrives, the robot stands at the origin rather than nowhere.
             self.frames[self.root_frame] = (WORLD_FRAME, np.eye(4))
@@ -396,24 +411,26 @@ class RobotScene:
             return poses[link]
 
         # Every kind on every row, empty when nothing of it is placed: rows with the same components are
-        # batched into one chunk per flush.
+        # batched into one chunk per flush. Sizes and colours come from ``shape_fields`` (fixed per model) and
+        # the poses are converted in one vectorised call: this is the visualiser's per-row cost.
         archetypes = []
         for kind, visuals in self.shapes.items():
-            placed = [(link_pose(link), visual) for link, visual in visuals]
-            placed = [(pose @ visual.origin, visual) for pose, visual in placed if pose is not None]
-            matrices = np.stack([m for m, _ in placed]) if placed else np.zeros((0, 4, 4))
+            link_poses = [link_pose(link) for link, _ in visuals]
+            placed = [i for i, pose in enumerate(link_poses) if pose is not None]
+            fields = self.shape_fields[kind]
+            if len(placed) < len(visuals):
+                fields = {name: values[placed] for name, values in fields.items()}
+            matrices = (np.stack([link_poses[i] for i in placed]) @ fields["origins"] if placed
+                        else np.zeros((0, 4, 4)))
             centers = matrices[:, :3, 3]
-            quats = [matrix_to_quaternion(m[:3, :3]) for m in matrices]
-            colors = [rgba8(v.rgba) for _, v in placed]
+            quats = matrix_to_quaternion(matrices[:, :3, :3]) if placed else np.zeros((0, 4))
+            common = {"centers": centers, "quaternions": quats, "colors": fields["colors"], "fill_mode": SOLID}
             if kind == "box":
-                archetypes.append(rr.Boxes3D(half_sizes=[[x / 2 for x in v.size] for _, v in placed] or np.zeros((0, 3)),
-                                             centers=centers, quaternions=quats, colors=colors, fill_mode=SOLID))
+                archetypes.append(rr.Boxes3D(half_sizes=fields["half_sizes"], **common))
             elif kind == "cylinder":  # URDF and Rerun cylinders both run along local z
-                archetypes.append(rr.Cylinders3D(lengths=[v.length for _, v in placed], radii=[v.radius for _, v in placed],
-                                                 centers=centers, quaternions=quats, colors=colors, fill_mode=SOLID))
+                archetypes.append(rr.Cylinders3D(lengths=fields["lengths"], radii=fields["radii"], **common))
             else:
-                archetypes.append(rr.Ellipsoids3D(half_sizes=[[v.radius] * 3 for _, v in placed] or np.zeros((0, 3)),
-                                                  centers=centers, quaternions=quats, colors=colors, fill_mode=SOLID))
+                archetypes.append(rr.Ellipsoids3D(half_sizes=fields["half_sizes"], **common))
         archetypes += self.marker_archetypes()
         archetypes += [rr.DynamicArchetype(kind, components=parts) for kind, parts in (plots or {}).items()]
         self.recording.log(self.entity, *archetypes)
