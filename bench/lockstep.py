@@ -156,14 +156,15 @@ def _node_label(cmd: list[str]) -> str:
     return Path(cmd[0]).name if cmd else "?"
 
 
-def fullstack(seconds: float, physics_rate: float) -> dict:
+def fullstack(seconds: float, physics_rate: float, launch_file: str = "humanoid.yaml",
+              launch_args: tuple[str, ...] = ()) -> dict:
     port = free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
     env.pop("ZENOH_CONFIG", None)
     env.pop("ZENOH_CONNECT", None)
     launch = subprocess.Popen(
-        [sys.executable, "-m", "launch", "humanoid.yaml", "mode:=lockstep", "gui:=false", f"zenoh_port:={port}",
+        [sys.executable, "-m", "launch", launch_file, "mode:=lockstep", "gui:=false", f"zenoh_port:={port}", *launch_args,
          "--log-dir", str(Path(os.environ.get("TMPDIR", "/tmp")) / f"bench-lockstep-{port}")],
         cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     try:
@@ -198,13 +199,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=8.0, help="wall seconds measured per full-stack run")
     parser.add_argument("--inprocess-steps", type=int, default=4000)
     parser.add_argument("--physics-rate", type=float, default=1000.0, help="must match config/sim.yaml")
+    parser.add_argument("--launch", default="humanoid.yaml", help="launch file of the full stack (experiments)")
+    parser.add_argument("launch_args", nargs="*", metavar="NAME:=VALUE",
+                        help="extra launch arguments, e.g. commander:=none (experiments)")
     args = parser.parse_args(argv)
 
     load_before = os.getloadavg()[0]
     rows = []
     for run in range(args.runs):
         ceiling, height = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
-        full = fullstack(args.seconds, args.physics_rate)
+        full = fullstack(args.seconds, args.physics_rate, args.launch, tuple(args.launch_args))
         ceiling_after, _ = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
         ceiling = statistics.mean([ceiling, ceiling_after])   # bracket the full-stack run
         rows.append({"inprocess": ceiling, "fullstack": full["steps_per_s"], "ratio": full["steps_per_s"] / ceiling,

@@ -52,7 +52,7 @@ def to_dict(msg: Any) -> dict[str, Any]:
 
 
 def encode(msg: Any) -> bytes:
-    return msgpack.packb(compiled.encoder(msg._type)(msg), use_bin_type=True)
+    return compiled.packb(compiled.encoder(msg._type)(msg))
 
 
 # ---------------------------------------------------------------- decode

@@ -26,6 +26,18 @@ import msgpack
 from msgs.idl import EQUAL_LENGTH_RULES, FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec, MsgSpec
 from msgs.registry import default_value, get_class, get_spec
 
+# msgpack's Packer starts with a 256 KiB buffer, which glibc serves with mmap and releases with munmap for
+# every message packed on a Zenoh callback thread (seen with strace in the controller manager and the
+# simulator: one mmap/munmap pair, page faults and a TLB shootdown per control period). Messages are a
+# few KiB; the buffer still grows when one is larger.
+_PACK_BUFFER_BYTES = 16 * 1024
+
+
+def packb(obj: Any) -> bytes:
+    """msgpack bytes of plain data (str as str, bytes as bin), with a heap-sized first buffer."""
+    return msgpack.packb(obj, buf_size=_PACK_BUFFER_BYTES)
+
+
 _FLOAT_ONLY = frozenset({float})
 _STR_ONLY = frozenset({str})
 _INF = math.inf
@@ -273,10 +285,9 @@ def _default_map(f: FieldSpec) -> Callable[[], Any]:
 def packer(type_name: str) -> Callable[..., bytes]:
     """``pack(**fields)`` -> msgpack bytes of the complete map (see ``builder``)."""
     build = builder(type_name)
-    packb = msgpack.packb   # a shared Packer is not thread-safe
 
     def packed(**fields: Any) -> bytes:
-        return packb(build(**fields))
+        return packb(build(**fields))   # a Packer per message: a shared one is not thread-safe
 
     packed.__doc__ = f"msgpack bytes of a {type_name} from its fields"
     return packed

@@ -13,8 +13,11 @@ from typing import Any
 
 import msgpack
 
+import msgs
 from nodes.core import Node, run_node
 from nodes.sim.interfaces import HardwareCommand, HardwareState
+
+_pack_command = msgs.packer("zenroid_msgs/msg/HardwareCommand")
 
 Policy = Callable[[dict[str, Any]], dict[str, float]]
 
@@ -55,10 +58,8 @@ class HardwareClient:
                 if self._hold is None:
                     self._hold = list(state["position"])
                 names, values = state["name"], self._hold
-        self._pub.publish_raw(msgpack.packb({
-            "step": state["step"], "update_rate": self.update_rate, "name": names,
-            "interface": ["position"] * len(names), "value": values,
-        }, use_bin_type=True))
+        self._pub.publish_raw(_pack_command(step=state["step"], update_rate=self.update_rate, name=names,
+                                            interface=["position"] * len(names), value=values))
 
     def reset_recording(self) -> None:
         with self._lock:

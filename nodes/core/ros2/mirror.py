@@ -17,6 +17,7 @@ import zenoh
 import zenoh.ext
 
 from msgs import cdr
+from msgs.compiled import packb
 from nodes.core.ros2 import attachment, names
 from nodes.core.ros2.graph import RosGraph
 from nodes.core.session import max_payload_bytes
@@ -44,7 +45,7 @@ def _to_cdr(type_name: str, msgpack_payload: bytes) -> bytes:
 
 
 def _to_msgpack(type_name: str, cdr_payload: bytes) -> bytes:
-    return msgpack.packb(cdr.decode(type_name, cdr_payload), use_bin_type=True)
+    return packb(cdr.decode(type_name, cdr_payload))
 
 
 class _Entity:
