@@ -142,11 +142,17 @@ class Subscription:
     ``max_rate`` (Hz): wake at most that often and take every message that arrived meanwhile at once.
     Zenoh keeps them in its own ring buffer (the newest ``backlog``), so a fast topic such as a 1 kHz
     ``joint_states`` costs a consumer that only needs 50 updates a second 50 wake-ups, not 1000.
+
+    ``pulled=True``: no thread delivers anything. Messages wait in Zenoh's ring buffer (the newest
+    ``backlog``) until the owner's thread takes them with ``take_pending()`` or ``wait(timeout)``, and the
+    callback runs there. For a thread that holds the GIL for long stretches (the simulator's physics, in
+    C++): a delivering thread would wait for the GIL until the physics ends and then hand it back and
+    forth; pulling costs no thread hand-off at all.
     """
 
     def __init__(self, node: NodeRuntime, msg_type: Any, key: str, callback: Callable[[Any], None] | None, *,
                  inline: bool = False, raw: bool = False, with_key: bool = False, with_source: bool = False,
-                 max_rate: float | None = None, backlog: int = 256) -> None:
+                 max_rate: float | None = None, backlog: int = 256, pulled: bool = False) -> None:
         self.node = node
         self.msg_type = msg_type
         self.key = key
@@ -160,7 +166,13 @@ class Subscription:
         self.max_payload = max_payload_bytes()   # bigger messages are dropped (logged) before decoding
         if max_rate is not None and not max_rate > 0:
             raise ValueError(f"max_rate must be > 0 Hz, got {max_rate}")
-        if max_rate is None:
+        self.pulled = pulled
+        self._wake_pub: Any = None
+        self._wake_at: float | None = None   # pulled: monotonic deadline of the wait in progress
+        self.closed = False
+        if pulled:
+            self._sub = node.session.declare_subscriber(key, zenoh.handlers.RingChannel(backlog))
+        elif max_rate is None:
             self._sub = node.session.declare_subscriber(key, self.handle_sample)
         else:
             self._sub = node.session.declare_subscriber(key, zenoh.handlers.RingChannel(backlog))
@@ -168,6 +180,59 @@ class Subscription:
                              name=f"sub:{key}").start()
         self._token = node.presence.token("sub", key, msg_type._type if msg_type else "*")
         self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
+
+    def take_pending(self) -> int:
+        """Pulled: handle every message that has arrived, on this thread; returns how many."""
+        count = 0
+        while (sample := self._sub.try_recv()) is not None:
+            if not _is_wake(sample):
+                self.handle_sample(sample)
+                count += 1
+        return count
+
+    def wait(self, timeout: float) -> int:
+        """Pulled: block (without the GIL) until a message arrives or ``timeout`` s pass; handles what
+        arrived and returns how many (0: timed out, or the subscription was closed).
+
+        Zenoh's channel has no timed receive, so a watchdog thread ends an overdue wait with an empty
+        message that only this session sees (``Locality.SESSION_LOCAL``)."""
+        if self.closed:
+            return 0
+        count = self.take_pending()
+        if count:
+            return count
+        self._arm_watchdog(timeout)
+        try:
+            sample = self._sub.recv()
+        except zenoh.ZError:
+            return 0   # undeclared while waiting (the node is closing)
+        finally:
+            self._wake_at = None
+        if self.closed:
+            return 0
+        if not _is_wake(sample):
+            self.handle_sample(sample)
+            count = 1
+        return count + self.take_pending()
+
+    def _arm_watchdog(self, timeout: float) -> None:
+        if self._wake_pub is None:
+            self._wake_pub = self.node.session.declare_publisher(
+                self.key, allowed_destination=zenoh.Locality.SESSION_LOCAL)
+            threading.Thread(target=self._watch, daemon=True, name=f"wait:{self.key}").start()
+        self._wake_at = time.monotonic() + timeout
+
+    def _watch(self) -> None:
+        """Wake the owner's ``wait`` once its deadline has passed (checked every 10 ms: timeouts are ~1 s)."""
+        try:
+            while not (self.closed or self.node.closed):
+                time.sleep(_WAKE_CHECK_S)
+                deadline = self._wake_at
+                if deadline is not None and time.monotonic() >= deadline:
+                    self._wake_at = None
+                    self._wake_pub.put(b"", attachment=_WAKE)
+        except zenoh.ZError:
+            return   # the session closed
 
     def _drain(self, period: float) -> None:
         try:
@@ -217,7 +282,28 @@ class Subscription:
         self._token.undeclare()
         if self._mirror is not None:
             self._mirror.close()
-        self._sub.undeclare()
+        self.closed = True
+        if self._wake_pub is None:
+            self._sub.undeclare()
+            return
+        self._wake_pub.put(b"", attachment=_WAKE)   # end a wait in progress: it holds the channel
+        for _ in range(500):
+            try:
+                self._sub.undeclare()
+                break
+            except RuntimeError:   # "Already borrowed": the waiting thread has not let go yet
+                time.sleep(0.01)
+        self._wake_pub.undeclare()
+
+
+# A pulled subscription's wake-up: an empty message with this attachment (ours are 24 bytes).
+_WAKE = b"zenroid-wake"
+_WAKE_CHECK_S = 0.01
+
+
+def _is_wake(sample: zenoh.Sample) -> bool:
+    att = sample.attachment
+    return len(sample.payload) == 0 and att is not None and att.to_bytes() == _WAKE
 
 
 # Elements per array in a message from the network (every list: points, names, positions ...; a JointTrajectory

@@ -35,10 +35,11 @@ class EndpointFactory:
         return fetch_latched(self._runtime.session, msg_type, self._resolve(topic), timeout)
 
     def subscription(self, msg_type: Any, topic: str, callback: Callable[..., None] | None, *, inline: bool,
-                     raw: bool, with_key: bool, max_rate: float | None, with_source: bool = False) -> Subscription:
+                     raw: bool, with_key: bool, max_rate: float | None, with_source: bool = False,
+                     pulled: bool = False, backlog: int = 256) -> Subscription:
         return self._keep(Subscription(self._runtime, msg_type, self._resolve(topic, wildcards=True), callback,
                                        inline=inline, raw=raw, with_key=with_key, with_source=with_source,
-                                       max_rate=max_rate))
+                                       max_rate=max_rate, pulled=pulled, backlog=backlog))
 
     def service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *, inline: bool) -> ServiceServer:
         return self._keep(ServiceServer(self._runtime, srv_type, self._resolve(name), handler, inline=inline))

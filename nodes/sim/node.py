@@ -4,7 +4,8 @@ hardware frames in ``robot_link.py``.
 
 The physics thread is the node's executor thread: ``spin()`` is replaced by the stepping loop, which runs
 service callbacks between control periods (and while it waits for the wall clock), so DART is only ever
-touched from one thread. Hardware commands arrive inline on Zenoh's thread into per-robot inboxes.
+touched from one thread. Hardware commands wait in Zenoh's buffer until that thread takes them: DART holds
+the GIL while it steps, so a thread delivering them would have to wait for the step to end anyway.
 """
 
 from __future__ import annotations
@@ -221,7 +222,7 @@ class SimulatorNode(Node):
                     continue   # the first pipelined periods: the last command stays in effect
                 due = link.answer_due.popleft()
                 waited = True
-                command = link.inbox.wait_for_step(due, self.lockstep_timeout)
+                command = link.command_for(due, self.lockstep_timeout)
                 if command is None:
                     link.inbox.connected = False
                     link.gave_up = True        # until its next command: a mere listener must not stall us
@@ -231,7 +232,7 @@ class SimulatorNode(Node):
                     continue
                 link.apply(command)
                 continue
-            command = link.inbox.take()
+            command = link.newest_command()
             if command is not None:
                 link.apply(command)
                 link.inbox.connected = lockstep

@@ -30,6 +30,9 @@ _header = msgs.builder("std_msgs/msg/Header")
 _point = msgs.builder("geometry_msgs/msg/Point")
 
 Command = HardwareCommand   # a decoded zenroid_msgs/HardwareCommand
+# Commands kept in Zenoh's buffer between two control periods (the oldest go first): lockstep needs the
+# last lockstep_delay + 1, realtime the newest.
+COMMAND_BACKLOG = 64
 
 
 def parse_command(payload: bytes) -> Any:
@@ -64,9 +67,11 @@ class RobotLink:
         # one controller manager commands a robot (as one ros2_control hardware has one manager): commands from
         # a second source are ignored and reported while the first keeps commanding
         self._commander = SingleSender(takeover_after=command_timeout)
-        # inline: commands go straight into the inbox from Zenoh's thread; the physics thread picks them up
+        # pulled: commands wait in Zenoh's buffer until the physics thread takes them (command_for,
+        # newest_command), which holds the GIL while DART steps: a delivering thread would wait for it
         self.command_sub = node.create_subscription(HardwareCommand, f"{ns}/hardware/command", self._on_command,
-                                                    inline=True, raw=True, with_source=True)
+                                                    inline=True, raw=True, with_source=True, pulled=True,
+                                                    backlog=COMMAND_BACKLOG)
         self.info_srv = node.create_service(GetHardwareInfo, f"{ns}/hardware/info", self._on_info)
         self._endpoints = [self.state_pub, self.humanoid_pub, self.command_sub, self.info_srv]
 
@@ -100,6 +105,22 @@ class RobotLink:
                                            key=f"stale:{self.namespace}")
             return
         self.inbox.put(command)
+
+    def command_for(self, step: int, timeout: float) -> Any:
+        """Lockstep: the command answering ``step``, waiting up to ``timeout`` wall s; None if none came."""
+        self.command_sub.take_pending()
+        deadline = time.monotonic() + timeout
+        while (command := self.inbox.take_step(step)) is None:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0 or self.command_sub.closed:
+                return None
+            self.command_sub.wait(remaining)
+        return command
+
+    def newest_command(self) -> Any:
+        """Realtime (and lockstep before a controller manager answers): the newest command, or None."""
+        self.command_sub.take_pending()
+        return self.inbox.take()
 
     # -- hardware frames --------------------------------------------------------------------------------
     def publish_state(self, step: int, sim_time: float) -> None:

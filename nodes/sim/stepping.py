@@ -1,13 +1,12 @@
 """How simulated time advances: wall-clock pacing and the lockstep hand-off with controller managers.
 
 ``Pacer`` keeps sim time on the wall clock at a real-time factor. ``CommandInbox`` is where a robot's
-``hardware/command`` messages land (written from Zenoh's thread, read by the physics thread), and tracks
-whether a controller manager is connected (lockstep waits for it) or gone (hold position).
+``hardware/command`` messages land once the physics thread has taken them from Zenoh, and tracks whether a
+controller manager is connected (lockstep waits for it) or gone (hold position).
 """
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -65,51 +64,39 @@ class CommandInbox:
     """The recent ``hardware/command`` messages of one robot and its controller manager's connection state.
 
     Pipelined lockstep waits for the answer to the *previous* state while the answer to the newest one may
-    already be in, so the last few commands are kept by step.
+    already be in, so the last few commands are kept by step. Only the physics thread touches it: the
+    commands are pulled from Zenoh's buffer on that thread (``RobotLink``).
     """
 
     KEEP = 8
 
     def __init__(self) -> None:
-        self._cond = threading.Condition()
         self._by_step: dict[int, Any] = {}   # insertion order = arrival order
         self.connected = False           # set by the physics thread when a command is taken
         self.last_wall = 0.0              # monotonic time of the last command received
 
     def put(self, command: Any) -> None:
-        """From the subscription (Zenoh thread)."""
-        with self._cond:
-            self._by_step.pop(command.step, None)
-            self._by_step[command.step] = command
-            if len(self._by_step) > self.KEEP:
-                del self._by_step[next(iter(self._by_step))]
-            self.last_wall = time.monotonic()
-            self._cond.notify_all()
+        self._by_step.pop(command.step, None)
+        self._by_step[command.step] = command
+        if len(self._by_step) > self.KEEP:
+            del self._by_step[next(iter(self._by_step))]
+        self.last_wall = time.monotonic()
 
     def take(self) -> Any:
         """The newest unread command, or None (realtime: whatever arrived last wins)."""
-        with self._cond:
-            if not self._by_step:
-                return None
-            newest = self._by_step[next(reversed(self._by_step))]
-            self._by_step.clear()
-            return newest
+        if not self._by_step:
+            return None
+        newest = self._by_step[next(reversed(self._by_step))]
+        self._by_step.clear()
+        return newest
 
-    def wait_for_step(self, step: int, timeout: float) -> Any:
-        """The command answering ``step`` (lockstep), or None after ``timeout`` s."""
-        deadline = time.monotonic() + timeout
-        with self._cond:
-            while True:
-                command = self._by_step.pop(step, None)
-                if command is not None:
-                    for older in [s for s in self._by_step if s < step]:
-                        del self._by_step[older]
-                    return command
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    return None
-                self._cond.wait(remaining)
+    def take_step(self, step: int) -> Any:
+        """The command answering ``step`` (lockstep), or None; older ones are dropped with it."""
+        command = self._by_step.pop(step, None)
+        if command is not None:
+            for older in [s for s in self._by_step if s < step]:
+                del self._by_step[older]
+        return command
 
     def clear(self) -> None:
-        with self._cond:
-            self._by_step.clear()
+        self._by_step.clear()

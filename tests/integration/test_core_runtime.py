@@ -321,3 +321,50 @@ def test_failing_subclass_constructor_closes_its_session(router, client) -> None
     # the half-built node's liveliness token goes away with its closed session
     wait_until(lambda: "/broken_ctor" not in graph.node_names(client.session, 0.3), timeout=5,
                message="broken_ctor gone from the graph")
+
+
+def test_pulled_subscription_runs_callbacks_on_the_owners_thread_and_times_out(router, client) -> None:
+    """``pulled=True`` (the simulator's hardware/command): messages wait until the owner takes them, on its
+    own thread; ``wait`` ends after its timeout with a wake-up no other session ever sees."""
+    String = msgs.get_type("std_msgs/msg/String")
+    puller = Node("puller", connect=[router])
+    try:
+        got: list[tuple[str, int]] = []
+        sub = puller.create_subscription(String, "pulled/topic", lambda m: got.append((m.data, threading.get_ident())),
+                                         pulled=True)
+        seen_elsewhere: list[str] = []
+        client.create_subscription(String, "pulled/topic", lambda m: seen_elsewhere.append(m.data))
+        pub = client.create_publisher(String, "pulled/topic")
+        wait_until(lambda: pub.has_subscribers, timeout=10, message="the pulled subscription is matched")
+        time.sleep(0.5)   # the client's own subscription is declared too
+
+        pub.publish(String(data="one"))
+        assert sub.wait(10.0) >= 1
+        assert got == [("one", threading.get_ident())]   # delivered here, not on a Zenoh thread
+        for text in ("two", "three"):
+            pub.publish(String(data=text))
+        wait_until(lambda: len(seen_elsewhere) == 3, timeout=10, message="the other session got all three")
+        time.sleep(0.2)
+        assert sub.take_pending() == 2
+        assert [text for text, _ in got] == ["one", "two", "three"]
+        assert sub.take_pending() == 0
+
+        started = time.monotonic()
+        assert sub.wait(0.3) == 0                # nothing came: the watchdog ends the wait
+        elapsed = time.monotonic() - started
+        assert 0.3 <= elapsed < 5.0
+        time.sleep(0.5)
+        assert seen_elsewhere == ["one", "two", "three"]   # the wake-up stayed inside the puller's session
+        assert len(got) == 3
+
+        pub.publish(String(data="four"))         # a wait after a timeout still delivers
+        assert sub.wait(10.0) >= 1 and got[-1][0] == "four"
+
+        ended = threading.Event()
+        waiter = threading.Thread(target=lambda: (sub.wait(60.0), ended.set()), daemon=True)
+        waiter.start()
+        time.sleep(0.3)
+        puller.destroy_entity(sub)               # undeclared while a thread waits on it: the wait ends
+        assert ended.wait(10), "wait() did not return after the subscription was undeclared"
+    finally:
+        puller.destroy()
