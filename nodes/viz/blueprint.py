@@ -22,6 +22,9 @@ from rerun.blueprint.encodings import ComponentSourceKind, VisualizerComponentMa
 
 from .scene import BALANCE_SERIES, PALETTE, SIM_TIMELINE, PlotGroup, lighter, robot_entity, series_component
 
+# The side panel's tabs, in this order (the visualiser's ``plots`` parameter picks some).
+PLOT_TABS = ("positions", "velocities", "efforts", "commanded", "balance")
+QUANTITY_TABS = {"positions": "position", "velocities": "velocity", "efforts": "effort"}
 PLOT_SECONDS = 8.0  # history shown in a plot, up to the time cursor
 LEGEND_SECONDS = 4.0  # empty time before that history, under the legend (Rerun 0.41's default corner: bottom left)
 CURSOR_MARGIN = 0.3  # s of axis past the cursor, so the newest point is not on the plot's edge
@@ -85,25 +88,27 @@ def grid(views: list[rrb.View], name: str) -> rrb.Container:
 
 
 def robot_plots(namespace: str, layout: RobotLayout, timeline: str = SIM_TIMELINE,
-                with_namespace: bool = False) -> rrb.Container:
-    """One robot's plots: a tab per quantity, a plot per limb group."""
+                with_namespace: bool = False, plots: Sequence[str] = PLOT_TABS) -> rrb.Container:
+    """One robot's plots: a tab per quantity, a plot per limb group (the tabs named in ``plots``)."""
     entity = robot_entity(namespace)
     prefix = f"{namespace}: " if with_namespace else ""
     tabs: list[rrb.Container] = []
     groups = list(layout.groups)
-    for quantity, label in (("position", "positions"), ("velocity", "velocities"), ("effort", "efforts")):
+    for label, quantity in QUANTITY_TABS.items():
+        if label not in plots:
+            continue
         if groups:
             views = [time_series(f"{prefix}{title(g.part)} {quantity} ", entity, timeline,
                                  joint_series(entity, quantity, g)) for g in groups]
         else:  # nothing received yet: an empty plot until the joints are known
             views = [time_series(f"{prefix}{label}", entity, timeline)]
         tabs.append(grid(views, label))
-    for controller, controller_groups in layout.controllers.items():
+    for controller, controller_groups in layout.controllers.items() if "commanded" in plots else ():
         views = [time_series(f"{prefix}{controller}: {title(g.part)} commanded vs actual", entity, timeline,
                              controller_series(entity, controller, g)) for g in controller_groups]
         if views:
             tabs.append(grid(views, f"{controller}"))
-    if layout.has_balance:
+    if layout.has_balance and "balance" in plots:
         tabs.append(rrb.Vertical(time_series(f"{prefix}CoM, ZMP (m), balanced (1/0)", entity, timeline,
                                              series(entity, "balance:values", BALANCE_SERIES, PALETTE[:6])),
                                  name="balance"))
@@ -111,9 +116,9 @@ def robot_plots(namespace: str, layout: RobotLayout, timeline: str = SIM_TIMELIN
 
 
 def build_blueprint(robots: Mapping[str, RobotLayout] | None = None, timeline: str = SIM_TIMELINE,
-                    ground: bool = True) -> rrb.Blueprint:
+                    ground: bool = True, plots: Sequence[str] = PLOT_TABS) -> rrb.Blueprint:
     """``robots``: namespace -> its plot layout; ``timeline``: the one the time panel follows; ``ground``: draw
-    the ground grid."""
+    the ground grid; ``plots``: the tabs beside the 3-D scene (of ``PLOT_TABS``; none: the scene alone)."""
     robots = robots or {}
     scene = rrb.Spatial3DView(
         name="scene", origin="world",
@@ -125,17 +130,19 @@ def build_blueprint(robots: Mapping[str, RobotLayout] | None = None, timeline: s
         eye_controls=rrb.EyeControls3D(position=[1.9, 1.4, 1.3], look_target=[0.0, 0.0, 0.55],
                                        eye_up=[0.0, 0.0, 1.0]),
     )
-    side: rrb.Container | rrb.View
+    side: rrb.Container | rrb.View | None
     several = len(robots) > 1
-    tabs = [robot_plots(ns, layout, timeline, with_namespace=several) for ns, layout in robots.items()]
+    tabs = [robot_plots(ns, layout, timeline, several, plots) for ns, layout in robots.items()] if plots else []
     if len(tabs) == 1:
         side = tabs[0]
     elif tabs:
         side = rrb.Tabs(*tabs)
-    else:
+    elif plots:  # no robot yet
         side = time_series("plots", "plots", timeline)
+    else:  # no plots asked for: the 3-D scene alone
+        side = None
     return rrb.Blueprint(
-        rrb.Horizontal(scene, side, column_shares=[11, 9]),
+        rrb.Horizontal(scene, side, column_shares=[11, 9]) if side is not None else scene,
         # "following": the cursor stays on the newest data, also in a viewer opened late.
         rrb.TimePanel(timeline=timeline, state="collapsed", play_state="following"),
         rrb.BlueprintPanel(state="collapsed"),

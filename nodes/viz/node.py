@@ -27,7 +27,7 @@ from nodes.core import graph as core_graph
 from nodes.core.latched import fetch_latched
 from nodes.urdf.model import UrdfError
 
-from .blueprint import RobotLayout, build_blueprint
+from .blueprint import PLOT_TABS, QUANTITY_TABS, RobotLayout, build_blueprint
 from .markers import MarkerError, MarkerLayer
 from .ratelimit import RateLimiter
 from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, SceneTime, is_wall_stamp, parse_model
@@ -129,6 +129,10 @@ class Visualiser(Node):
         flush_period = p("flush_period", 0.5, min_value=0.0, max_value=2.0, description=(
             "s the recording batches rows before sending (fewer, larger chunks for the viewer to take in)"))
         self.show_ground = p("ground", True, description="draw the ground grid (off for joint_animation)")
+        self.plots = [t for t in p("plots", list(PLOT_TABS), choices=PLOT_TABS, description=(
+            f"the plot tabs beside the 3-D scene, of {', '.join(PLOT_TABS)} (each costs a late viewer time to "
+            "take in; [] for the scene alone)")) if t]
+        self.quantities = [q for tab, q in QUANTITY_TABS.items() if tab in self.plots]
         self.tf_fallback_after = p("tf_fallback_after", 1.0, min_value=0.0,
                                    description="s of joint_states without tf before frames come from our FK")
 
@@ -149,7 +153,8 @@ class Visualiser(Node):
         plan = OutputPlan.resolve(args.save, args.serve, args.spawn, args.headless, args.web_port, args.grpc_port,
                                   getattr(args, "server_history", None), getattr(args, "bind", "127.0.0.1"))
         self.timeline = SIM_TIMELINE
-        self.output = Output(self.recording, plan, build_blueprint(timeline=self.timeline, ground=self.show_ground))
+        self.output = Output(self.recording, plan, build_blueprint(timeline=self.timeline, ground=self.show_ground,
+                                                                   plots=self.plots))
         for note in plan.notes:
             self.logger.info(note)
         if plan.save:
@@ -439,8 +444,9 @@ class Visualiser(Node):
                 scene.update_balance(*balance[1])
             scene.update_paths()
         # The robot's row: its pose, markers and every plotted value (controllers, balance: the latest).
-        scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort,
-                               controllers=self.controller_values(robot), balance=balance[0] if balance else None)
+        scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort, self.quantities,
+                               controllers=self.controller_values(robot) if "commanded" in self.plots else None,
+                               balance=balance[0] if balance and "balance" in self.plots else None)
 
     def controller_values(self, robot: RobotView) -> dict[str, tuple[list[str], list[float], list[float]]]:
         """Each controller's latest (joint names, reference, actual positions), for the plot row."""
@@ -572,7 +578,7 @@ class Visualiser(Node):
             self.pending_layout = (key, now)
         if key != self.layout_key and now - self.pending_layout[1] >= LAYOUT_SETTLE:
             self.layout_key = key
-            self.recording.send_blueprint(build_blueprint(layout, self.timeline, self.show_ground))
+            self.recording.send_blueprint(build_blueprint(layout, self.timeline, self.show_ground, self.plots))
 
     def keyframe(self) -> None:
         """Every idle robot's model and markers again (see ``RobotScene.refresh``), and the user markers."""

@@ -435,7 +435,7 @@ class RobotScene:
         archetypes += [rr.DynamicArchetype(kind, components=parts) for kind, parts in (plots or {}).items()]
         self.recording.log(self.entity, *archetypes)
         self.last_row = time.monotonic()
-        if plots:
+        if plots is not None:  # a joint_states row (with no plotted values when no plot tab is shown)
             self.last_plot_row = self.last_row
         for link, origin, entity, archetype in self.meshes:
             pose = link_pose(link)
@@ -459,19 +459,20 @@ class RobotScene:
 
     def log_joint_states(self, sim_time: float, names: Sequence[str], position: Sequence[float],
                          velocity: Sequence[float], effort: Sequence[float],
+                         quantities: Sequence[str] = QUANTITIES,
                          controllers: Mapping[str, tuple[Sequence[str], Sequence[float], Sequence[float]]] | None = None,
                          balance: Sequence[float] | None = None) -> None:
         """The robot's row for this joint_states sample, with every plotted value: positions, velocities and
-        efforts per limb group, each controller's reference and actual position per joint of its groups
-        (``controllers``: name -> (joint names, reference, actual)), and the balance values (CoM x y z, ZMP
-        x y, is_balanced)."""
+        efforts per limb group (those of ``quantities``), each controller's reference and actual position per
+        joint of its groups (``controllers``: name -> (joint names, reference, actual)), and the balance values
+        (CoM x y z, ZMP x y, is_balanced)."""
         names = tuple(names)
         self.positions.update(zip(names, position, strict=False))
         groups = self._groups(names)
         self.plot_groups = [g for g, _ in groups]
         columns: dict[str, dict[str, np.ndarray]] = {}
         for quantity, values in zip(QUANTITIES, (position, velocity, effort), strict=True):
-            if len(values) != len(names) or not names:
+            if quantity not in quantities or len(values) != len(names) or not names:
                 continue
             array = np.asarray(values, float)
             columns[quantity] = {group.part: array[indices] for group, indices in groups}

@@ -20,7 +20,7 @@ from nodes.urdf.model import rpy_matrix as rpy_to_matrix
 from nodes.viz.blueprint import build_blueprint
 from nodes.viz.ratelimit import RateLimiter
 from nodes.viz.readback import load
-from nodes.viz.scene import WORLD_FRAME, RobotScene, frame_name
+from nodes.viz.scene import WORLD_FRAME, RobotScene, frame_name, plot_groups
 from nodes.viz.scene import parse_model as parse_urdf
 from nodes.viz.sink import OutputPlan
 
@@ -247,6 +247,20 @@ def test_scene_logs_one_row_per_sample_with_pose_markers_and_plots(tmp_path: Pat
     assert data["world/leg"].column("Clear:is_recursive") == [(2.0, [True])]
 
 
+def test_rows_carry_only_the_plotted_quantities(tmp_path: Path) -> None:
+    def body(recording: rr.RecordingStream) -> None:
+        scene = RobotScene(recording, "leg", parse_urdf(LEG))
+        scene.log_model(0.5)
+        scene.log_joint_states(1.0, ["hip_pitch"], [0.2], [0.1], [0.5], ["position"])
+        scene.log_transforms(1.05, [("hip", "thigh", (0, 0, 0), (0, 0, 0, 1))])  # waits for the next sample
+        scene.log_joint_states(1.1, ["hip_pitch"], [0.3], [0.1], [0.5], [])
+
+    robot = record(tmp_path, body)["world/leg/robot"]
+    assert [r["sim_time"] for r in robot.rows] == [0.5, 1.0, 1.1], "no plotted values: still one row per sample"
+    assert robot.column("position:joints") == [(1.0, [0.2])]
+    assert robot.column("velocity:joints") == [] and robot.column("effort:joints") == []
+
+
 def test_an_idle_robot_is_drawn_again_at_key_frames(tmp_path: Path) -> None:
     """Without joint_states rows (a paused simulation), a key frame re-logs the robot for late viewers."""
     def body(recording: rr.RecordingStream) -> None:
@@ -366,7 +380,6 @@ def test_blueprint_has_a_plot_per_limb_group_and_follows_the_newest_data() -> No
 
     from nodes.share import robot_file
     from nodes.viz.blueprint import RobotLayout
-    from nodes.viz.scene import plot_groups
 
     empty = _blueprint_side(build_blueprint())  # nothing seen yet: one plot of everything logged
     assert isinstance(empty, rrb.TimeSeriesView) and empty.origin == "plots"
@@ -400,6 +413,34 @@ def test_blueprint_has_a_plot_per_limb_group_and_follows_the_newest_data() -> No
         assert views and all(str(v.origin) == f"world/{ns}/robot" for v in views), (ns, [v.origin for v in views])
     a_titles = " | ".join(str(v.name) for v in tabs["a"])
     assert "jtc" not in a_titles and "balance" not in a_titles, a_titles  # only what robot a has
+
+
+def _blueprint_chunks(blueprint: Any, tmp_path: Path) -> int:
+    """How many chunks a viewer takes in for this layout (one per blueprint entity and property)."""
+    from rerun.chunk import RrdReader
+
+    path = tmp_path / "layout.rbl"
+    blueprint.save("zenroid_viz", str(path))
+    reader = RrdReader(str(path))
+    return sum(1 for _ in reader.stream(store=reader.blueprints()[0]))
+
+
+def test_plot_tabs_are_chosen_and_each_costs_the_viewer_chunks(tmp_path: Path) -> None:
+    """``plots`` picks the tabs; fewer tabs, fewer chunks for a late viewer to take in before the present."""
+    import rerun.blueprint as rrb
+
+    from nodes.share import robot_file
+    from nodes.viz.blueprint import PLOT_TABS, RobotLayout
+
+    groups = plot_groups([j.name for j in parse_urdf(robot_file("humanoid").read_text()).movable_joints()])
+    layout = {"humanoid": RobotLayout(groups, {"joint_trajectory_controller": groups}, True)}
+    side = _blueprint_side(build_blueprint(layout, plots=["positions", "balance"]))
+    assert [tab.name for tab in side.contents] == ["positions", "balance"]
+    [alone] = build_blueprint(layout, plots=[]).root_container.contents
+    assert isinstance(alone, rrb.Spatial3DView), "no plots: the 3-D scene alone"
+    counts = {plots: _blueprint_chunks(build_blueprint(layout, plots=list(plots)), tmp_path)
+              for plots in (PLOT_TABS, ("positions",), ())}
+    assert counts[()] < 15 < counts[("positions",)] < 60 < counts[PLOT_TABS], counts
 
 
 def test_the_ground_is_the_viewers_grid_in_the_layout() -> None:
