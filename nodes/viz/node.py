@@ -51,6 +51,7 @@ GLOBAL_MARKER_TOPICS = {"visualization_marker": Marker, "visualization_marker_ar
 DISCOVERY_PERIOD = 2.0
 LATEST_FRESH = 1.0  # s a controller_state or humanoid_state stays in the plot rows after it stops coming
 LAYOUT_SETTLE = 1.0  # s the plot layout must stay the same before the blueprint is sent again
+LAYOUT_WAIT = 5.0  # ... and, while a robot's joints (or any robot) are still unknown, before it is sent anyway
 
 
 @dataclass
@@ -153,8 +154,7 @@ class Visualiser(Node):
         plan = OutputPlan.resolve(args.save, args.serve, args.spawn, args.headless, args.web_port, args.grpc_port,
                                   getattr(args, "server_history", None), getattr(args, "bind", "127.0.0.1"))
         self.timeline = SIM_TIMELINE
-        self.output = Output(self.recording, plan, build_blueprint(timeline=self.timeline, ground=self.show_ground,
-                                                                   plots=self.plots))
+        self.output = Output(self.recording, plan)
         for note in plan.notes:
             self.logger.info(note)
         if plan.save:
@@ -568,15 +568,20 @@ class Visualiser(Node):
             has_balance=robot.has_balance)
 
     def update_layout(self) -> None:
-        """Re-send the blueprint when robots, plot groups, controllers, balance plots or the timeline change,
+        """Send the blueprint when robots, plot groups, controllers, balance plots or the timeline change,
         once the change has settled for ``LAYOUT_SETTLE``: the server keeps every blueprint for the viewers
-        that open later, and each one costs them about a hundred chunks to take in."""
+        that open later, and each one costs them a chunk per view and property (the humanoid's: ~160) to take
+        in before they show the present. So there is no start-up layout either (``Output`` sends none)."""
         layout = {ns: self.robot_layout(r) for ns, r in sorted(self.robots.items()) if r.present}
         key = (self.timeline, tuple((ns, lay.key()) for ns, lay in layout.items()))
         now = time.monotonic()
         if key != self.pending_layout[0]:
             self.pending_layout = (key, now)
-        if key != self.layout_key and now - self.pending_layout[1] >= LAYOUT_SETTLE:
+        settled = now - self.pending_layout[1]
+        # Until every robot's joints are known, the layout would only be sent again a moment later: wait
+        # (up to LAYOUT_WAIT), and a viewer opened meanwhile shows Rerun's own layout of what it has.
+        incomplete = not layout or any(not lay.groups for lay in layout.values())
+        if key != self.layout_key and settled >= (LAYOUT_WAIT if incomplete else LAYOUT_SETTLE):
             self.layout_key = key
             self.recording.send_blueprint(build_blueprint(layout, self.timeline, self.show_ground, self.plots))
 
@@ -607,6 +612,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                           "container whose ports are published)")
     out.add_argument("--server-history", metavar="SIZE", default=None,
                      help="what the web viewer server keeps for viewers that connect later, e.g. 4MiB (default "
-                          "384KiB: the layout and a few seconds of this stream; a late viewer starts at the present)")
+                          "1KiB: the layout and the newest message; a late viewer starts at the present)")
     out.add_argument("--robots", default="", help="comma-separated robot namespaces (same as robots:=[...])")
 

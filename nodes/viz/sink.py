@@ -77,13 +77,15 @@ def wait_for_port(port: int, timeout: float) -> bool:
     return False
 
 
-# What the web viewer server keeps for viewers that connect later; a new viewer takes all of it in before it
-# shows the present, and a software-rendered page takes in only a few chunks per second (bench/viz.py). The
-# server never drops blueprints (each one the visualiser sends, ~250 KiB for a humanoid's, counts toward the
-# limit) and drops the oldest data beyond it, static data last. Nothing the visualiser logs is static: the
-# ground is the layout's grid, and every robot row holds the whole robot, its markers and its plotted values,
-# so the last seconds (or, with more blueprints, just the next row) always draw a complete scene.
-SERVER_HISTORY = "384KiB"
+# What the web viewer server keeps for viewers that connect later. A viewer takes in everything the server
+# sends it, in order, before it shows the present: the layouts (the server always keeps every blueprint, and
+# counts them toward this limit), then the kept rows, then whatever arrived meanwhile; a software-rendered page
+# takes in only a few chunks per frame at 1-3 frames per second (bench/viz.py, README "Visualiser"), so every
+# kept row delays the present. The server drops the oldest data beyond the limit before it stores a new
+# message, and the layouts alone are larger than this, so it keeps just the newest message: nothing the
+# visualiser logs is static, every robot row holds the whole robot, its markers and its plotted values, and
+# the ground is the layout's grid, so that one row draws a complete scene (the plots fill from there).
+SERVER_HISTORY = "1KiB"
 
 
 @dataclass
@@ -122,7 +124,7 @@ class OutputPlan:
 class Output:
     """Attaches the sinks of an ``OutputPlan`` to a recording; ``close()`` flushes and stops the server."""
 
-    def __init__(self, recording: rr.RecordingStream, plan: OutputPlan, blueprint: rrb.Blueprint) -> None:
+    def __init__(self, recording: rr.RecordingStream, plan: OutputPlan, blueprint: rrb.Blueprint | None = None) -> None:
         self.recording = recording
         self.plan = plan
         self.server: subprocess.Popen | None = None
