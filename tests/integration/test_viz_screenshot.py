@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from nodes.viz.screenshot import find_browser
+from tests.conftest import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -144,8 +145,12 @@ def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int)
                     if frozen == cursor:
                         break
                 assert frozen == cursor > 0, f"the page did not pause (cursor {frozen} then {cursor})"
-                with lock:  # the plot's newest point is the row at the cursor; rows come every 0.1 s
-                    window = [v for t, v in knees.items() if cursor - 0.15 <= t / 1000 <= cursor]
+                # The plot's newest point is the row at the cursor (rows come every 0.1 s), but a paused page
+                # still draws the rows that arrive after it a few pixels right of the cursor line: the knee
+                # must be in one state from just before the cursor to half a second after it.
+                wait_until(lambda at=cursor: clock["now"] > at + 0.6, timeout=30, message="sim time past the cursor")
+                with lock:
+                    window = [v for t, v in knees.items() if cursor - 0.15 <= t / 1000 <= cursor + 0.5]
                 if not window or not (min(window) > 0.3 or max(window) < 0.05):
                     tries.append(f"{cursor:.2f}: knee mid-motion")  # the picture could be either; try again
                     continue
