@@ -273,7 +273,7 @@ class Subscription:
         if self.with_source:
             attachment = parse_attachment(sample)
             args += (attachment[1] if attachment is not None else None,)
-        if self.inline:
+        if self.inline or self.pulled:   # pulled: the taking thread is the one the owner chose
             self.node.executor.run_callback(self.callback, *args, where=f"subscription '{self.key}'")
         else:
             self.node.executor.dispatch(self.callback, *args, where=f"subscription '{self.key}'")

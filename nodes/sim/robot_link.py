@@ -70,7 +70,7 @@ class RobotLink:
         # pulled: commands wait in Zenoh's buffer until the physics thread takes them (command_for,
         # newest_command), which holds the GIL while DART steps: a delivering thread would wait for it
         self.command_sub = node.create_subscription(HardwareCommand, f"{ns}/hardware/command", self._on_command,
-                                                    inline=True, raw=True, with_source=True, pulled=True,
+                                                    raw=True, with_source=True, pulled=True,
                                                     backlog=COMMAND_BACKLOG)
         self.info_srv = node.create_service(GetHardwareInfo, f"{ns}/hardware/info", self._on_info)
         self._endpoints = [self.state_pub, self.humanoid_pub, self.command_sub, self.info_srv]
