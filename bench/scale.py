@@ -108,8 +108,9 @@ def side_by_side(k: int, seconds: float) -> dict:
     """k independent launches of the main job in lockstep."""
     ports = [free_port() for _ in range(k)]
     procs = [subprocess.Popen(
+        # exclusive_cpu:=false: each world's physics thread would want the same kept CPU
         [sys.executable, "-m", "launch", "humanoid.yaml", "mode:=lockstep", "gui:=false", f"zenoh_port:={port}",
-         "--log-dir", f"/tmp/bench-scale-{port}"],
+         "exclusive_cpu:=false", "--log-dir", f"/tmp/bench-scale-{port}"],
         cwd=ROOT, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         for port in ports]
     try:

@@ -140,6 +140,7 @@ def execute(plan: LaunchPlan, log_dir: Path) -> int:
     if _interrupted_early():
         return 0
     log_dir.mkdir(parents=True, exist_ok=True)
+    exclusive_cpu = reserve_exclusive_cpu(plan)   # before the router's threads exist: they inherit the rest
     reaper = Reaper()
     session = None
     readiness = None
@@ -163,7 +164,7 @@ def execute(plan: LaunchPlan, log_dir: Path) -> int:
         readiness = NodeReadiness(session)
         environment = child_environment(endpoint, ros2_wire_of(plan))
         supervisor = Supervisor(plan, log_dir, environment, readiness, reaper=reaper,
-                                own_process_tree=True)
+                                own_process_tree=True, exclusive_cpu=exclusive_cpu)
         interrupts.hand_over(supervisor.handle_signal)  # a signal that came during start-up stops it at once
         try:
             return supervisor.run()
@@ -175,6 +176,37 @@ def execute(plan: LaunchPlan, log_dir: Path) -> int:
         if session is not None:
             session.close()
         reaper.close()
+
+
+def reserve_exclusive_cpu(plan: LaunchPlan) -> int | None:
+    """The CPU kept for the node with ``exclusive_cpu`` (None: no such node, or one CPU only).
+
+    The launcher's own threads move to the other CPUs first, so the router and every process it starts
+    run there; the node's stepping thread claims the kept CPU itself (nodes.core.cpu)."""
+    from nodes.core import cpu
+
+    owner = next((spec for spec in plan.nodes if spec.exclusive_cpu), None)
+    if owner is None:
+        return None
+    if not cpu.supported():
+        print(f"[launch] [INFO] exclusive_cpu of '{owner.name}': CPU affinity is not available on this system; "
+              "not reserved", flush=True)
+        return None
+    allowed = cpu.allowed_cpus()
+    chosen = cpu.choose_exclusive(allowed)
+    if chosen is None:
+        print(f"[launch] [INFO] exclusive_cpu of '{owner.name}': only one CPU available; not reserved", flush=True)
+        return None
+    if not cpu.hold_reservation():
+        # a second launch on this machine would pick the same CPU: two physics threads on one CPU
+        print(f"[launch] [INFO] exclusive_cpu of '{owner.name}': another launch on this machine keeps a CPU for "
+              "its physics; not reserved (several worlds side by side: exclusive_cpu:=false for each)", flush=True)
+        return None
+    rest = allowed - {chosen}
+    cpu.move_threads(rest)
+    print(f"[launch] [INFO] CPU {chosen} kept for the stepping thread of '{owner.name}'; every other process "
+          f"on CPU {','.join(map(str, sorted(rest)))} (exclusive_cpu)", flush=True)
+    return chosen
 
 
 def _interrupted_early() -> bool:

@@ -24,7 +24,7 @@ CONDITION_KEYS = ("if", "unless")
 NODE_KEYS = (
     "name", "module", "exec", "args", "namespace", "params", "param_file", "remap", "env",
     "respawn", "respawn_delay", "respawn_max", "required", "output", "wait_for", "wait_timeout",
-    "health_timeout", *CONDITION_KEYS,
+    "health_timeout", "exclusive_cpu", *CONDITION_KEYS,
 )
 ARG_KEYS = ("name", "default", "description", "choices")
 INCLUDE_KEYS = ("file", "args", *CONDITION_KEYS)

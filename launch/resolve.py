@@ -64,6 +64,7 @@ class NodeSpec:
     wait_timeout: float
     source: str
     health_timeout: float = DEFAULT_HEALTH_TIMEOUT
+    exclusive_cpu: bool = False   # a CPU of its own for its stepping thread, the other processes off it
 
     @property
     def full_name(self) -> str:
@@ -100,6 +101,8 @@ class NodeSpec:
             out["health_timeout"] = self.health_timeout
         if self.output != "screen":
             out["output"] = self.output
+        if self.exclusive_cpu:
+            out["exclusive_cpu"] = True
         out["source"] = self.source
         return out
 
@@ -358,14 +361,20 @@ class _Resolver:
                                    "wait_timeout")
         health_timeout = self.number(f.get("health_timeout", DEFAULT_HEALTH_TIMEOUT), scope, at("health_timeout"),
                                      "health_timeout")
+        # true/false, or a comparison such as "$(var mode) == lockstep" (as in 'if')
+        exclusive_cpu = evaluate_condition(self.text(f.get("exclusive_cpu", False), scope, at("exclusive_cpu"),
+                                                     "exclusive_cpu"), "node 'exclusive_cpu'", at("exclusive_cpu"))
         spec = NodeSpec(name=name, namespace=namespace, module=module, executable=executable, args=args,
                         params=params, param_files=param_files, remaps=remaps, env=env, respawn=respawn,
                         respawn_delay=respawn_delay, respawn_max=respawn_max, required=required, output=output,
                         wait_for=wait_for, wait_timeout=wait_timeout, source=str(decl.source),
-                        health_timeout=health_timeout)
+                        health_timeout=health_timeout, exclusive_cpu=exclusive_cpu)
         for other in self.plan.nodes:
             if other.name == name:
                 raise LaunchError(f"duplicate node name '{name}' (also at {other.source})", at("name"))
+            if exclusive_cpu and other.exclusive_cpu:
+                raise LaunchError(f"node '{name}': only one node of a launch can have exclusive_cpu "
+                                  f"('{other.name}' at {other.source} has it)", at("exclusive_cpu"))
         self.plan.nodes.append(spec)
 
     def word_list(self, value: Any, scope: _Scope, decl: NodeDecl, key: str, split: bool = False) -> list[str]:

@@ -22,6 +22,7 @@ import yaml
 
 from launch.reaper import Reaper
 from launch.resolve import LaunchPlan, NodeSpec
+from nodes.core.cpu import EXCLUSIVE_CPU_ENV
 
 SIGTERM_AFTER_S = 4.0
 SIGKILL_AFTER_S = 7.0
@@ -103,7 +104,8 @@ class Managed:
 class Supervisor:
     def __init__(self, plan: LaunchPlan, log_dir: Path, child_env: dict[str, str],
                  readiness: Readiness | None, out: IO[str] | None = None, colour: bool | None = None,
-                 python: str = sys.executable, reaper: Reaper | None = None, own_process_tree: bool = False) -> None:
+                 python: str = sys.executable, reaper: Reaper | None = None, own_process_tree: bool = False,
+                 exclusive_cpu: int | None = None) -> None:
         self.plan = plan
         self.log_dir = log_dir
         self.child_env = child_env
@@ -115,6 +117,7 @@ class Supervisor:
         # Only a launcher process owns all its descendants; embedded in another program it must not adopt
         # or end processes that are not its nodes'.
         self.own_process_tree = own_process_tree
+        self.exclusive_cpu = exclusive_cpu   # told to the node with exclusive_cpu (launch.cli reserves it)
         self.nodes = [Managed(spec, _COLOURS[i % len(_COLOURS)]) for i, spec in enumerate(plan.nodes)]
         self.by_name = {m.spec.name: m for m in self.nodes}
         self.exit_status = 0
@@ -165,6 +168,8 @@ class Supervisor:
         env[STATE_DIR_ENV] = str(self.log_dir / "state")
         env[RESPAWN_ENV] = str(managed.restarts)
         env.update(spec.env)
+        if spec.exclusive_cpu and self.exclusive_cpu is not None:
+            env[EXCLUSIVE_CPU_ENV] = str(self.exclusive_cpu)
         try:
             proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                     stderr=subprocess.STDOUT, env=env, start_new_session=True)

@@ -15,6 +15,7 @@ import time
 from typing import Any
 
 from nodes.core import Node
+from nodes.core.cpu import ExclusiveCpu
 from nodes.core.endpoints import ServiceError
 from nodes.core.params import ParameterError, load_params_file
 from nodes.sim.config import DEFAULT_CONFIG, StartupEntity, parse_entities, parse_gains
@@ -252,14 +253,33 @@ class SimulatorNode(Node):
         steps = self._period_steps()
         self.sim.step(steps if max_steps is None else min(steps, max_steps))
 
+    def _claim_exclusive_cpu(self) -> ExclusiveCpu | None:
+        """The launch's ``exclusive_cpu``: this (stepping) thread alone on its CPU, the others off it."""
+        try:
+            exclusive = ExclusiveCpu.from_environment()
+            if exclusive is not None:
+                exclusive.claim()
+        except (ValueError, OSError) as exc:
+            self.logger.error(f"exclusive_cpu: {exc}; stepping on any CPU")
+            return None
+        if exclusive is not None:
+            self.logger.info(f"stepping thread alone on CPU {exclusive.cpu}, the other threads on CPU "
+                             f"{','.join(map(str, sorted(exclusive.rest)))}")
+        return exclusive
+
     def spin(self) -> None:
         # Everything long-lived exists now: keep the cyclic GC from pausing the physics loop for
         # milliseconds scanning it (realtime lateness), and collect young objects less often.
         gc.collect()
         gc.freeze()
         gc.set_threshold(50_000, 20, 100)
+        exclusive = self._claim_exclusive_cpu()
+        next_sweep = time.monotonic() + 1.0
         try:
             while self.ok:
+                if exclusive is not None and time.monotonic() >= next_sweep:
+                    exclusive.sweep()   # threads started since (Zenoh's, a new robot's) inherited the CPU
+                    next_sweep = time.monotonic() + 1.0
                 self._drain()
                 if self._startup and time.monotonic() >= self._next_startup_try:
                     self._spawn_startup_entities()

@@ -4,7 +4,9 @@
   bit-identical joint trajectories, the joint commander's knee bends included;
 - every hot-path message (hardware frames, joint_states, tf, controller state, clock, model_states,
   humanoid_state), built by the generated packers, is a complete map of its schema: a third-party
-  ``msgpack.unpackb`` sees exactly the fields of the ``.msg`` file, and the schema decoder accepts it.
+  ``msgpack.unpackb`` sees exactly the fields of the ``.msg`` file, and the schema decoder accepts it;
+- ``exclusive_cpu`` (on by default in lockstep): while it runs, the simulator's stepping thread is alone
+  on the CPU the launcher kept, and no other thread of the launch may run there.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import time
 from pathlib import Path
 
 import msgpack
+import psutil
 import pytest
 import zenoh
 
@@ -71,8 +74,29 @@ def schema_fields(type_name: str, value: object, path: str = "") -> list[str]:
     return problems
 
 
+def thread_cpus(launcher_pid: int) -> list[tuple[str, int, int, set[int]]]:
+    """(process name, pid, thread id, allowed CPUs) of every thread of the launch's process tree."""
+    out = []
+    for proc in [psutil.Process(launcher_pid), *psutil.Process(launcher_pid).children(recursive=True)]:
+        try:
+            cmd = proc.cmdline()
+            name = cmd[cmd.index("--name") + 1] if "--name" in cmd else proc.name()
+            for thread in proc.threads():
+                status = Path(f"/proc/{proc.pid}/task/{thread.id}/status").read_text()
+                allowed = next(line.split(":")[1].strip() for line in status.splitlines()
+                               if line.startswith("Cpus_allowed_list"))
+                cpus = set()
+                for part in allowed.split(","):
+                    low, _, high = part.partition("-")
+                    cpus.update(range(int(low), int(high or low) + 1))
+                out.append((name, proc.pid, thread.id, cpus))
+        except (psutil.Error, FileNotFoundError):
+            continue   # a spawner that just ended
+    return out
+
+
 def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[float]], list[str], dict[str, bytes],
-                                                    str]:
+                                                    str, list[tuple[str, int, int, set[int]]]]:
     """Launch paused, unpause when the controllers are active, record joint_states until RECORD_UNTIL."""
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     env.pop("ZENOH_CONNECT", None)
@@ -118,10 +142,12 @@ def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[f
             if stamp["sec"] + stamp["nanosec"] * 1e-9 >= RECORD_UNTIL:
                 break
         assert names and len(names) == 22
+        time.sleep(1.2)   # the simulator moves threads started after its claim off the CPU once a second
+        threads = thread_cpus(launcher.pid)
         for sub in hot:
             sub.undeclare()
         joint_states.undeclare()
-        return trajectory, names, samples, out_path.read_text(errors="replace")
+        return trajectory, names, samples, out_path.read_text(errors="replace"), threads
     finally:
         if session is not None:
             session.close()
@@ -140,7 +166,21 @@ def test_lockstep_main_job_is_bit_identical_and_hot_paths_follow_the_schema(tmp_
 
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
-    first, names, samples, log = run_main_job(free_port(), tmp_path / "a")
+    first, names, samples, log, threads = run_main_job(free_port(), tmp_path / "a")
+
+    # exclusive_cpu: the stepping thread (the simulator's main thread) alone on the kept CPU
+    if len(os.sched_getaffinity(0)) >= 2:
+        kept = {len(cpus) == 1 and next(iter(cpus)) for name, pid, tid, cpus in threads
+                if name == "simulator" and tid == pid}
+        assert len(kept) == 1 and kept != {False}, f"simulator's stepping thread: {threads}"
+        cpu = kept.pop()
+        assert f"CPU {cpu} kept for the stepping thread of 'simulator'" in log
+        intruders = [(name, tid) for name, pid, tid, cpus in threads
+                     if cpu in cpus and not (name == "simulator" and tid == pid)]
+        assert not intruders, f"threads allowed on the simulator's CPU {cpu}: {intruders}"
+        assert len(threads) > 40, threads   # the whole tree was seen (router, nodes, their Zenoh threads)
+    else:
+        assert "only one CPU available; not reserved" in log
 
     # the hot paths: complete schema maps for a third-party unpackb, accepted by the schema decoder
     assert sorted(samples) == sorted(HOT_KEYS), f"no message on {set(HOT_KEYS) - set(samples)}"
@@ -157,7 +197,7 @@ def test_lockstep_main_job_is_bit_identical_and_hot_paths_follow_the_schema(tmp_
     assert late and max(late) > 0.3, f"the knees did not bend: {late[-3:]}"
     assert len(stamps) > 5000, f"only {len(stamps)} joint_states in {RECORD_UNTIL} sim s"
 
-    second, _, _, second_log = run_main_job(free_port(), tmp_path / "b")
+    second, _, _, second_log, _ = run_main_job(free_port(), tmp_path / "b")
     common = sorted(set(first) & set(second))
     assert len(common) > 0.99 * len(first), "the two runs published different stamps"
     differing = [s for s in common if first[s] != second[s]]

@@ -285,3 +285,29 @@ def test_zenroid_launch_verb_is_the_same_launcher(tmp_path: Path) -> None:
     bad = subprocess.run([sys.executable, "-m", "nodes.tools.cli", "launch", str(path)], cwd=ROOT,
                          capture_output=True, text=True, timeout=60)
     assert bad.returncode == 2 and f"{path}:2:" in bad.stderr
+
+
+def test_exclusive_cpu_is_a_condition_for_one_node_only(tmp_path: Path) -> None:
+    # the main job keeps a CPU for the physics in lockstep only, and a user can force it either way
+    humanoid = find_launch_file("humanoid.yaml")
+    by_mode = {mode: {n.name: n.exclusive_cpu for n in resolve(humanoid, {"mode": mode}).nodes}
+               for mode in ("lockstep", "realtime")}
+    assert by_mode["lockstep"]["simulator"] and not by_mode["realtime"]["simulator"]
+    assert [name for name, on in by_mode["lockstep"].items() if on] == ["simulator"]
+    assert resolve(humanoid, {"mode": "realtime", "exclusive_cpu": "true"}).nodes[0].exclusive_cpu
+    assert not resolve(humanoid, {"mode": "lockstep", "exclusive_cpu": "false"}).nodes[0].exclusive_cpu
+    assert resolve(humanoid, {"mode": "lockstep"}).nodes[0].describe()["exclusive_cpu"] is True
+
+    two = write(tmp_path, """
+        launch:
+          - node: {name: a, module: tests.support.dummy_node, exclusive_cpu: true}
+          - node: {name: b, module: tests.support.dummy_node, exclusive_cpu: "yes"}
+        """)
+    err = error_of(two)
+    assert "test.yaml:3" in str(err) and "only one node of a launch can have exclusive_cpu" in str(err)
+    assert "'a'" in str(err)
+    bad = write(tmp_path, """
+        launch:
+          - node: {name: a, module: tests.support.dummy_node, exclusive_cpu: sometimes}
+        """, "bad.yaml")
+    assert "exclusive_cpu" in str(error_of(bad)) and "sometimes" in str(error_of(bad))
