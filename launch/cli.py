@@ -179,7 +179,7 @@ def execute(plan: LaunchPlan, log_dir: Path) -> int:
 
 
 def reserve_exclusive_cpu(plan: LaunchPlan) -> int | None:
-    """The CPU kept for the node with ``exclusive_cpu`` (None: no such node, or one CPU only).
+    """The CPU kept for the node with ``exclusive_cpu`` (None: no such node, or none can be kept; says why).
 
     The launcher's own threads move to the other CPUs first, so the router and every process it starts
     run there; the node's stepping thread claims the kept CPU itself (nodes.core.cpu)."""
@@ -200,7 +200,8 @@ def reserve_exclusive_cpu(plan: LaunchPlan) -> int | None:
     if not cpu.hold_reservation():
         # a second launch on this machine would pick the same CPU: two physics threads on one CPU
         print(f"[launch] [INFO] exclusive_cpu of '{owner.name}': another launch on this machine keeps a CPU for "
-              "its physics; not reserved (several worlds side by side: exclusive_cpu:=false for each)", flush=True)
+              "its physics (or the temporary directory is not writable); not reserved (several worlds side by "
+              "side: exclusive_cpu:=false for each)", flush=True)
         return None
     rest = allowed - {chosen}
     cpu.move_threads(rest)
