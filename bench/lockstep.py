@@ -61,7 +61,7 @@ with session as s:
     def on_models(sample):
         m = msgpack.unpackb(sample.payload.to_bytes())
         for name, pose in zip(m["name"], m["pose"]):
-            if name == "humanoid":
+            if name != "ground_plane":   # every robot: humanoid here, humanoid_0.. in bench/scale.py
                 pelvis.append(pose["position"]["z"])
     def on_start(sample):
         started.set()
