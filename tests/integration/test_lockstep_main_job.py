@@ -170,10 +170,11 @@ def test_lockstep_main_job_is_bit_identical_and_hot_paths_follow_the_schema(tmp_
 
     # exclusive_cpu: the stepping thread (the simulator's main thread) alone on the kept CPU
     if len(os.sched_getaffinity(0)) >= 2:
-        kept = {len(cpus) == 1 and next(iter(cpus)) for name, pid, tid, cpus in threads
-                if name == "simulator" and tid == pid}
-        assert len(kept) == 1 and kept != {False}, f"simulator's stepping thread: {threads}"
-        cpu = kept.pop()
+        assert "another launch on this machine keeps a CPU" not in log, \
+            "another lockstep launch was running on this machine (it held the CPU reservation): stop it and rerun"
+        stepping = [cpus for name, pid, tid, cpus in threads if name == "simulator" and tid == pid]
+        assert len(stepping) == 1 and len(stepping[0]) == 1, f"simulator's stepping thread: {threads}"
+        (cpu,) = stepping[0]
         assert f"CPU {cpu} kept for the stepping thread of 'simulator'" in log
         intruders = [(name, tid) for name, pid, tid, cpus in threads
                      if cpu in cpus and not (name == "simulator" and tid == pid)]
