@@ -168,6 +168,7 @@ class Supervisor:
         env[STATE_DIR_ENV] = str(self.log_dir / "state")
         env[RESPAWN_ENV] = str(managed.restarts)
         env.update(spec.env)
+        env.pop(EXCLUSIVE_CPU_ENV, None)   # only from this launch's reservation, never inherited from a shell
         if spec.exclusive_cpu and self.exclusive_cpu is not None:
             env[EXCLUSIVE_CPU_ENV] = str(self.exclusive_cpu)
         try:

@@ -281,3 +281,29 @@ def test_supervisor_prefixes_colours_and_logs_output(tmp_path: Path) -> None:
     assert text.index("'talker'") < text.index("started 'second'")  # waited for talker to finish with 0
     assert "[second] \x1b[0mafter" in text
     assert "all processes have ended" in text and text.rstrip().endswith("done")
+
+
+def test_only_the_exclusive_cpu_node_is_told_the_kept_cpu(tmp_path: Path) -> None:
+    # the CPU comes from this launch's reservation only: a value left in the shell reaches no node
+    import io
+
+    from launch.resolve import resolve
+    from launch.supervisor import Supervisor
+
+    show = "import os; print('cpu=' + os.environ.get('ZENROID_EXCLUSIVE_CPU', 'none'))"
+    file = tmp_path / "test.yaml"
+    file.write_text(textwrap.dedent(f"""
+        launch:
+          - node: {{name: stepper, exec: python, args: [-c, "{show}"], exclusive_cpu: true}}
+          - node: {{name: other, exec: python, args: [-c, "{show}"]}}
+        """))
+    plan = resolve(file, {})
+    screen = io.StringIO()
+    environment = dict(os.environ, ZENROID_EXCLUSIVE_CPU="7")
+    assert Supervisor(plan, tmp_path, environment, readiness=None, out=screen, colour=False,
+                      exclusive_cpu=1).run() == 0
+    text = screen.getvalue()
+    assert "[stepper] cpu=1" in text and "[other] cpu=none" in text, text
+    screen = io.StringIO()
+    assert Supervisor(plan, tmp_path, environment, readiness=None, out=screen, colour=False).run() == 0
+    assert "[stepper] cpu=none" in screen.getvalue() and "[other] cpu=none" in screen.getvalue()
