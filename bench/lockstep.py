@@ -9,7 +9,8 @@ Each run:
       process that imports only zenoh and msgpack counts simulated time on ``sim/clock`` and watches the
       pelvis height on ``sim/model_states``.
 ``ratio`` = (b) / (a). Prints a table, then one JSON line with ``fullstack_steps_per_s``,
-``inprocess_steps_per_s`` and ``ratio`` (medians over the runs).
+``inprocess_steps_per_s`` and ``ratio`` (medians over the runs); each run also records what the launcher
+did with ``exclusive_cpu`` ("CPU 1", "not reserved: why" when another lockstep launch holds the CPU, "off").
 
     python bench/lockstep.py [--runs 3] [--seconds 8] [--physics-rate 1000]
 """
@@ -156,6 +157,16 @@ def _node_label(cmd: list[str]) -> str:
     return Path(cmd[0]).name if cmd else "?"
 
 
+def exclusive_cpu_of(launch_output: str) -> str:
+    """What the launcher said about ``exclusive_cpu``: "CPU n", "not reserved: why" or "off"."""
+    for line in launch_output.splitlines():
+        if "kept for the stepping thread" in line:
+            return line.split("[INFO] ", 1)[-1].split(" kept", 1)[0]
+        if "exclusive_cpu of" in line and "not reserved" in line:
+            return "not reserved: " + line.split(": ", 1)[-1].split(";", 1)[0]
+    return "off"
+
+
 def fullstack(seconds: float, physics_rate: float, launch_file: str = "humanoid.yaml",
               launch_args: tuple[str, ...] = ()) -> dict:
     port = free_port()
@@ -163,10 +174,13 @@ def fullstack(seconds: float, physics_rate: float, launch_file: str = "humanoid.
     env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
     env.pop("ZENOH_CONFIG", None)
     env.pop("ZENOH_CONNECT", None)
-    launch = subprocess.Popen(
-        [sys.executable, "-m", "launch", launch_file, "mode:=lockstep", "gui:=false", f"zenoh_port:={port}", *launch_args,
-         "--log-dir", str(Path(os.environ.get("TMPDIR", "/tmp")) / f"bench-lockstep-{port}")],
-        cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    log_dir = Path(os.environ.get("TMPDIR", "/tmp")) / f"bench-lockstep-{port}"
+    log_dir.mkdir(parents=True, exist_ok=True)
+    with open(log_dir / "launch.out", "wb") as out:   # the launcher says whether it kept a CPU for the physics
+        launch = subprocess.Popen(
+            [sys.executable, "-m", "launch", launch_file, "mode:=lockstep", "gui:=false", f"zenoh_port:={port}",
+             *launch_args, "--log-dir", str(log_dir)],
+            cwd=ROOT, env=env, stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
     try:
         time.sleep(0.5)
         probe = subprocess.Popen(
@@ -190,6 +204,7 @@ def fullstack(seconds: float, physics_rate: float, launch_file: str = "humanoid.
             launch.wait()
     result["steps_per_s"] = result["sim_seconds"] * physics_rate / result["wall_seconds"]
     result["cpu_percent"] = {k: round(100 * (cpu_after.get(k, 0.0) - v) / wall, 1) for k, v in cpu_before.items()}
+    result["exclusive_cpu"] = exclusive_cpu_of((log_dir / "launch.out").read_text(errors="replace"))
     return result
 
 
@@ -212,7 +227,8 @@ def main(argv: list[str] | None = None) -> int:
         ceiling_after, _ = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
         ceiling = statistics.mean([ceiling, ceiling_after])   # bracket the full-stack run
         rows.append({"inprocess": ceiling, "fullstack": full["steps_per_s"], "ratio": full["steps_per_s"] / ceiling,
-                     "pelvis_min": full["pelvis_min"], "cpu": full["cpu_percent"], "inprocess_height": height})
+                     "pelvis_min": full["pelvis_min"], "cpu": full["cpu_percent"], "inprocess_height": height,
+                     "exclusive_cpu": full["exclusive_cpu"]})
         print(f"run {run + 1}: in-process {ceiling:,.0f} steps/s, full stack {full['steps_per_s']:,.0f} steps/s, "
               f"ratio {full['steps_per_s'] / ceiling:.2f}, pelvis min {full['pelvis_min']:.3f} m", file=sys.stderr)
 
@@ -226,6 +242,8 @@ def main(argv: list[str] | None = None) -> int:
          f"{med['fullstack'] / args.physics_rate:.2f}x real time"),
         ("ratio (b)/(a)", f"{med['ratio']:.2f}", "goal >= 0.5, stretch 0.7"),
         ("pelvis height, lowest seen", f"{pelvis_min:.3f} m", "standing: > 0.75 m"),
+        ("exclusive_cpu (the launcher's choice)", ", ".join(sorted({r["exclusive_cpu"] for r in rows})),
+         "a CPU of its own for the physics thread"),
     ]
     table += [(f"  CPU of {k}", f"{v:.0f} %", "of one core, median") for k, v in cpu.items()]
     table.append(("load average (1 min) before / after", f"{load_before:.1f} / {os.getloadavg()[0]:.1f}",
