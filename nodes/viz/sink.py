@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import rerun as rr
-import rerun.blueprint as rrb
 
 
 def has_display() -> bool:
@@ -124,7 +123,7 @@ class OutputPlan:
 class Output:
     """Attaches the sinks of an ``OutputPlan`` to a recording; ``close()`` flushes and stops the server."""
 
-    def __init__(self, recording: rr.RecordingStream, plan: OutputPlan, blueprint: rrb.Blueprint | None = None) -> None:
+    def __init__(self, recording: rr.RecordingStream, plan: OutputPlan) -> None:
         self.recording = recording
         self.plan = plan
         self.server: subprocess.Popen | None = None
@@ -139,7 +138,7 @@ class Output:
         if plan.spawn:
             sinks.append(rr.GrpcSink(self._spawn_viewer()))
         if sinks:
-            recording.set_sinks(*sinks, default_blueprint=blueprint)
+            recording.set_sinks(*sinks)   # no start-up layout: the visualiser sends one once joints are known
 
     def _spawn_viewer(self) -> str:
         """The native viewer, started like ``rr.spawn`` (detached: the window outlives the node) but with
