@@ -60,23 +60,15 @@ def hold_reservation() -> bool:
     return True
 
 
-def set_thread_affinity(tid: int, cpus: set[int]) -> bool:
-    """Move one thread (or a just-started process: its only thread); False when it is gone."""
-    try:
-        os.sched_setaffinity(tid, cpus)
-        return True
-    except OSError:   # the thread ended meanwhile, or the CPU set is not allowed here
-        return False
-
-
-def move_threads(cpus: set[int], *, keep: int | None = None) -> int:
-    """Every thread of this process except ``keep`` (a native thread id) onto ``cpus``; how many moved."""
-    moved = 0
+def move_threads(cpus: set[int], *, keep: int | None = None) -> None:
+    """Every thread of this process except ``keep`` (a native thread id) onto ``cpus``."""
     for entry in Path("/proc/self/task").iterdir():
         tid = int(entry.name)
-        if tid != keep and set_thread_affinity(tid, cpus):
-            moved += 1
-    return moved
+        if tid != keep:
+            try:
+                os.sched_setaffinity(tid, cpus)
+            except OSError:   # the thread ended meanwhile
+                pass
 
 
 class ExclusiveCpu:
@@ -111,5 +103,5 @@ class ExclusiveCpu:
         os.sched_setaffinity(0, {self.cpu})   # 0: the calling thread
         self.sweep()
 
-    def sweep(self) -> int:
-        return move_threads(self.rest, keep=self.thread_id)
+    def sweep(self) -> None:
+        move_threads(self.rest, keep=self.thread_id)

@@ -82,15 +82,8 @@ def thread_cpus(launcher_pid: int) -> list[tuple[str, int, int, set[int]]]:
             cmd = proc.cmdline()
             name = cmd[cmd.index("--name") + 1] if "--name" in cmd else proc.name()
             for thread in proc.threads():
-                status = Path(f"/proc/{proc.pid}/task/{thread.id}/status").read_text()
-                allowed = next(line.split(":")[1].strip() for line in status.splitlines()
-                               if line.startswith("Cpus_allowed_list"))
-                cpus = set()
-                for part in allowed.split(","):
-                    low, _, high = part.partition("-")
-                    cpus.update(range(int(low), int(high or low) + 1))
-                out.append((name, proc.pid, thread.id, cpus))
-        except (psutil.Error, FileNotFoundError):
+                out.append((name, proc.pid, thread.id, set(os.sched_getaffinity(thread.id))))
+        except (psutil.Error, ProcessLookupError):
             continue   # a spawner that just ended
     return out
 
