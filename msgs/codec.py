@@ -13,7 +13,7 @@ from typing import Any
 
 import msgpack
 
-from msgs import compiled
+from msgs import compiled, structs
 from msgs.idl import EQUAL_LENGTH_RULES, FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
 from msgs.registry import default_value, get_class, get_spec
 
@@ -58,6 +58,7 @@ def encode(msg: Any) -> bytes:
 # ---------------------------------------------------------------- decode
 
 _fast_default_decoders: dict[str, Callable[[Any], Any]] = {}  # the common case without hashing Limits
+_struct_decoders: dict[tuple[str, int, bool], Callable[[Any], Any] | None] = {}
 
 
 def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFAULT_LIMITS) -> Any:
@@ -66,6 +67,16 @@ def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFA
     size = len(data)
     if size > limits.max_message_bytes:
         raise DecodeError(type_name, "", f"message is {size} bytes, over the {limits.max_message_bytes}-byte limit")
+    if size <= limits.max_string_length:   # then no string in it can be over the limit (see msgs.structs)
+        key = (type_name, limits.max_array_length, limits.allow_nonfinite)
+        fast = _struct_decoders.get(key, _MISSING)
+        if fast is _MISSING:
+            fast = _struct_decoders[key] = structs.decoder(*key)
+        if fast is not None:
+            try:
+                return fast(data)
+            except structs.Refused:
+                pass   # invalid, or valid in a way only the precise path handles: it decides and explains
     try:
         obj = msgpack.unpackb(
             data, raw=False, strict_map_key=True,

@@ -80,7 +80,7 @@ def encoder(type_name: str) -> Callable[[Any], dict]:
     spec = get_spec(type_name)
     env: dict[str, Any] = {"_floats": _floats, "_strs": _strs, "bytes": bytes}
     lines = ["def encode(m):", f"    return {_encode_expr(spec, 'm', env, depth=0)}"]
-    return _compile("\n".join(lines), env, "encode", f"encoder of {type_name}")
+    return compile_source("\n".join(lines), env, "encode", f"encoder of {type_name}")
 
 
 def _encode_expr(spec: MsgSpec, var: str, env: dict[str, Any], depth: int) -> str:
@@ -128,7 +128,7 @@ def decoder(type_name: str, max_array_length: int, max_string_length: int, allow
     }
     body = ["def decode(o):", *_decode_lines(type_name, "o", "result", env, "", 0, allow_nonfinite,
                                               lengths_checked), "    return result"]
-    return _compile("\n".join(body), env, "decode", f"decoder of {type_name}")
+    return compile_source("\n".join(body), env, "decode", f"decoder of {type_name}")
 
 
 def _decode_lines(type_name: str, obj: str, result: str, env: dict[str, Any], prefix: str, depth: int,
@@ -271,7 +271,7 @@ def builder(type_name: str) -> Callable[..., dict]:
             items.append(f"{f.name!r}: (_d{i}() if {f.name} is None else "
                          f"{f.name} if _t({f.name}) is dict else {nested}({f.name}))")
     source = f"def build(*, {', '.join(params)}):\n    return {{{', '.join(items)}}}"
-    return _compile(source, env, "build", f"builder of {type_name}")
+    return compile_source(source, env, "build", f"builder of {type_name}")
 
 
 def _default_map(f: FieldSpec) -> Callable[[], Any]:
@@ -295,7 +295,8 @@ def packer(type_name: str) -> Callable[..., bytes]:
 
 # ---------------------------------------------------------------- helpers
 
-def _compile(source: str, env: dict[str, Any], name: str, what: str) -> Callable[..., Any]:
+def compile_source(source: str, env: dict[str, Any], name: str, what: str) -> Callable[..., Any]:
+    """Compile generated ``source`` (from parsed definitions only) and return its function ``name``."""
     code = compile(source, f"<{what}>", "exec")
     namespace = dict(env)
     exec(code, namespace)  # noqa: S102 - source generated from parsed definitions, never from user input

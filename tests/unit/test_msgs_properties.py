@@ -13,6 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import msgs
+from msgs import structs
 from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
 from msgs.registry import get_class, get_spec
 
@@ -199,3 +200,31 @@ def test_each_type_refuses_unknown_fields_and_non_maps(type_name: str) -> None:
     assert isinstance(error, msgs.DecodeError) and error.path == "zz_unknown_field"
     for payload in (msgpack.packb([1, 2]), msgpack.packb(3), b"\xc1", b"\x92\x01"):
         assert isinstance(_decode_or_decode_error(cls, payload), msgs.DecodeError)
+
+
+@pytest.mark.parametrize("type_name", ALL)
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(data=st.data())
+def test_the_struct_fast_path_accepts_only_what_the_precise_path_accepts_and_builds_the_same(
+        type_name: str, data: st.DataObject) -> None:
+    """msgs.structs may refuse anything (the precise path then decides), but what it accepts must be exactly
+    what the generated/precise decoders build from the same map: valid messages, integers where floats go,
+    and each field replaced by a value no decoder may accept."""
+    cls = get_class(type_name)
+    plain = msgs.to_dict(data.draw(message_strategy(type_name)))
+    fields = _fields_of(type_name)
+    if fields and data.draw(st.booleans()):
+        f = data.draw(st.sampled_from(fields))
+        if f.is_array and f.is_primitive and f.base in FLOAT_TYPES and plain[f.name]:
+            plain[f.name] = [int(x) if math.isfinite(x) and abs(x) < 2**53 else x for x in plain[f.name]]
+        else:
+            plain[f.name] = data.draw(st.sampled_from(_wrong_values(f)))
+    payload = msgpack.packb(plain, use_bin_type=True)
+    fast = structs.decoder(type_name, 1000, False)
+    assert fast is not None
+    try:
+        got = fast(payload)
+    except structs.Refused:
+        return
+    expected = msgs.from_dict(cls, msgpack.unpackb(payload, raw=False))   # raises if it would refuse
+    assert type(got) is cls and got == expected
