@@ -128,11 +128,11 @@ def inprocess_steps_per_s(steps: int, physics_rate: float) -> tuple[float, float
     return steps / elapsed, height
 
 
-def process_tree_cpu(pid: int) -> dict[str, float]:
-    """CPU seconds used so far by each process under ``pid``, keyed by its node name."""
+def process_tree_cpu(pid: int) -> dict[int, tuple[str, float]]:
+    """CPU seconds used so far by each process under ``pid``: pid -> (its node name, seconds)."""
     import psutil
 
-    out: dict[str, float] = {}
+    out: dict[int, tuple[str, float]] = {}
     try:
         root = psutil.Process(pid)
         procs = [root, *root.children(recursive=True)]
@@ -145,8 +145,19 @@ def process_tree_cpu(pid: int) -> dict[str, float]:
         except psutil.Error:
             continue
         label = "launcher (+router)" if proc.pid == pid else _node_label(cmd)
-        out[label] = out.get(label, 0.0) + times.user + times.system
+        out[proc.pid] = (label, times.user + times.system)
     return out
+
+
+def cpu_percent_between(before: dict[int, tuple[str, float]], after: dict[int, tuple[str, float]],
+                        wall: float) -> dict[str, float]:
+    """Percent of one core per node name, over the processes alive at both snapshots (a short-lived one,
+    such as a spawner that ended in between, would otherwise count negative)."""
+    used: dict[str, float] = {}
+    for pid, (label, seconds) in before.items():
+        if pid in after:
+            used[label] = used.get(label, 0.0) + after[pid][1] - seconds
+    return {label: round(100 * seconds / wall, 1) for label, seconds in used.items()}
 
 
 def _node_label(cmd: list[str]) -> str:
@@ -203,7 +214,7 @@ def fullstack(seconds: float, physics_rate: float, launch_file: str = "humanoid.
             os.killpg(launch.pid, signal.SIGKILL)
             launch.wait()
     result["steps_per_s"] = result["sim_seconds"] * physics_rate / result["wall_seconds"]
-    result["cpu_percent"] = {k: round(100 * (cpu_after.get(k, 0.0) - v) / wall, 1) for k, v in cpu_before.items()}
+    result["cpu_percent"] = cpu_percent_between(cpu_before, cpu_after, wall)
     result["exclusive_cpu"] = exclusive_cpu_of((log_dir / "launch.out").read_text(errors="replace"))
     return result
 

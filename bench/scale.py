@@ -27,7 +27,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.lockstep import PROBE, process_tree_cpu  # noqa: E402 - after the path set-up
+from bench.lockstep import PROBE, cpu_percent_between, process_tree_cpu  # noqa: E402 - after the path set-up
 
 ENV = {k: v for k, v in os.environ.items() if k not in ("ZENOH_CONNECT", "ZENOH_CONFIG")}
 ENV.update(PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
@@ -67,8 +67,14 @@ def stop(procs: list[subprocess.Popen]) -> None:
             proc.wait()
 
 
-def cpu_of(pids: list[int]) -> float:
-    return sum(sum(process_tree_cpu(pid).values()) for pid in pids)
+def cpu_of(pids: list[int]) -> dict[int, tuple[str, float]]:
+    """CPU seconds so far of every process under ``pids`` (see ``cores_used``)."""
+    return {child: used for pid in pids for child, used in process_tree_cpu(pid).items()}
+
+
+def cores_used(before: dict[int, tuple[str, float]], after: dict[int, tuple[str, float]], wall: float) -> float:
+    """Cores used between two ``cpu_of`` snapshots, by the processes alive at both."""
+    return sum(cpu_percent_between(before, after, wall).values()) / 100
 
 
 def one_world(k: int, seconds: float) -> dict:
@@ -95,7 +101,7 @@ def one_world(k: int, seconds: float) -> dict:
         probe.stdout.readline()
         cpu0, wall0 = cpu_of([p.pid for p in procs]), time.perf_counter()
         result = finish_probe(probe, seconds)
-        cpu = (cpu_of([p.pid for p in procs]) - cpu0) / (time.perf_counter() - wall0)
+        cpu = cores_used(cpu0, cpu_of([p.pid for p in procs]), time.perf_counter() - wall0)
     finally:
         stop(procs)
         router.close()
@@ -121,7 +127,7 @@ def side_by_side(k: int, seconds: float) -> dict:
             probe.stdout.readline()
         cpu0, wall0 = cpu_of([p.pid for p in procs]), time.perf_counter()
         results = [finish_probe(probe, seconds) for probe in probes]
-        cpu = (cpu_of([p.pid for p in procs]) - cpu0) / (time.perf_counter() - wall0)
+        cpu = cores_used(cpu0, cpu_of([p.pid for p in procs]), time.perf_counter() - wall0)
     finally:
         stop(procs)
     per_world = [r["sim_seconds"] * 1000.0 / r["wall_seconds"] for r in results]
