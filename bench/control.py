@@ -6,9 +6,12 @@
    Reported as thread CPU time (the work itself; on a shared 2-core machine wall-clock percentiles mostly
    measure preemption by other processes), with the wall-clock figures alongside.
 2. Command latency (realtime mode, three processes): a JointTrajectory published by this process to the
-   first ``hardware/command`` from the controller manager process that carries it.
+   first ``hardware/command`` from the controller manager process that carries it; and, of it, the wait
+   from the publish to the next ``hardware/state`` seen by this process (about when the manager's next
+   cycle starts: on average half a control period, as in ros2_control).
 
-Prints a small table, then one JSON line: update_p99_us, command_latency_p50_us, command_latency_p99_us.
+Prints a small table, then one JSON line: update_p99_us, command_latency_p50_us, command_latency_p99_us,
+wait_for_state_p50_us.
     python bench/control.py [--cycles 5000] [--samples 200]
 """
 
@@ -127,6 +130,8 @@ def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
     lock = threading.Lock()
     pending: dict[str, float] = {}  # target -> publish time
     latencies: list[float] = []
+    waits: list[float] = []   # publish -> the next hardware/state seen here (the manager's next cycle starts then)
+    state_arrivals: list[float] = []
     commands = [0]
 
     def on_command(payload: bytes) -> None:
@@ -140,11 +145,20 @@ def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
             for name, value in zip(frame["name"], frame["value"], strict=True):
                 if name == "neck_pitch" and abs(value - float(target)) < 1e-9:
                     latencies.append((received - sent) * 1e6)
+                    later = [t for t in state_arrivals[-100:] if t > sent]
+                    if later:
+                        waits.append((later[0] - sent) * 1e6)
                     pending.clear()
                     return
 
+    def on_state(_payload: bytes) -> None:
+        state_arrivals.append(time.perf_counter())
+        if len(state_arrivals) > 1000:
+            del state_arrivals[:500]
+
     try:
         node.create_subscription(None, "/humanoid/hardware/command", on_command, inline=True, raw=True)
+        node.create_subscription(None, "/humanoid/hardware/state", on_state, inline=True, raw=True)
         pub = node.create_publisher(JointTrajectory, "/humanoid/joint_trajectory_controller/joint_trajectory",
                                     express=True)
         deadline = time.monotonic() + 120
@@ -174,6 +188,7 @@ def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
             except subprocess.TimeoutExpired:
                 proc.kill()
     return {"p50": pct(latencies, 50), "p99": pct(latencies, 99), "n": len(latencies), "sent": samples,
+            "wait_p50": pct(waits, 50), "wait_p99": pct(waits, 99),
             "cycle_p50": manager_stats["cycle_p50_us"], "cycle_p99": manager_stats["cycle_p99_us"]}
 
 
@@ -197,6 +212,8 @@ def main() -> int:
         ("manager cycle in the process (decode+update+publish)", latency["cycle_p50"], latency["cycle_p99"], ""),
         (f"JointTrajectory -> hardware/command ({latency['n']}/{latency['sent']})", latency["p50"], latency["p99"],
          "goal p50 < 1000, p99 < 3000"),
+        ("  of it: publish -> the next hardware/state seen here", latency["wait_p50"], latency["wait_p99"],
+         "the manager's next cycle; ~half a period"),
     ]
     print(f"{'measurement':<58} {'p50 µs':>9} {'p99 µs':>9}  note")
     for label, p50, p99, note in rows:
@@ -205,7 +222,8 @@ def main() -> int:
                       "update_wall_p99_us": round(update["wall_p99"], 1),
                       "cycle_p99_us": round(latency["cycle_p99"], 1),
                       "command_latency_p50_us": round(latency["p50"], 1),
-                      "command_latency_p99_us": round(latency["p99"], 1)}))
+                      "command_latency_p99_us": round(latency["p99"], 1),
+                      "wait_for_state_p50_us": round(latency["wait_p50"], 1)}))
     return 0
 
 
