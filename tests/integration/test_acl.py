@@ -156,7 +156,7 @@ def test_a_normal_launch_listens_on_loopback_only(tmp_path: Path, zenoh_port: in
         tree = [scenario.proc.pid] + [c.pid for c in psutil.Process(scenario.proc.pid).children(recursive=True)]
         sockets = [c for c in psutil.net_connections(kind="inet") if c.pid in tree]
         listening = [c for c in sockets if c.status == psutil.CONN_LISTEN]
-        commands = {pid: " ".join(psutil.Process(pid).cmdline()[:4]) for pid in {c.pid for c in sockets}}
+        commands = {pid: _command_of(pid) for pid in {c.pid for c in sockets}}
         exposed = [(commands[c.pid], c.laddr) for c in listening if not ipaddress.ip_address(c.laddr.ip).is_loopback]
         assert not exposed, f"listening beyond loopback: {exposed}"
         # UDP: nothing bound to an address other machines could send to (no multicast scouting)
@@ -168,3 +168,11 @@ def test_a_normal_launch_listens_on_loopback_only(tmp_path: Path, zenoh_port: in
     finally:
         scenario.close()
 
+
+def _command_of(pid: int) -> str:
+    """The start of a process's command line; a short-lived child (the controller spawner) may have ended
+    between listing the sockets and asking (psutil then raises ZombieProcess or NoSuchProcess)."""
+    try:
+        return " ".join(psutil.Process(pid).cmdline()[:4])
+    except psutil.Error:
+        return f"(pid {pid}, ended)"
