@@ -51,7 +51,13 @@ def test_four_limb_controllers_side_by_side(processes, router):
             with lock:
                 return all(abs(latest[j] - t) < 0.02 for j, t in TARGETS.values())
 
-        wait_until(reached, timeout=90, interval=0.5, message="every limb at its own target")
+        try:
+            wait_until(reached, timeout=90, interval=0.5, message="every limb at its own target")
+        except BaseException:   # say where each limb was (pytest.fail raises an exception outside Exception)
+            with lock:
+                where = {j: round(latest[j], 3) for j, _ in TARGETS.values()}
+            print(f"limbs at {where}, targets {dict(TARGETS.values())}\n" + processes.output(manager)[-3000:])
+            raise
         # A controller only accepts its own joint.
         pubs["left_arm_controller"].publish(msgs.from_dict(JointTrajectory, {"joint_names": ["right_arm_joint"],
                                             "points": [{"positions": [0.0], "time_from_start": {"sec": 1}}]}))
