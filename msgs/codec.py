@@ -58,7 +58,6 @@ def encode(msg: Any) -> bytes:
 # ---------------------------------------------------------------- decode
 
 _fast_default_decoders: dict[str, Callable[[Any], Any]] = {}  # the common case without hashing Limits
-_struct_decoders: dict[tuple[str, int, bool], Callable[[Any], Any] | None] = {}
 
 
 def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFAULT_LIMITS) -> Any:
@@ -68,10 +67,7 @@ def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFA
     if size > limits.max_message_bytes:
         raise DecodeError(type_name, "", f"message is {size} bytes, over the {limits.max_message_bytes}-byte limit")
     if size <= limits.max_string_length:   # then no string in it can be over the limit (see msgs.structs)
-        key = (type_name, limits.max_array_length, limits.allow_nonfinite)
-        fast = _struct_decoders.get(key, _MISSING)
-        if fast is _MISSING:
-            fast = _struct_decoders[key] = structs.decoder(*key)
+        fast = structs.decoder(type_name, limits.max_array_length, limits.allow_nonfinite)   # cached per type
         if fast is not None:
             try:
                 return fast(data)

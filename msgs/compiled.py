@@ -156,17 +156,25 @@ def _decode_lines(type_name: str, obj: str, result: str, env: dict[str, Any], pr
             body += ["        " + line
                      for line in _check_lines(f, var, env, f"{prefix}_{i}", allow_nonfinite, lengths_checked)]
         args.append(f"{f.name}={var}")
-    rule = EQUAL_LENGTH_RULES.get(type_name)
-    if rule:
-        ref, others, empty_ok = rule
-        index = {f.name: i for i, f in enumerate(spec.fields)}
-        n = f"len(v{prefix}_{index[ref]})"
-        for other in others:
-            m = f"len(v{prefix}_{index[other]})"
-            cond = f"{m} != {n}" + (f" and {m} != 0" if empty_ok else "")
-            body += [f"    if {cond}:", "        raise Reject"]
+    body += ["    " + line for line in equal_length_lines(type_name, prefix, "Reject")]
     body.append(f"    {result} = _cls{prefix}({', '.join(args)})")
     return body
+
+
+def equal_length_lines(type_name: str, prefix: str, exception: str) -> list[str]:
+    """Generated checks of the type's equal-length rule (``EQUAL_LENGTH_RULES``), unindented, for a body that
+    holds field ``i``'s value in ``v{prefix}_{i}``; a broken rule raises ``exception``."""
+    rule = EQUAL_LENGTH_RULES.get(type_name)
+    if not rule:
+        return []
+    ref, others, empty_ok = rule
+    index = {f.name: i for i, f in enumerate(get_spec(type_name).fields)}
+    n = f"len(v{prefix}_{index[ref]})"
+    lines = []
+    for other in others:
+        m = f"len(v{prefix}_{index[other]})"
+        lines += [f"if {m} != {n}" + (f" and {m} != 0:" if empty_ok else ":"), f"    raise {exception}"]
+    return lines
 
 
 def _check_lines(f: FieldSpec, var: str, env: dict[str, Any], index: str, allow_nonfinite: bool,

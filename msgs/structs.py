@@ -20,8 +20,8 @@ from typing import Annotated, Any
 
 import msgspec
 
-from msgs.compiled import compile_source
-from msgs.idl import EQUAL_LENGTH_RULES, FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
+from msgs.compiled import compile_source, equal_length_lines
+from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
 from msgs.registry import default_value, get_class, get_spec
 
 # What the decoder raises for data it does not accept (the caller falls back to the precise decoder): msgspec's
@@ -130,13 +130,7 @@ def _convert_lines(type_name: str, source: str, result: str, env: dict[str, Any]
                 body += ["else:", *("    " + line
                                     for line in _convert_lines(f.base, var, var, env, f"{prefix}_{i}", depth + 1))]
         args.append(f"{f.name}={var}")
-    rule = EQUAL_LENGTH_RULES.get(type_name)
-    if rule:
-        ref, others, empty_ok = rule
-        index = {f.name: i for i, f in enumerate(spec.fields)}
-        for other in others:
-            n, m = f"v{prefix}_{index[ref]}", f"v{prefix}_{index[other]}"
-            body += [f"if len({m}) != len({n})" + (f" and {m}:" if empty_ok else ":"), "    raise _Broken"]
+    body += equal_length_lines(type_name, prefix, "_Broken")
     body.append(f"{result} = _cls{prefix}({', '.join(args)})")
     return ["    " + line for line in body] if depth == 0 else body
 
