@@ -6,6 +6,7 @@ Errors name the message type, the field path and the reason, e.g.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -256,15 +257,7 @@ def _scalar_decoder(f: FieldSpec, limits: Limits) -> Callable[[Any], Any]:
             return v
 
         return dec_str
-    nested = f.base
-    resolved: list[Callable[[Any], Any]] = []  # looked up on first use: types may be recursive
-
-    def dec_nested(v: Any) -> Any:
-        if not resolved:
-            resolved.append(_decoder(nested, limits))
-        return resolved[0](v)
-
-    return dec_nested
+    return compiled.on_first_use(functools.partial(_decoder, f.base, limits))
 
 
 def _array_decoder(f: FieldSpec, limits: Limits) -> Callable[[Any], Any]:

@@ -235,14 +235,20 @@ def _check_lines(f: FieldSpec, var: str, env: dict[str, Any], index: str, allow_
 def _nested(type_name: str, env: dict[str, Any]) -> Callable[[Any], Any]:
     """The decoder of a nested type with the same limits, resolved on first use (types may recurse)."""
     limits = (env["_MAXLEN"], env["_MAXSTR"], env["_ALLOW_NONFINITE"], env["_LENGTHS_CHECKED"])
+    return on_first_use(functools.partial(decoder, type_name, *limits))
+
+
+def on_first_use(build: Callable[[], Callable[[Any], Any]]) -> Callable[[Any], Any]:
+    """A function that calls ``build()``'s result, built on the first call: a nested type's decoder cannot be
+    built while the type containing it is (types may recurse)."""
     resolved: list[Callable[[Any], Any]] = []
 
-    def nested(v: Any) -> Any:
+    def call(v: Any) -> Any:
         if not resolved:
-            resolved.append(decoder(type_name, *limits))
+            resolved.append(build())
         return resolved[0](v)
 
-    return nested
+    return call
 
 
 # ---------------------------------------------------------------- builders (keyword fields -> map)

@@ -20,7 +20,7 @@ from typing import Annotated, Any
 
 import msgspec
 
-from msgs.compiled import compile_source, equal_length_lines
+from msgs.compiled import compile_source, equal_length_lines, on_first_use
 from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
 from msgs.registry import default_value, get_class, get_spec
 
@@ -123,7 +123,7 @@ def _convert_lines(type_name: str, source: str, result: str, env: dict[str, Any]
         body += [f"{var} = {source}.f{i}", f"if {var} is _UNSET:", f"    {var} = _default{prefix}_{i}()"]
         if not f.is_primitive:
             if f.is_array or depth >= 3:
-                env[f"_conv{prefix}_{i}"] = _LazyConverter(f.base)
+                env[f"_conv{prefix}_{i}"] = on_first_use(functools.partial(_converter, f.base))
                 call = f"[_conv{prefix}_{i}(x) for x in {var}]" if f.is_array else f"_conv{prefix}_{i}({var})"
                 body += ["else:", f"    {var} = {call}"]
             else:
@@ -134,18 +134,3 @@ def _convert_lines(type_name: str, source: str, result: str, env: dict[str, Any]
     body.append(f"{result} = _cls{prefix}({', '.join(args)})")
     return ["    " + line for line in body] if depth == 0 else body
 
-
-class _LazyConverter:
-    """A nested type's converter, built on first use."""
-
-    __slots__ = ("_type_name", "_convert")
-
-    def __init__(self, type_name: str) -> None:
-        self._type_name = type_name
-        self._convert: Callable[[Any], Any] | None = None
-
-    def __call__(self, value: Any) -> Any:
-        convert = self._convert
-        if convert is None:
-            convert = self._convert = _converter(self._type_name)
-        return convert(value)
