@@ -93,6 +93,9 @@ class Trajectory:
     start_positions: np.ndarray | None = None  # state before the trajectory, set by ``set_start_state``
     start_velocities: np.ndarray | None = None
     start_accelerations: np.ndarray | None = None
+    # per joint, the fastest the points themselves ask for (``peak_speeds``); the segment from the start
+    # state is added by ``speed_ratio`` once that state is known
+    peak_speeds: list[float] | None = None
 
     @property
     def end_time(self) -> float:
@@ -106,35 +109,38 @@ class Trajectory:
         self.start_accelerations = (np.zeros_like(self.start_positions) if accelerations is None
                                     else np.asarray(accelerations, dtype=float))
 
-    def speed_ratio(self, max_velocity: np.ndarray) -> tuple[float, int, float]:
+    def speed_ratio(self, max_velocity) -> tuple[float, int, float]:
         """How much faster than its velocity limit the trajectory asks a joint to move.
 
         Returns ``(ratio, joint, speed)``: the largest ``speed / limit`` over the explicit ``velocities``
         and the average speed of every segment, the first one starting from the start state (a first
         point at time 0 is a jump no timing can slow: the controller's output limiter handles it), with
-        the position in ``joint_names`` and the speed (rad/s) of the worst joint."""
-        limits = np.asarray(max_velocity, dtype=float)[self.joint_indices]
-        if not np.isfinite(limits).any():
+        the position in ``joint_names`` and the speed (rad/s) of the worst joint.
+
+        Plain Python on the per-joint peaks found at validation: it runs in the control cycle that takes the
+        trajectory, where a dozen numpy calls on arrays this small cost more than the loop (measured)."""
+        limits = [float(max_velocity[i]) for i in self.joint_indices]
+        if not any(math.isfinite(limit) for limit in limits):
             return 0.0, 0, 0.0
-        positions, times = self.positions, self.times
-        if self.start_positions is not None and times[0] > 0.0:
-            positions = np.vstack([self.start_positions, positions])
-            times = np.concatenate([[0.0], times])
-        speeds = [np.zeros(len(limits))]
-        if len(times) > 1:
-            with np.errstate(invalid="ignore"):
-                segment = np.abs(np.diff(positions, axis=0)) / np.diff(times)[:, None]
-            speeds.append(np.nanmax(np.where(np.isfinite(segment), segment, 0.0), axis=0))
-        if self.velocities is not None:
-            speeds.append(np.max(np.abs(self.velocities), axis=0))
-        speed = np.max(speeds, axis=0)
-        ratio = np.where(np.isfinite(limits), speed / np.where(limits > 0, limits, 1.0), 0.0)
-        worst = int(np.argmax(ratio))
-        return float(ratio[worst]), worst, float(speed[worst])
+        if self.peak_speeds is None:
+            self.peak_speeds = peak_speeds(self.times.tolist(), self.positions.tolist(),
+                                           self.velocities.tolist() if self.velocities is not None else [])
+        speed = list(self.peak_speeds)
+        first_time = float(self.times[0])
+        if self.start_positions is not None and first_time > 0.0:
+            _raise_peaks(speed, self.start_positions.tolist(), self.positions[0].tolist(), first_time)
+        ratio, worst = -1.0, 0
+        for k, (joint_speed, limit) in enumerate(zip(speed, limits, strict=True)):
+            joint_ratio = joint_speed / (limit if limit > 0.0 else 1.0) if math.isfinite(limit) else 0.0
+            if joint_ratio > ratio:
+                ratio, worst = joint_ratio, k
+        return ratio, worst, speed[worst]
 
     def scale_time(self, factor: float) -> None:
         """Stretch the timing by ``factor`` (> 1 slows down): times x f, velocities / f, accelerations / f²."""
         self.times = self.times * factor
+        if self.peak_speeds is not None:
+            self.peak_speeds = [speed / factor for speed in self.peak_speeds]
         if self.velocities is not None:
             self.velocities = self.velocities / factor
         if self.accelerations is not None:
@@ -228,6 +234,27 @@ def interpolate(degree: int, duration: float, s: float, p0, v0, a0, p1, v1, a1) 
     return Sample(pos, vel, acc, False, False)
 
 
+def peak_speeds(times: list[float], positions: list[list[float]], velocities: list[list[float] | None]) -> list[float]:
+    """Per joint: the largest of every explicit velocity's magnitude and the average speed of every segment
+    between two points (a segment with a velocity-only point, NaN positions, or an infinite speed counts 0)."""
+    peaks = [0.0] * len(positions[0])
+    for i in range(1, len(times)):
+        _raise_peaks(peaks, positions[i - 1], positions[i], times[i] - times[i - 1])
+    for point_velocities in velocities:
+        if point_velocities is not None:
+            for k, value in enumerate(point_velocities):
+                if abs(value) > peaks[k]:
+                    peaks[k] = abs(value)
+    return peaks
+
+
+def _raise_peaks(peaks: list[float], before: list[float], after: list[float], duration: float) -> None:
+    for k, (p0, p1) in enumerate(zip(before, after, strict=True)):
+        speed = abs(p1 - p0) / duration
+        if speed > peaks[k] and speed != math.inf:   # NaN compares false
+            peaks[k] = speed
+
+
 def _float_list(values, where: str, expected: int) -> list[float] | None:
     """A point's array: None when empty, else exactly ``expected`` finite floats."""
     if values is None:
@@ -316,7 +343,7 @@ def validate_trajectory(msg, controller_joints: list[str], *, now: float,
         accelerations.append(acc)
     joint_indices = [index_of[name] for name in joint_names]
     if limits is not None:
-        _check_position_limits(np.array(positions, dtype=float), joint_names, joint_indices, limits)
+        _check_position_limits(positions, joint_names, joint_indices, limits)
     header = _field(msg, "header")
     stamp = duration_to_sec(_field(header, "stamp")) if header is not None and _field(header, "stamp") is not None else 0.0
     if stamp < 0.0 or not math.isfinite(stamp):
@@ -344,19 +371,21 @@ def validate_trajectory(msg, controller_joints: list[str], *, now: float,
         has_acceleration=has_acc,
         start_time=start_time,
         starts_on_receipt=stamp <= 0.0,
+        peak_speeds=peak_speeds(times, positions, velocities),
     )
 
 
-def _check_position_limits(positions: np.ndarray, joint_names: list[str], joint_indices: list[int],
+def _check_position_limits(positions: list[list[float]], joint_names: list[str], joint_indices: list[int],
                            limits: JointLimits) -> None:
-    """Refuse the first position outside its joint's [lower, upper] (NaN = velocity-only: not checked)."""
-    lower, upper = limits.lower[joint_indices], limits.upper[joint_indices]
-    with np.errstate(invalid="ignore"):
-        outside = (positions < lower) | (positions > upper)
-    if not outside.any():
-        return
-    i, k = (int(v) for v in np.argwhere(outside)[0])
-    value = positions[i, k]
-    bound = f"lower limit {lower[k]:g}" if value < lower[k] else f"upper limit {upper[k]:g}"
-    raise TrajectoryError(f"points[{i}].positions[{k}]: joint '{joint_names[k]}' {value:g} rad is outside its "
-                          f"{bound} rad (limits [{lower[k]:g}, {upper[k]:g}])")
+    """Refuse the first position outside its joint's [lower, upper] (NaN = velocity-only: not checked).
+
+    A plain loop: the values were just checked one by one in Python anyway, and numpy's calls on a short
+    trajectory cost more than the loop (this runs on every trajectory received)."""
+    lower = [float(limits.lower[k]) for k in joint_indices]
+    upper = [float(limits.upper[k]) for k in joint_indices]
+    for i, point in enumerate(positions):
+        for k, value in enumerate(point):
+            if value < lower[k] or value > upper[k]:
+                bound = f"lower limit {lower[k]:g}" if value < lower[k] else f"upper limit {upper[k]:g}"
+                raise TrajectoryError(f"points[{i}].positions[{k}]: joint '{joint_names[k]}' {value:g} rad is "
+                                      f"outside its {bound} rad (limits [{lower[k]:g}, {upper[k]:g}])")

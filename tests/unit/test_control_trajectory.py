@@ -181,3 +181,79 @@ def test_position_limits_and_hardware_zero_meaning_none():
     with pytest.raises(TrajectoryError, match=r"points\[0\]\.positions\[0\]: joint 'a' -0.6 rad is outside its "
                                               r"lower limit -0.5 rad"):
         validate_trajectory(traj([point(1.0, [-0.6, 0.0])]), JOINTS, now=0.0, limits=limits)
+
+
+# --- the plain-Python speed and limit checks against numpy references -------------------------------------
+def _numpy_speed_ratio(t, max_velocity: np.ndarray) -> tuple[float, int, float]:
+    """The vectorised form of ``Trajectory.speed_ratio`` (what it computed before it became a loop)."""
+    limits = np.asarray(max_velocity, dtype=float)[t.joint_indices]
+    if not np.isfinite(limits).any():
+        return 0.0, 0, 0.0
+    positions, times = t.positions, t.times
+    if t.start_positions is not None and times[0] > 0.0:
+        positions = np.vstack([t.start_positions, positions])
+        times = np.concatenate([[0.0], times])
+    speeds = [np.zeros(len(limits))]
+    if len(times) > 1:
+        with np.errstate(invalid="ignore", over="ignore"):
+            segment = np.abs(np.diff(positions, axis=0)) / np.diff(times)[:, None]
+        speeds.append(np.nanmax(np.where(np.isfinite(segment), segment, 0.0), axis=0))
+    if t.velocities is not None:
+        speeds.append(np.max(np.abs(t.velocities), axis=0))
+    speed = np.max(speeds, axis=0)
+    ratio = np.where(np.isfinite(limits), speed / np.where(limits > 0, limits, 1.0), 0.0)
+    worst = int(np.argmax(ratio))
+    return float(ratio[worst]), worst, float(speed[worst])
+
+
+_value = st.floats(-4.0, 4.0, allow_nan=False)
+_limit = st.sampled_from([0.5, 1.0, 3.0, math.inf, 0.0])
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(st.tuples(st.floats(0.001, 2.0), st.lists(_value, min_size=3, max_size=3),
+                          st.one_of(st.none(), st.lists(_value, min_size=3, max_size=3)),
+                          st.booleans()), min_size=1, max_size=6),
+       st.lists(_limit, min_size=3, max_size=3), st.lists(_value, min_size=3, max_size=3),
+       st.floats(-2.0, 2.0), st.booleans())
+def test_speed_ratio_and_position_limits_match_their_numpy_forms(steps, max_velocity, start, bound, first_at_zero):
+    from nodes.control.trajectory import JointLimits, _check_position_limits
+    joints = ["a", "b", "c"]
+    points, t = [], 0.0 if first_at_zero else None
+    for dt, positions, velocities, velocity_only in steps:
+        t = dt if t is None else t + dt
+        p = point(t, [] if velocity_only and velocities is not None else positions, velocities)
+        points.append(p)
+    if first_at_zero:
+        points[0]["time_from_start"] = {"sec": 0, "nanosec": 0}
+    msg = traj(points, joints)
+    try:
+        trajectory = validate_trajectory(msg, joints, now=0.0, require_positions=False)
+    except TrajectoryError:
+        return  # e.g. two points at one time after rounding to nanoseconds
+    velocity = np.array(max_velocity)
+    trajectory.set_start_state(np.array(start), np.zeros(3))
+    assert trajectory.speed_ratio(velocity) == _numpy_speed_ratio(trajectory, velocity)
+    ratio = trajectory.speed_ratio(velocity)[0]
+    if ratio > 1.0:
+        trajectory.scale_time(ratio)
+        assert trajectory.speed_ratio(velocity)[0] == pytest.approx(_numpy_speed_ratio(trajectory, velocity)[0])
+
+    # position limits: the first value outside, in point-major order, as numpy's argwhere finds it
+    limits = JointLimits(np.full(3, -abs(bound)), np.full(3, abs(bound)), velocity)
+    positions = trajectory.positions
+    with np.errstate(invalid="ignore"):
+        outside = np.argwhere((positions < limits.lower) | (positions > limits.upper))
+    try:
+        _check_position_limits(positions.tolist(), joints, [0, 1, 2], limits)
+        assert len(outside) == 0
+    except TrajectoryError as exc:
+        i, k = (int(v) for v in outside[0])
+        assert str(exc).startswith(f"points[{i}].positions[{k}]: joint '{joints[k]}' {positions[i, k]:g} rad")
+
+
+def test_an_infinite_segment_speed_counts_zero_as_numpy_did():
+    t = validate_trajectory(traj([point(0.0, [1e308, 0.0]), point(1.0, [-1e308, 1.0])]), JOINTS, now=0.0)
+    t.set_start_state(np.zeros(2), np.zeros(2))
+    limits = np.array([1.0, 1.0])
+    assert t.speed_ratio(limits) == _numpy_speed_ratio(t, limits) == (1.0, 1, 1.0)
