@@ -8,10 +8,11 @@
 2. Command latency (realtime mode, three processes): a JointTrajectory published by this process to the
    first ``hardware/command`` from the controller manager process that carries it; and, of it, the wait
    from the publish to the next ``hardware/state`` seen by this process (about when the manager's next
-   cycle starts: on average half a control period, as in ros2_control).
+   cycle starts: on average half a control period, as in ros2_control); from that state to the command,
+   for the trajectories taken by that cycle; and how many arrived too late for it (taken one period later).
 
 Prints a small table, then one JSON line: update_p99_us, command_latency_p50_us, command_latency_p99_us,
-wait_for_state_p50_us.
+wait_for_state_p50_us, state_to_command_p50_us, taken_a_period_later.
     python bench/control.py [--cycles 5000] [--samples 200]
 """
 
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import socket
 import subprocess
@@ -114,6 +116,9 @@ def bench_update(endpoint: str, cycles: int) -> dict[str, float]:
             "n": len(warm)}
 
 
+LATE_US = 800.0   # state -> command beyond this: the trajectory was taken a cycle later (periods are 1 ms)
+
+
 def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
     env = dict(os.environ, ZENOH_CONNECT=endpoint, PYTHONPATH=str(ROOT))
     env.pop("ZENOH_CONFIG", None)
@@ -132,6 +137,7 @@ def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
     latencies: list[float] = []
     waits: list[float] = []   # publish -> the next hardware/state seen here (the manager's next cycle starts then)
     state_arrivals: list[float] = []
+    after_state: list[float] = []   # that state -> the command carrying the trajectory
     commands = [0]
 
     def on_command(payload: bytes) -> None:
@@ -148,6 +154,7 @@ def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
                     later = [t for t in state_arrivals[-100:] if t > sent]
                     if later:
                         waits.append((later[0] - sent) * 1e6)
+                        after_state.append((received - later[0]) * 1e6)
                     pending.clear()
                     return
 
@@ -189,6 +196,8 @@ def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
                 proc.kill()
     return {"p50": pct(latencies, 50), "p99": pct(latencies, 99), "n": len(latencies), "sent": samples,
             "wait_p50": pct(waits, 50), "wait_p99": pct(waits, 99),
+            # more than ~a period after that state: the trajectory missed that cycle and was taken by the next
+            "next_cycle": [a for a in after_state if a < LATE_US], "late": sum(a >= LATE_US for a in after_state),
             "cycle_p50": manager_stats["cycle_p50_us"], "cycle_p99": manager_stats["cycle_p99_us"]}
 
 
@@ -214,16 +223,23 @@ def main() -> int:
          "goal p50 < 1000, p99 < 3000"),
         ("  of it: publish -> the next hardware/state seen here", latency["wait_p50"], latency["wait_p99"],
          "the manager's next cycle; ~half a period"),
+        ("  then: that state -> the command (taken by that cycle)", pct(latency["next_cycle"], 50),
+         pct(latency["next_cycle"], 99), "the manager's cycle + one hop"),
+        (f"  taken a period later: {latency['late']}/{latency['n']}", math.nan, math.nan,
+         "reached the manager after that cycle had started"),
     ]
     print(f"{'measurement':<58} {'p50 µs':>9} {'p99 µs':>9}  note")
     for label, p50, p99, note in rows:
-        print(f"{label:<58} {p50:>9.1f} {p99:>9.1f}  {note}")
+        figures = f"{p50:>9.1f} {p99:>9.1f}" if p50 == p50 else " " * 19
+        print(f"{label:<58} {figures}  {note}")
     print(json.dumps({"update_p99_us": round(update["p99"], 1), "update_p50_us": round(update["p50"], 1),
                       "update_wall_p99_us": round(update["wall_p99"], 1),
                       "cycle_p99_us": round(latency["cycle_p99"], 1),
                       "command_latency_p50_us": round(latency["p50"], 1),
                       "command_latency_p99_us": round(latency["p99"], 1),
-                      "wait_for_state_p50_us": round(latency["wait_p50"], 1)}))
+                      "wait_for_state_p50_us": round(latency["wait_p50"], 1),
+                      "state_to_command_p50_us": round(pct(latency["next_cycle"], 50), 1),
+                      "taken_a_period_later": round(latency["late"] / max(latency["n"], 1), 3)}))
     return 0
 
 
