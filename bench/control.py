@@ -10,9 +10,11 @@
    from the publish to the next ``hardware/state`` seen by this process (about when the manager's next
    cycle starts: on average half a control period, as in ros2_control); from that state to the command,
    for the trajectories taken by that cycle; and how many arrived too late for it (taken one period later).
+3. The baseline of a hop, in the same conditions (simulator and manager still running, a message every
+   ~30 ms): a raw zenoh-python put -> callback in another process, with the stamp in the payload.
 
 Prints a small table, then one JSON line: update_p99_us, command_latency_p50_us, command_latency_p99_us,
-wait_for_state_p50_us, state_to_command_p50_us, taken_a_period_later.
+wait_for_state_p50_us, state_to_command_p50_us, taken_a_period_later, raw_hop_p50_us.
     python bench/control.py [--cycles 5000] [--samples 200]
 """
 
@@ -41,7 +43,7 @@ from nodes.control.interfaces import HardwareInterfaces, JointInfo  # noqa: E402
 from nodes.control.manager import STRICT, ControllerManager  # noqa: E402
 from nodes.control.node import NodeControllerContext  # noqa: E402
 from nodes.core import Node  # noqa: E402
-from nodes.core.session import loopback_endpoint, open_router  # noqa: E402
+from nodes.core.session import loopback_endpoint, open_peer, open_router  # noqa: E402
 
 JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
 
@@ -185,6 +187,7 @@ def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
             time.sleep(0.03 + 0.01 * (i % 3) / 3)  # not phase-locked to the 1 kHz cycle
         time.sleep(0.2)
         manager_stats = json.loads(stats.call(timeout=5.0).message)
+        hop = raw_hop(endpoint, samples)
     finally:
         node.destroy()
         for proc in procs:
@@ -198,7 +201,54 @@ def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
             "wait_p50": pct(waits, 50), "wait_p99": pct(waits, 99),
             # more than ~a period after that state: the trajectory missed that cycle and was taken by the next
             "next_cycle": [a for a in after_state if a < LATE_US], "late": sum(a >= LATE_US for a in after_state),
-            "cycle_p50": manager_stats["cycle_p50_us"], "cycle_p99": manager_stats["cycle_p99_us"]}
+            "cycle_p50": manager_stats["cycle_p50_us"], "cycle_p99": manager_stats["cycle_p99_us"],
+            "hop_p50": pct(hop, 50), "hop_p99": pct(hop, 99), "hop_n": len(hop)}
+
+
+HOP_KEY = "bench/control/hop"
+
+
+def raw_hop_child(endpoint: str, count: int) -> None:
+    """The receiving end of ``raw_hop``: prints each one-way delay (µs) as a JSON list."""
+    session = open_peer([endpoint])
+    delays: list[float] = []
+    done = threading.Event()
+
+    def on_sample(sample) -> None:
+        delays.append((time.perf_counter_ns() - int.from_bytes(sample.payload.to_bytes()[:8], "little")) / 1e3)
+        if len(delays) >= count:
+            done.set()
+
+    session.declare_subscriber(HOP_KEY, on_sample)
+    ready = session.declare_publisher(HOP_KEY + "/ready")
+    while not done.wait(0.2):
+        ready.put(b"1")
+    print(json.dumps(delays), flush=True)
+    os._exit(0)   # skip zenoh's slow session teardown
+
+
+def raw_hop(endpoint: str, count: int) -> list[float]:
+    """One-way raw zenoh-python hops (express put -> callback in another process) at the trajectories' pace."""
+    session = open_peer([endpoint])
+    ready = threading.Event()
+    child = subprocess.Popen([sys.executable, __file__, "--raw-hop-child", endpoint, str(count)],
+                             stdout=subprocess.PIPE, text=True, cwd=ROOT)
+    try:
+        session.declare_subscriber(HOP_KEY + "/ready", lambda _sample: ready.set())
+        if not ready.wait(60):
+            raise RuntimeError("the raw hop's receiving process did not start within 60 s")
+        publisher = session.declare_publisher(HOP_KEY, express=True)
+        padding = bytes(120)   # about a one-point JointTrajectory's size
+        for i in range(count + 20):   # a few spare: the receiver stops at `count`
+            if child.poll() is not None:
+                break
+            publisher.put(time.perf_counter_ns().to_bytes(8, "little") + padding)
+            time.sleep(0.03 + 0.01 * (i % 3) / 3)
+        return json.loads(child.communicate(timeout=30)[0])[:count]
+    finally:
+        if child.poll() is None:
+            child.kill()
+        session.close()
 
 
 def main() -> int:
@@ -227,6 +277,8 @@ def main() -> int:
          pct(latency["next_cycle"], 99), "the manager's cycle + one hop"),
         (f"  taken a period later: {latency['late']}/{latency['n']}", math.nan, math.nan,
          "reached the manager after that cycle had started"),
+        (f"raw zenoh hop, same conditions ({latency['hop_n']})", latency["hop_p50"], latency["hop_p99"],
+         "put -> callback in another process, the baseline"),
     ]
     print(f"{'measurement':<58} {'p50 µs':>9} {'p99 µs':>9}  note")
     for label, p50, p99, note in rows:
@@ -239,9 +291,12 @@ def main() -> int:
                       "command_latency_p99_us": round(latency["p99"], 1),
                       "wait_for_state_p50_us": round(latency["wait_p50"], 1),
                       "state_to_command_p50_us": round(pct(latency["next_cycle"], 50), 1),
-                      "taken_a_period_later": round(latency["late"] / max(latency["n"], 1), 3)}))
+                      "taken_a_period_later": round(latency["late"] / max(latency["n"], 1), 3),
+                      "raw_hop_p50_us": round(latency["hop_p50"], 1)}))
     return 0
 
 
 if __name__ == "__main__":
+    if len(sys.argv) == 4 and sys.argv[1] == "--raw-hop-child":
+        raw_hop_child(sys.argv[2], int(sys.argv[3]))
     sys.exit(main())
