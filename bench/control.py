@@ -209,19 +209,25 @@ HOP_KEY = "bench/control/hop"
 
 
 def raw_hop_child(endpoint: str, count: int) -> None:
-    """The receiving end of ``raw_hop``: prints each one-way delay (µs) as a JSON list."""
+    """The receiving end of ``raw_hop``: prints each one-way delay (µs) as a JSON list once ``count`` have
+    arrived, or the sender has been silent for a second (a few early ones lost while the route formed)."""
     session = open_peer([endpoint])
     delays: list[float] = []
+    last = [time.monotonic()]
     done = threading.Event()
 
     def on_sample(sample) -> None:
         delays.append((time.perf_counter_ns() - int.from_bytes(sample.payload.to_bytes()[:8], "little")) / 1e3)
+        last[0] = time.monotonic()
         if len(delays) >= count:
             done.set()
 
     session.declare_subscriber(HOP_KEY, on_sample)
     ready = session.declare_publisher(HOP_KEY + "/ready")
-    while not done.wait(0.2):
+    give_up = time.monotonic() + 90
+    while not done.wait(0.2) and time.monotonic() < give_up:
+        if delays and time.monotonic() - last[0] > 1.0:
+            break
         ready.put(b"1")
     print(json.dumps(delays), flush=True)
     os._exit(0)   # skip zenoh's slow session teardown
