@@ -133,4 +133,3 @@ def _convert_lines(type_name: str, source: str, result: str, env: dict[str, Any]
     body += equal_length_lines(type_name, prefix, "_Broken")
     body.append(f"{result} = _cls{prefix}({', '.join(args)})")
     return ["    " + line for line in body] if depth == 0 else body
-
