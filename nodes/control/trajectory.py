@@ -119,7 +119,7 @@ class Trajectory:
 
         Plain Python on the per-joint peaks found at validation: it runs in the control cycle that takes the
         trajectory, where a dozen numpy calls on arrays this small cost more than the loop (measured)."""
-        limits = [float(max_velocity[i]) for i in self.joint_indices]
+        limits = _floats_at(max_velocity, self.joint_indices)
         if not any(math.isfinite(limit) for limit in limits):
             return 0.0, 0, 0.0
         if self.peak_speeds is None:
@@ -246,6 +246,11 @@ def peak_speeds(times: list[float], positions: list[list[float]], velocities: li
                 if abs(value) > peaks[k]:
                     peaks[k] = abs(value)
     return peaks
+
+
+def _floats_at(values, indices: list[int]) -> list[float]:
+    """``values[i]`` for each index, as Python floats (a per-joint limit array read for a trajectory's joints)."""
+    return [float(values[i]) for i in indices]
 
 
 def _raise_peaks(peaks: list[float], before: list[float], after: list[float], duration: float) -> None:
@@ -381,8 +386,7 @@ def _check_position_limits(positions: list[list[float]], joint_names: list[str],
 
     A plain loop: the values were just checked one by one in Python anyway, and numpy's calls on a short
     trajectory cost more than the loop (this runs on every trajectory received)."""
-    lower = [float(limits.lower[k]) for k in joint_indices]
-    upper = [float(limits.upper[k]) for k in joint_indices]
+    lower, upper = _floats_at(limits.lower, joint_indices), _floats_at(limits.upper, joint_indices)
     for i, point in enumerate(positions):
         for k, value in enumerate(point):
             if value < lower[k] or value > upper[k]:
