@@ -65,7 +65,10 @@ _pack_command = msgs.packer("zenroid_msgs/msg/HardwareCommand")
 
 class CyclePublisher:
     """A controller's publisher. What a controller publishes during a control cycle is sent after the cycle's
-    hardware command, so the simulator never waits behind joint_states or controller state.
+    hardware command, so the simulator never waits behind joint_states or controller state. Messages given
+    as fields (``publish_fields``) are also packed only then, as ros2_controllers' RealtimePublisher leaves
+    serialising to a non-realtime thread: packing joint_states cost the cycle ~18 µs before the command,
+    the trajectory controller's state ~110 µs (measured in situ).
 
     Against realtime hardware a message is dropped rather than wait for a stalled subscriber, as
     ros2_controllers' RealtimePublisher skips one it cannot hand over at once; in lockstep every message is
@@ -75,6 +78,7 @@ class CyclePublisher:
         self._publisher = publisher
         self._node = node
         self.msg_type, self.key = publisher.msg_type, publisher.key
+        self._pack = msgs.packer(publisher.msg_type._type)
 
     def publish(self, msg: Any) -> None:
         self.publish_raw(msgs.encode(msg))
@@ -86,9 +90,36 @@ class CyclePublisher:
         else:
             self._publisher.publish_raw(payload, droppable=self._node.realtime_hardware)
 
+    def publish_fields(self, **fields: Any) -> None:
+        """A message of this publisher's type from its fields (schema names; ROS defaults for the rest).
+
+        In a control cycle the fields are packed after the hardware command is sent: pass values the
+        controller will not change afterwards (fresh lists, as ``read_values`` and ``tolist`` return)."""
+        deferred = self._node.deferred_publications
+        if deferred is not None and threading.get_ident() == self._node.cycle_thread:
+            deferred.append((self, fields))
+        else:
+            self.send_deferred(fields)
+
+    def send_deferred(self, item: bytes | dict[str, Any]) -> None:
+        """Send what ``publish_raw`` or ``publish_fields`` held back during a cycle."""
+        payload = item if isinstance(item, bytes) else self._pack(**item)
+        self._publisher.publish_raw(payload, droppable=self._node.realtime_hardware)
+
     @property
     def has_subscribers(self) -> bool:
         return self._publisher.has_subscribers
+
+
+def send_held_back(held_back: Any, logger: Any) -> None:
+    """Send a cycle's held-back publications (``CyclePublisher``), in order, once its command is out.
+    Fields that do not pack lose that one message (logged), not the ones after it."""
+    for publisher, item in held_back:
+        try:
+            publisher.send_deferred(item)
+        except (TypeError, ValueError) as exc:
+            logger.warn_throttle(1.0, f"{publisher.key}: dropped a controller's message that does not pack: {exc}",
+                                 key=f"pack {publisher.key}")
 
 
 class NodeControllerContext:
@@ -334,8 +365,7 @@ class ControllerManagerNode(Node):
                                                 interface=cmd_kinds, value=cmd_values),
                                   droppable=self.realtime_hardware)
         deferred, self.deferred_publications = self.deferred_publications, None
-        for publisher, payload in deferred or ():
-            publisher._publisher.publish_raw(payload, droppable=self.realtime_hardware)
+        send_held_back(deferred or (), self.logger)
         self._cycles += 1
         self._cycle_us.append((time.perf_counter() - started) * 1e6)
 

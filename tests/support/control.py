@@ -33,6 +33,9 @@ class ListLogger:
     def error(self, msg: str) -> None:
         self._log("error", msg)
 
+    def warn_throttle(self, _period_s: float, msg: str, key: str | None = None) -> None:
+        self._log("warn", msg)
+
     def text(self, level: str | None = None) -> str:
         return "\n".join(m for lvl, m in self.lines if level is None or lvl == level)
 
@@ -50,6 +53,11 @@ class FakePublisher:
         import msgs
 
         self.messages.append(msgs.decode(self.msg_type, payload))  # also proves the bytes decode as the type
+
+    def publish_fields(self, **fields: Any) -> None:
+        import msgs
+
+        self.publish_raw(msgs.packer(self.msg_type._type)(**fields))
 
 
 class FakeActionServer:

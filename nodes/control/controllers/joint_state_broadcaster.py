@@ -12,7 +12,6 @@ from nodes.control.interfaces import read_values
 from nodes.control.messages import msg_type
 from nodes.core.param_schema import param
 
-_pack_joint_state = msgs.packer("sensor_msgs/msg/JointState")
 _header = msgs.builder("std_msgs/msg/Header")
 
 
@@ -67,7 +66,7 @@ class JointStateBroadcaster(Controller):
         values = {k: read_values(loans) for k, loans in self._loans.items()}
         if any(v != v for v in values.get("position", ())):  # NaN: no state has arrived yet
             return
-        # every cycle: the generated packer, no message instances
-        self._pub.publish_raw(_pack_joint_state(
+        # every cycle: fields for the generated packer (after the hardware command), no message instances
+        self._pub.publish_fields(
             header=_header(stamp=msgs.time_map(time), frame_id=self.frame_id), name=self.joints,
-            position=values.get("position"), velocity=values.get("velocity"), effort=values.get("effort")))
+            position=values.get("position"), velocity=values.get("velocity"), effort=values.get("effort"))

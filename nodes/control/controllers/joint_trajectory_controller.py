@@ -480,14 +480,14 @@ class JointTrajectoryController(Controller):
             self.logger.warn(f"{self.name}: feedback not sent: {exc}")
 
     def _publish_state(self, time: float, actual_pos: np.ndarray, actual_vel: np.ndarray) -> None:
-        # on the control thread: packed by the generated packer, no message instances
+        # fields for the generated packer (packed after the hardware command), no message instances
         desired = _point_map(self._desired_pos, self._desired_vel)
         output = desired if self._last_output is None else _point_map(self._last_output, self._desired_vel)
         actual = _point_map(actual_pos, actual_vel)
         error = _point_map(self._desired_pos - actual_pos, self._desired_vel - actual_vel)
-        self._state_pub.publish_raw(_pack_state(
+        self._state_pub.publish_fields(
             header=_header(stamp=msgs.time_map(time)), joint_names=self.joints,
-            reference=desired, feedback=actual, error=error, output=output, speed_scaling_factor=1.0))
+            reference=desired, feedback=actual, error=error, output=output, speed_scaling_factor=1.0)
 
 
 def _violations(error: np.ndarray, tolerance: np.ndarray) -> list[int]:
@@ -510,7 +510,6 @@ def _result(code: int, text: str):
     return cls(error_code=code, error_string=text)
 
 
-_pack_state = msgs.packer("control_msgs/msg/JointTrajectoryControllerState")
 _header = msgs.builder("std_msgs/msg/Header")
 _point = msgs.builder("trajectory_msgs/msg/JointTrajectoryPoint")
 
