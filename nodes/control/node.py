@@ -29,7 +29,7 @@ from nodes.control.config import (
 from nodes.control.controller import ACTIVE
 from nodes.control.interfaces import COMMAND_KINDS, HardwareInterfaces, JointInfo
 from nodes.control.manager import BEST_EFFORT, STRICT, ControllerManager, ManagerError
-from nodes.core import Node, ServiceError
+from nodes.core import Node, ServiceError, realtime
 from nodes.core.endpoints import SingleSender, source_label
 from nodes.core.log import truncate
 
@@ -184,6 +184,11 @@ class ControllerManagerNode(Node):
         self.autostart = self.declare_parameter(
             "activate", [], type=list, description="controllers to load, configure and activate on start")
         extra = self.declare_parameter("controllers_file", "", type=str, description="extra ros2_control YAML")
+        self._raise_priority(int(self.declare_parameter(
+            "thread_priority", 50, type=int, min_value=0, max_value=realtime.MAX_PRIORITY,
+            read_only="applied to the process's threads at start-up",
+            description="SCHED_FIFO priority of the manager's threads (the control loop runs on Zenoh's), as "
+                        "ros2_control's thread_priority; 0: normal priority")))
         try:
             self.config = self._load_config(cli_args)
             if extra:
@@ -205,6 +210,16 @@ class ControllerManagerNode(Node):
         self._bad_frames = 0
         self._cycle_since: float | None = None
         threading.Thread(target=self._discover, daemon=True, name="hardware-discovery").start()
+
+    def _raise_priority(self, priority: int) -> None:
+        if priority <= 0:
+            return
+        problem = realtime.raise_process(priority)
+        if problem is None:
+            self.logger.info(f"threads at SCHED_FIFO priority {priority} (thread_priority)")
+        else:   # as ros2_control: the loop still runs, with more jitter
+            self.logger.warn(f"could not enable SCHED_FIFO priority {priority} (thread_priority): {problem}; "
+                             "the control loop runs at normal priority (README: Real-time priority)")
 
     def _load_config(self, cli_args: Any) -> ManagerConfig:
         config = ManagerConfig()

@@ -4,13 +4,14 @@ positions never step (the first command holds the measured pose, each trajectory
 
 from __future__ import annotations
 
+import os
 import threading
 
 import msgpack
 import pytest
 
 import msgs
-from nodes.core import Node
+from nodes.core import Node, realtime
 from tests.conftest import wait_until
 
 pytestmark = pytest.mark.slow
@@ -22,6 +23,10 @@ LEGS = ["left_hip_yaw", "left_hip_roll", "left_hip_pitch", "left_knee", "left_an
         "right_hip_yaw", "right_hip_roll", "right_hip_pitch", "right_knee", "right_ankle_pitch", "right_ankle_roll"]
 STAND = [0.0] * 12
 BEND = [0.0, 0.0, -0.2, 0.4, -0.2, 0.0, 0.0, 0.0, -0.2, 0.4, -0.2, 0.0]  # the tutorial's knee bend
+
+
+def _threads(pid: int) -> list[int]:
+    return [int(tid) for tid in os.listdir(f"/proc/{pid}/task")]
 
 
 def test_stand_knee_bend_cycle_keeps_the_humanoid_standing_with_smooth_commands(processes, router):
@@ -68,6 +73,11 @@ def test_stand_knee_bend_cycle_keeps_the_humanoid_standing_with_smooth_commands(
         wait_until(lambda: states and heights, timeout=90, message="joint_states and model_states")
         wait_until(lambda: "controller manager ready" in processes.output(manager), timeout=30,
                    message="controller manager ready")
+        # ros2_control's thread_priority (default 50): every thread of the manager, Zenoh's included, and
+        # those started with the controllers' subscriptions after start-up, runs at SCHED_FIFO 50
+        assert "threads at SCHED_FIFO priority 50" in processes.output(manager)
+        policies = {realtime.policy_of(tid) for tid in _threads(manager.pid)}
+        assert policies == {("fifo", 50)}, policies
         t0 = sim_time()
         run_until(t0 + 1.0)  # settle on the feet
         with lock:
@@ -100,3 +110,15 @@ def test_stand_knee_bend_cycle_keeps_the_humanoid_standing_with_smooth_commands(
         assert len(history) > 5000
     finally:
         node.destroy()
+
+
+def test_thread_priority_zero_in_the_params_file_keeps_normal_scheduling(processes, tmp_path):
+    params = tmp_path / "controllers.yaml"
+    params.write_text("controller_manager:\n  ros__parameters:\n    update_rate: 1000\n    thread_priority: 0\n")
+    manager = processes.start("-m", "nodes.control", "--ns", "nohw", "--params-file", str(params),
+                              name="controller_manager")
+    # no simulator: the manager starts and waits for the hardware with all its Zenoh threads running
+    wait_until(lambda: "waiting for the hardware" in processes.output(manager), timeout=30,
+               message="the manager waiting for its hardware")
+    assert {realtime.policy_of(tid) for tid in _threads(manager.pid)} == {("other", 0)}
+    assert "SCHED_FIFO" not in processes.output(manager)
