@@ -184,11 +184,11 @@ class ControllerManagerNode(Node):
         self.autostart = self.declare_parameter(
             "activate", [], type=list, description="controllers to load, configure and activate on start")
         extra = self.declare_parameter("controllers_file", "", type=str, description="extra ros2_control YAML")
-        self._raise_priority(int(self.declare_parameter(
+        self.thread_priority = int(self.declare_parameter(
             "thread_priority", 50, type=int, min_value=0, max_value=realtime.MAX_PRIORITY,
-            read_only="applied to the process's threads at start-up",
-            description="SCHED_FIFO priority of the manager's threads (the control loop runs on Zenoh's), as "
-                        "ros2_control's thread_priority; 0: normal priority")))
+            read_only="applied to the process's threads when the hardware is found",
+            description="SCHED_FIFO priority of the manager's threads against realtime hardware (the control "
+                        "loop runs on Zenoh's), as ros2_control's thread_priority; 0: normal priority"))
         try:
             self.config = self._load_config(cli_args)
             if extra:
@@ -211,8 +211,13 @@ class ControllerManagerNode(Node):
         self._cycle_since: float | None = None
         threading.Thread(target=self._discover, daemon=True, name="hardware-discovery").start()
 
-    def _raise_priority(self, priority: int) -> None:
+    def _raise_priority(self, priority: int, mode: str) -> None:
         if priority <= 0:
+            return
+        if mode != "realtime":
+            # Lockstep has no deadline to meet, and the manager is busy for as long as the physics runs: at
+            # FIFO it would starve the processes that share its CPU (the launcher keeps one CPU for physics).
+            self.logger.info(f"{mode} hardware: threads at normal priority (thread_priority is for realtime)")
             return
         problem = realtime.raise_process(priority)
         if problem is None:
@@ -261,6 +266,7 @@ class ControllerManagerNode(Node):
                                     j.max_velocity, j.max_effort))
         self.hardware = HardwareInterfaces(joints)
         self.realtime_hardware = info.mode == "realtime"
+        self._raise_priority(self.thread_priority, info.mode)
         self.manager = ControllerManager(self.hardware, self.config, self.update_rate, self._make_context,
                                          self.logger)
         self.logger.info(f"hardware '{info.robot_name}' ({info.mode}, {len(joints)} joints); "

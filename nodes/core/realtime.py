@@ -3,7 +3,9 @@
 ros2_control's controller manager asks for ``SCHED_FIFO`` priority 50 for its control loop whatever the
 kernel, and goes on at normal priority with a warning when the system refuses. Here the control loop is
 carried by Zenoh's threads (network, hand-off to Python) and runs on them, so the whole process is
-raised: every thread it has, and, through the main thread, every thread it starts later.
+raised: every thread it has, and, through the threads that start others, every thread it starts later.
+Only for a loop that sleeps between periods: a FIFO thread that stays busy starves every normal process
+on its CPU.
 
 Measured (``bench/control.py``, controller manager alone raised): a received trajectory reaches the
 next control cycle more often (taken a period later: ~45 % -> ~30 %), and the command latency p50 falls
@@ -37,7 +39,7 @@ def raise_process(priority: int) -> str | None:
         return "SCHED_FIFO is not available on this system"
     param = os.sched_param(priority)
     try:
-        # The calling thread first: it decides whether we may, and threads it starts later inherit it.
+        # The calling thread first: it decides whether we may. Threads inherit their creator's policy.
         os.sched_setscheduler(0, os.SCHED_FIFO, param)
     except OSError as exc:
         return f"{exc.strerror or exc} (needs CAP_SYS_NICE or an RLIMIT_RTPRIO of at least {priority})"

@@ -73,11 +73,6 @@ def test_stand_knee_bend_cycle_keeps_the_humanoid_standing_with_smooth_commands(
         wait_until(lambda: states and heights, timeout=90, message="joint_states and model_states")
         wait_until(lambda: "controller manager ready" in processes.output(manager), timeout=30,
                    message="controller manager ready")
-        # ros2_control's thread_priority (default 50): every thread of the manager, Zenoh's included, and
-        # those started with the controllers' subscriptions after start-up, runs at SCHED_FIFO 50
-        assert "threads at SCHED_FIFO priority 50" in processes.output(manager)
-        policies = {realtime.policy_of(tid) for tid in _threads(manager.pid)}
-        assert policies == {("fifo", 50)}, policies
         t0 = sim_time()
         run_until(t0 + 1.0)  # settle on the feet
         with lock:
@@ -112,13 +107,24 @@ def test_stand_knee_bend_cycle_keeps_the_humanoid_standing_with_smooth_commands(
         node.destroy()
 
 
-def test_thread_priority_zero_in_the_params_file_keeps_normal_scheduling(processes, tmp_path):
-    params = tmp_path / "controllers.yaml"
-    params.write_text("controller_manager:\n  ros__parameters:\n    update_rate: 1000\n    thread_priority: 0\n")
-    manager = processes.start("-m", "nodes.control", "--ns", "nohw", "--params-file", str(params),
-                              name="controller_manager")
-    # no simulator: the manager starts and waits for the hardware with all its Zenoh threads running
-    wait_until(lambda: "waiting for the hardware" in processes.output(manager), timeout=30,
-               message="the manager waiting for its hardware")
-    assert {realtime.policy_of(tid) for tid in _threads(manager.pid)} == {("other", 0)}
-    assert "SCHED_FIFO" not in processes.output(manager)
+@pytest.mark.parametrize("mode, params, policy", [("realtime", None, ("fifo", 50)), ("lockstep", None, ("other", 0)),
+                                                  ("realtime", "thread_priority: 0", ("other", 0))])
+def test_thread_priority_raises_every_manager_thread_against_realtime_hardware(processes, tmp_path, mode, params,
+                                                                                policy):
+    """ros2_control's thread_priority (default 50): against realtime hardware every thread of the manager,
+    Zenoh's included and those started with the controllers after start-up, runs at SCHED_FIFO 50.
+    Lockstep keeps the manager busy as long as the physics runs: at FIFO it would starve the processes
+    sharing its CPU, so it keeps normal priority; thread_priority: 0 from a params file switches it off."""
+    argv = ["--params-file", "config/controllers.yaml"]
+    if params:
+        (tmp_path / "cm.yaml").write_text(f"controller_manager:\n  ros__parameters:\n    {params}\n")
+        argv += ["--params-file", str(tmp_path / "cm.yaml")]
+    processes.start("-m", "nodes.sim", "--params-file", "config/sim.yaml", "--param", f"mode:={mode}",
+                    "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}]", name="sim")
+    manager = processes.start("-m", "nodes.control", "--ns", "humanoid", *argv, name="controller_manager")
+    wait_until(lambda: "controller manager ready" in processes.output(manager), timeout=60,
+               message="controller manager ready")
+    assert {realtime.policy_of(tid) for tid in _threads(manager.pid)} == {policy}
+    output = processes.output(manager)
+    assert ("threads at SCHED_FIFO priority 50 (thread_priority)" in output) == (policy[0] == "fifo")
+    assert ("lockstep hardware: threads at normal priority" in output) == (mode == "lockstep")

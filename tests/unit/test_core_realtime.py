@@ -23,9 +23,10 @@ stop = threading.Event()
 before = threading.Thread(target=stop.wait); before.start()
 problem = realtime.raise_process(7)
 after = threading.Thread(target=stop.wait); after.start()
-policies = sorted({realtime.policy_of(tid) for tid in realtime.thread_ids()})
+threads = realtime.thread_ids()
+policies = sorted({realtime.policy_of(tid) for tid in threads})
 stop.set()
-print(json.dumps({"problem": problem, "policies": policies, "threads": len(realtime.thread_ids())}))
+print(json.dumps({"problem": problem, "policies": policies, "threads": len(threads)}))
 """
 
 
