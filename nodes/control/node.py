@@ -78,7 +78,6 @@ class CyclePublisher:
         self._publisher = publisher
         self._node = node
         self.msg_type, self.key = publisher.msg_type, publisher.key
-        self._pack = msgs.packer(publisher.msg_type._type)
 
     def publish(self, msg: Any) -> None:
         self.publish_raw(msgs.encode(msg))
@@ -103,7 +102,7 @@ class CyclePublisher:
 
     def send_deferred(self, item: bytes | dict[str, Any]) -> None:
         """Send what ``publish_raw`` or ``publish_fields`` held back during a cycle."""
-        payload = item if isinstance(item, bytes) else self._pack(**item)
+        payload = item if isinstance(item, bytes) else msgs.packer(self.msg_type._type)(**item)   # cached per type
         self._publisher.publish_raw(payload, droppable=self._node.realtime_hardware)
 
     @property
@@ -117,7 +116,7 @@ def send_held_back(held_back: Any, logger: Any) -> None:
     for publisher, item in held_back:
         try:
             publisher.send_deferred(item)
-        except (TypeError, ValueError) as exc:
+        except (TypeError, ValueError, OverflowError) as exc:
             logger.warn_throttle(1.0, f"{publisher.key}: dropped a controller's message that does not pack: {exc}",
                                  key=f"pack {publisher.key}")
 
@@ -196,7 +195,7 @@ class ControllerManagerNode(Node):
         except ConfigError as exc:
             raise ValueError(str(exc)) from None
         self.control_time = 0.0
-        self.deferred_publications: list[tuple[Any, bytes]] | None = None   # during a control cycle
+        self.deferred_publications: list[tuple[Any, bytes | dict[str, Any]]] | None = None   # during a cycle
         self.realtime_hardware = True
         self.cycle_thread = 0
         self.manager: ControllerManager | None = None

@@ -61,9 +61,11 @@ def test_a_message_that_does_not_pack_is_dropped_with_its_topic_named_and_the_re
     publisher = CyclePublisher(inner, node)
     publisher.publish_fields(**_fields(["not a number", 1.0]))
     publisher.publish_fields(no_such_field=1)
+    publisher.publish_fields(header={"stamp": {"sec": 10**30, "nanosec": 0}})   # msgpack: integer out of range
     publisher.publish_fields(**_fields([3.0, 4.0]))
     send_held_back(node.deferred_publications, logger)
     assert [msgs.decode(JointState, payload).position for payload, _ in inner.sent] == [[3.0, 4.0]]
     warnings = logger.text("warn")
-    assert warnings.count("robot/joint_states: dropped a controller's message that does not pack") == 2
+    assert warnings.count("robot/joint_states: dropped a controller's message that does not pack") == 3
     assert "could not convert string to float" in warnings and "no_such_field" in warnings
+    assert "out of range" in warnings
