@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import functools
 import sys
+import threading
 from collections.abc import Callable
 from typing import Annotated, Any
 
@@ -35,18 +36,30 @@ class _Recursive(Exception):
     """A type that contains itself: no shadow struct (the precise path decodes it)."""
 
 
+# One thread at a time inside msgspec. It completes a Struct's type information lazily, running Python code (so
+# the GIL can pass to another thread) in the middle; a second thread decoding through the same shadow struct
+# meanwhile read it half-built and crashed the process (segfault in mpack_decode: four trajectory controllers
+# receiving their first JointTrajectory at once, ~1 launch in 6; tests/unit/test_msgs_structs_threads.py).
+# Decoding holds the GIL throughout anyway, so the lock costs no parallelism, only ~0.1 µs.
+_inside_msgspec = threading.Lock()
+
+
 @functools.cache
 def decoder(type_name: str, max_array_length: int, allow_nonfinite: bool) -> Callable[[bytes], Any] | None:
-    """``decode(payload) -> message`` raising one of ``Refused``; None when the type has no fast path."""
-    try:
-        shadow = _shadow(type_name, max_array_length, allow_nonfinite, ())
-    except _Recursive:
-        return None
-    decode = msgspec.msgpack.Decoder(shadow).decode
+    """``decode(payload) -> message`` raising one of ``Refused``; None when the type has no fast path.
+    Safe to call, and the decoder safe to use, from any number of threads."""
+    with _inside_msgspec:
+        try:
+            shadow = _shadow(type_name, max_array_length, allow_nonfinite, ())
+        except _Recursive:
+            return None
+        decode = msgspec.msgpack.Decoder(shadow).decode
     convert = _converter(type_name)
 
     def decode_message(payload: bytes) -> Any:
-        return convert(decode(payload))
+        with _inside_msgspec:
+            shadow_message = decode(payload)
+        return convert(shadow_message)
 
     return decode_message
 
