@@ -83,22 +83,21 @@ class CyclePublisher:
         self.publish_raw(msgs.encode(msg))
 
     def publish_raw(self, payload: bytes) -> None:
-        deferred = self._node.deferred_publications
-        if deferred is not None and threading.get_ident() == self._node.cycle_thread:
-            deferred.append((self, payload))
-        else:
-            self._publisher.publish_raw(payload, droppable=self._node.realtime_hardware)
+        self._send_or_hold(payload)
 
     def publish_fields(self, **fields: Any) -> None:
         """A message of this publisher's type from its fields (schema names; ROS defaults for the rest).
 
         In a control cycle the fields are packed after the hardware command is sent: pass values the
         controller will not change afterwards (fresh lists, as ``read_values`` and ``tolist`` return)."""
+        self._send_or_hold(fields)
+
+    def _send_or_hold(self, item: bytes | dict[str, Any]) -> None:
         deferred = self._node.deferred_publications
         if deferred is not None and threading.get_ident() == self._node.cycle_thread:
-            deferred.append((self, fields))
+            deferred.append((self, item))
         else:
-            self.send_deferred(fields)
+            self.send_deferred(item)
 
     def send_deferred(self, item: bytes | dict[str, Any]) -> None:
         """Send what ``publish_raw`` or ``publish_fields`` held back during a cycle."""
