@@ -60,10 +60,14 @@ def hold_reservation() -> bool:
     return True
 
 
+def thread_ids(pid: int | str = "self") -> list[int]:
+    """The threads (Linux task ids) of process ``pid``, this one by default."""
+    return sorted(int(entry.name) for entry in Path(f"/proc/{pid}/task").iterdir() if entry.name.isdigit())
+
+
 def move_threads(cpus: set[int], *, keep: int | None = None) -> None:
     """Every thread of this process except ``keep`` (a native thread id) onto ``cpus``."""
-    for entry in Path("/proc/self/task").iterdir():
-        tid = int(entry.name)
+    for tid in thread_ids():
         if tid != keep:
             try:
                 os.sched_setaffinity(tid, cpus)

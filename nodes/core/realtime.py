@@ -18,16 +18,13 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from nodes.core.cpu import thread_ids
+
 MAX_PRIORITY = 99
 
 
 def supported() -> bool:
     return hasattr(os, "SCHED_FIFO") and Path("/proc/self/task").is_dir()
-
-
-def thread_ids() -> list[int]:
-    """This process's threads (Linux task ids), the calling one included."""
-    return sorted(int(entry.name) for entry in Path("/proc/self/task").iterdir() if entry.name.isdigit())
 
 
 def raise_process(priority: int) -> str | None:

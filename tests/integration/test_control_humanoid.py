@@ -4,14 +4,13 @@ positions never step (the first command holds the measured pose, each trajectory
 
 from __future__ import annotations
 
-import os
 import threading
 
 import msgpack
 import pytest
 
 import msgs
-from nodes.core import Node, realtime
+from nodes.core import Node, cpu, realtime
 from tests.conftest import wait_until
 
 pytestmark = pytest.mark.slow
@@ -23,10 +22,6 @@ LEGS = ["left_hip_yaw", "left_hip_roll", "left_hip_pitch", "left_knee", "left_an
         "right_hip_yaw", "right_hip_roll", "right_hip_pitch", "right_knee", "right_ankle_pitch", "right_ankle_roll"]
 STAND = [0.0] * 12
 BEND = [0.0, 0.0, -0.2, 0.4, -0.2, 0.0, 0.0, 0.0, -0.2, 0.4, -0.2, 0.0]  # the tutorial's knee bend
-
-
-def _threads(pid: int) -> list[int]:
-    return [int(tid) for tid in os.listdir(f"/proc/{pid}/task")]
 
 
 def test_stand_knee_bend_cycle_keeps_the_humanoid_standing_with_smooth_commands(processes, router):
@@ -124,7 +119,7 @@ def test_thread_priority_raises_every_manager_thread_against_realtime_hardware(p
     manager = processes.start("-m", "nodes.control", "--ns", "humanoid", *argv, name="controller_manager")
     wait_until(lambda: "controller manager ready" in processes.output(manager), timeout=60,
                message="controller manager ready")
-    assert {realtime.policy_of(tid) for tid in _threads(manager.pid)} == {policy}
+    assert {realtime.policy_of(tid) for tid in cpu.thread_ids(manager.pid)} == {policy}
     output = processes.output(manager)
     assert ("threads at SCHED_FIFO priority 50 (thread_priority)" in output) == (policy[0] == "fifo")
     assert ("lockstep hardware: threads at normal priority" in output) == (mode == "lockstep")

@@ -16,14 +16,14 @@ from nodes.core import realtime
 ROOT = Path(__file__).resolve().parents[2]
 CHILD = """
 import json, os, sys, threading
-from nodes.core import realtime
+from nodes.core import cpu, realtime
 if sys.argv[1] == "unprivileged":
     os.setgid(65534); os.setuid(65534)   # nobody: no CAP_SYS_NICE, RLIMIT_RTPRIO 0
 stop = threading.Event()
 before = threading.Thread(target=stop.wait); before.start()
 problem = realtime.raise_process(7)
 after = threading.Thread(target=stop.wait); after.start()
-threads = realtime.thread_ids()
+threads = cpu.thread_ids()
 policies = sorted({realtime.policy_of(tid) for tid in threads})
 stop.set()
 print(json.dumps({"problem": problem, "policies": policies, "threads": len(threads)}))
