@@ -126,10 +126,12 @@ def _workspace(tmp_path: Path) -> tuple[Path, dict[str, str]]:
             (work / entry.name).symlink_to(entry)
     bin_dir = tmp_path / "bin"
     bin_dir.mkdir()
-    (bin_dir / "python").symlink_to(sys.executable)
-    script = bin_dir / "zenroid"
-    script.write_text(f'#!/bin/sh\nexec "{sys.executable}" -m nodes.tools "$@"\n')
-    script.chmod(0o755)
+    # Scripts, not links: CPython finds a venv's pyvenv.cfg beside the path it was started by, so a link to
+    # the venv's interpreter would run outside the venv (without its packages).
+    for name, command in (("python", f'"{sys.executable}"'), ("zenroid", f'"{sys.executable}" -m nodes.tools')):
+        script = bin_dir / name
+        script.write_text(f'#!/bin/sh\nexec {command} "$@"\n')
+        script.chmod(0o755)
     env = dict(os.environ, PATH=f"{bin_dir}{os.pathsep}{os.environ.get('PATH', '')}", PYTHONPATH=str(ROOT),
                PYTHONUNBUFFERED="1", ZENROID_LOG_DIR=str(tmp_path / "logs"))
     env.pop("ZENOH_CONFIG", None)
