@@ -21,15 +21,13 @@ from typing import Any
 import numpy as np
 
 import msgs
+from msgs.gazebo_msgs import ModelStates
+from msgs.sensor_msgs import JointState
+from msgs.std_msgs import String
+from msgs.tf2_msgs import TFMessage
 from nodes.core import Node, ParameterError, run_node
 from nodes.kinematics import KinematicTree
 from nodes.urdf import UrdfError, load_robot_description, parse_urdf, parse_xacro_args, validate
-
-JointState = msgs.get_type("sensor_msgs/msg/JointState")
-ModelStates = msgs.get_type("gazebo_msgs/msg/ModelStates")
-String = msgs.get_type("std_msgs/msg/String")
-TFMessage = msgs.get_type("tf2_msgs/msg/TFMessage")
-
 
 _stamp = msgs.time_map
 _pack_tf = msgs.packer("tf2_msgs/msg/TFMessage")

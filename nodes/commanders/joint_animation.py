@@ -13,14 +13,12 @@ from __future__ import annotations
 import math
 import sys
 
-from msgs import get_type
+from msgs.control_msgs import JointTrajectoryControllerState as ControllerState
 from msgs.rosgraph_msgs import Clock
 from msgs.trajectory_msgs import JointTrajectory
 from nodes.commanders.live import restart
 from nodes.commanders.trajectories import point, trajectory
 from nodes.core import Node, run_node
-
-ControllerState = get_type("control_msgs/msg/JointTrajectoryControllerState")
 
 # The tutorial's (Atlas v1/v3) joint order, and which of the two waves each joint follows.
 JOINTS_AND_WAVES = [

@@ -25,17 +25,15 @@ import sys
 import time
 from dataclasses import dataclass
 
-import msgs
 from msgs import duration_from_sec
+from msgs.control_msgs import JointTrajectoryControllerState as ControllerState
+from msgs.std_msgs import String
 from msgs.trajectory_msgs import JointTrajectory, JointTrajectoryPoint
 from nodes.commanders.joint_commander import LEG_JOINTS
 from nodes.commanders.live import restart
 from nodes.commanders.trajectories import trajectory
 from nodes.core import Node, run_node
 from nodes.urdf.model import RobotModel, UrdfError, parse_urdf
-
-String = msgs.get_type("std_msgs/msg/String")
-ControllerState = msgs.get_type("control_msgs/msg/JointTrajectoryControllerState")
 
 SIDES = ("left", "right")
 

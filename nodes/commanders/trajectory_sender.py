@@ -11,12 +11,11 @@ from __future__ import annotations
 import sys
 import threading
 
-from msgs import get_type
+from msgs.control_msgs import FollowJointTrajectory
 from nodes.commanders.live import restart
 from nodes.commanders.trajectories import single_point, trajectory, waveform_points
 from nodes.core import Node, run_node
 
-FollowJointTrajectory = get_type("control_msgs/action/FollowJointTrajectory")
 WAVEFORMS = ("point", "sine", "square")
 DEFAULT_FREQUENCY = {"sine": 0.1, "square": 0.05}
 STATUS_NAMES = {4: "SUCCEEDED", 5: "CANCELED", 6: "ABORTED"}

@@ -12,10 +12,11 @@ through the small ``ControllerContext`` handle the manager passes in, never thro
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
+from msgs.std_msgs import Float64MultiArray
 from nodes.control.interfaces import JointInfo, LoanedCommandInterface, LoanedStateInterface
 from nodes.core.param_schema import load_parameters
 
@@ -117,6 +118,28 @@ class Controller:
         raise NotImplementedError
 
     # --- helpers ----------------------------------------------------------------------------------
+    def take_joints(self, joints: list[str]) -> list[str]:
+        """Keep ``joints`` (from a parameter) as ``self.joints``; raises ControllerError when it is empty or
+        names a joint twice."""
+        if not joints:
+            raise ControllerError("parameter 'joints' is empty")
+        if len(set(joints)) != len(joints):
+            raise ControllerError(f"parameter 'joints' lists a joint twice: {joints}")
+        self.joints = list(joints)
+        return self.joints
+
+    def subscribe_joint_values(self, topic: str, what: str, keep: Callable[[list[float]], None]) -> None:
+        """Subscribe to a std_msgs/Float64MultiArray ``topic`` with one value per joint: ``keep(values)`` gets
+        every accepted message's values; refused ones are logged as ``what`` and counted."""
+        self.rejected_count = 0
+
+        def on_message(msg: Any) -> None:
+            values = self.one_value_per_joint(msg.data, what)
+            if values is not None:
+                keep(values)
+
+        self.context.create_subscription(Float64MultiArray, topic, on_message)
+
     def one_value_per_joint(self, data: Any, what: str) -> list[float] | None:
         """``data`` (a Float64MultiArray's) as one finite value per joint of ``self.joints``; None when it
         is refused (logged with the reason, counted in ``rejected_count``)."""

@@ -29,7 +29,11 @@ def split_interface(name: str) -> tuple[str, str]:
 
 @dataclass
 class JointInfo:
-    """One joint as the hardware describes it (zenroid_msgs/HardwareJoint)."""
+    """One joint of the hardware: its interfaces and limits (on the wire: zenroid_msgs/HardwareJoint).
+
+    The simulator fills it from the URDF (``<limit>``) and ``<ros2_control>`` (interfaces, min/max params),
+    the controller manager from the simulator's ``hardware/info``. ``inf`` means "no limit".
+    """
 
     name: str
     command_interfaces: list[str] = field(default_factory=lambda: ["position"])
@@ -38,6 +42,22 @@ class JointInfo:
     max_position: float = math.inf
     max_velocity: float = math.inf
     max_effort: float = math.inf
+    type: str = ""  # the URDF joint type ("revolute", "continuous", "prismatic") where known
+    # <ros2_control> min/max params per command interface, on top of the limits above
+    command_bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
+
+    def bounds(self, interface: str) -> tuple[float, float]:
+        """The admissible range of a command on ``interface`` (the joint's limit ∩ ros2_control min/max)."""
+        if interface == "position":
+            lo, hi = self.min_position, self.max_position
+        elif interface == "velocity":
+            lo, hi = -self.max_velocity, self.max_velocity
+        else:
+            lo, hi = -self.max_effort, self.max_effort
+        extra = self.command_bounds.get(interface)
+        if extra:
+            lo, hi = max(lo, extra[0]), min(hi, extra[1])
+        return lo, hi
 
 
 class _Slot:

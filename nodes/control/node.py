@@ -18,6 +18,18 @@ import time
 from typing import Any
 
 import msgs
+from msgs.controller_manager_msgs import (
+    ConfigureController,
+    ControllerState,
+    ListControllers,
+    ListHardwareInterfaces,
+    LoadController,
+    SwitchController,
+    UnloadController,
+)
+from msgs.controller_manager_msgs import HardwareInterface as HardwareInterfaceMsg
+from msgs.std_srvs import Trigger
+from msgs.zenroid_msgs import GetHardwareInfo, HardwareCommand, HardwareState, SetParameters
 from nodes.control import restore
 from nodes.control.config import (
     ConfigError,
@@ -33,19 +45,6 @@ from nodes.core import Node, ServiceError, realtime
 from nodes.core.endpoints import SingleSender, source_label
 from nodes.core.log import truncate
 
-ListControllers = msgs.get_type("controller_manager_msgs/srv/ListControllers")
-LoadController = msgs.get_type("controller_manager_msgs/srv/LoadController")
-ConfigureController = msgs.get_type("controller_manager_msgs/srv/ConfigureController")
-SwitchController = msgs.get_type("controller_manager_msgs/srv/SwitchController")
-UnloadController = msgs.get_type("controller_manager_msgs/srv/UnloadController")
-ListHardwareInterfaces = msgs.get_type("controller_manager_msgs/srv/ListHardwareInterfaces")
-ControllerState = msgs.get_type("controller_manager_msgs/msg/ControllerState")
-HardwareInterfaceMsg = msgs.get_type("controller_manager_msgs/msg/HardwareInterface")
-GetHardwareInfo = msgs.get_type("zenroid_msgs/srv/GetHardwareInfo")
-HardwareState = msgs.get_type("zenroid_msgs/msg/HardwareState")
-HardwareCommand = msgs.get_type("zenroid_msgs/msg/HardwareCommand")
-SetParameters = msgs.get_type("zenroid_msgs/srv/SetParameters")
-Trigger = msgs.get_type("std_srvs/srv/Trigger")
 # A request names at most this many controllers, each at most MAX_NAME_CHARS long (a controller manager
 # has a handful); the limits are checked before anything is looked up or logged per name.
 MAX_SWITCH_CONTROLLERS = 256
@@ -348,7 +347,7 @@ class ControllerManagerNode(Node):
             return
         step, names, positions = state.step, state.name, state.position
         velocities, efforts = state.velocity, state.effort
-        t = state.stamp.sec + state.stamp.nanosec * 1e-9
+        t = msgs.time_to_sec(state.stamp)
         manager = self.manager
         self._cycle_since = time.monotonic()   # the watchdog's view of a cycle that never ends
         with manager.lock:

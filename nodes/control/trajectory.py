@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from msgs import duration_to_sec, time_to_sec
+
 LINEAR, CUBIC, QUINTIC = 1, 3, 5
 MAX_POINTS = 100_000  # points per trajectory (the Atlas playback has 1,500)
 MAX_DURATION = 3600.0  # s: time_from_start of any point, and how far in the future a stamp may start
@@ -24,13 +26,6 @@ MAX_DURATION = 3600.0  # s: time_from_start of any point, and how far in the fut
 
 class TrajectoryError(ValueError):
     """An incoming trajectory was rejected; the message says which field and why."""
-
-
-def duration_to_sec(value) -> float:
-    """builtin_interfaces Duration/Time (object or dict) -> seconds."""
-    if isinstance(value, dict):
-        return float(value.get("sec", 0)) + float(value.get("nanosec", 0)) * 1e-9
-    return float(value.sec) + float(value.nanosec) * 1e-9
 
 
 def _field(obj, name: str):
@@ -350,7 +345,7 @@ def validate_trajectory(msg, controller_joints: list[str], *, now: float,
     if limits is not None:
         _check_position_limits(positions, joint_names, joint_indices, limits)
     header = _field(msg, "header")
-    stamp = duration_to_sec(_field(header, "stamp")) if header is not None and _field(header, "stamp") is not None else 0.0
+    stamp = time_to_sec(_field(header, "stamp")) if header is not None and _field(header, "stamp") is not None else 0.0
     if stamp < 0.0 or not math.isfinite(stamp):
         raise TrajectoryError(f"header.stamp is negative ({stamp:.9g} s)")
     if stamp > now + max_duration:

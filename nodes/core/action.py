@@ -13,15 +13,11 @@ from typing import Any
 import zenoh
 
 import msgs
+from msgs.action_msgs import CancelGoal, GoalInfo, GoalStatus, GoalStatusArray
+from msgs.unique_identifier_msgs import UUID
 from nodes.core import graph
 from nodes.core.endpoints import Publisher, ServiceError, call_raw, decode_request, encoding_for
 from nodes.core.runtime import NodeRuntime
-
-_GoalStatus = msgs.get_type("action_msgs/msg/GoalStatus")
-_GoalStatusArray = msgs.get_type("action_msgs/msg/GoalStatusArray")
-_GoalInfo = msgs.get_type("action_msgs/msg/GoalInfo")
-_CancelGoal = msgs.get_type("action_msgs/srv/CancelGoal")
-_UUID = msgs.get_type("unique_identifier_msgs/msg/UUID")
 
 ACCEPTED, EXECUTING, CANCELING, SUCCEEDED, CANCELED, ABORTED = 1, 2, 3, 4, 5, 6
 TERMINAL = frozenset({SUCCEEDED, CANCELED, ABORTED})
@@ -106,7 +102,7 @@ class ActionServer:
         self.goals: OrderedDict[bytes, ServerGoalHandle] = OrderedDict()
         self._lock = threading.RLock()
         self._feedback = Publisher(node, action_type.FeedbackMessage, f"{key}/feedback")
-        self._status = Publisher(node, _GoalStatusArray, f"{key}/status")
+        self._status = Publisher(node, GoalStatusArray, f"{key}/status")
         s = node.session
         self._queryables = [
             s.declare_queryable(f"{key}/send_goal", self.handle_send_goal, complete=True),
@@ -126,7 +122,7 @@ class ActionServer:
             self.node.executor.dispatch(self._handle_goal, query, request, where=f"action '{self.key}' goal")
 
     def handle_cancel_goal(self, query: zenoh.Query) -> None:
-        request = self._decode(query, _CancelGoal.Request)
+        request = self._decode(query, CancelGoal.Request)
         if request is not None:
             self.node.executor.dispatch(self._handle_cancel, query, request, where=f"action '{self.key}' cancel")
 
@@ -222,10 +218,10 @@ class ActionServer:
                     allowed = False
             if allowed:
                 handle._set(CANCELING)
-                canceling.append(_GoalInfo(goal_id=_UUID(uuid=handle.goal_id), stamp=handle.stamp))
+                canceling.append(GoalInfo(goal_id=UUID(uuid=handle.goal_id), stamp=handle.stamp))
         if targets and not canceling and code == 0:
             code = 1  # ERROR_REJECTED
-        self._reply(query, _CancelGoal.Response(return_code=code, goals_canceling=canceling))
+        self._reply(query, CancelGoal.Response(return_code=code, goals_canceling=canceling))
 
     # -- replies and topics
     def _reply(self, query: zenoh.Query, response: Any) -> None:
@@ -238,15 +234,15 @@ class ActionServer:
         self._reply(query, self.action_type.GetResultResponse(status=handle.status, result=handle.result))
 
     def _publish_feedback(self, goal_id: bytes, feedback: Any) -> None:
-        self._feedback.publish(self.action_type.FeedbackMessage(goal_id=_UUID(uuid=goal_id), feedback=feedback))
+        self._feedback.publish(self.action_type.FeedbackMessage(goal_id=UUID(uuid=goal_id), feedback=feedback))
 
     def _publish_status(self) -> None:
         with self._lock:
             status_list = [
-                _GoalStatus(goal_info=_GoalInfo(goal_id=_UUID(uuid=h.goal_id), stamp=h.stamp), status=h.status)
+                GoalStatus(goal_info=GoalInfo(goal_id=UUID(uuid=h.goal_id), stamp=h.stamp), status=h.status)
                 for h in self.goals.values()
             ]
-        self._status.publish(_GoalStatusArray(status_list=status_list))
+        self._status.publish(GoalStatusArray(status_list=status_list))
 
     def _on_terminal(self, handle: ServerGoalHandle) -> None:
         with self._lock:
@@ -280,16 +276,16 @@ class ClientGoalHandle:
 
     def get_result(self, timeout: float = 30.0) -> tuple[int, Any]:
         """Block until the goal ends; returns (status, result). Raises ServiceError on timeout."""
-        request = self.client.action_type.GetResultRequest(goal_id=_UUID(uuid=self.goal_id))
+        request = self.client.action_type.GetResultRequest(goal_id=UUID(uuid=self.goal_id))
         data = call_raw(self.client.node.session, f"{self.client.key}/get_result", msgs.encode(request), timeout)
         response = msgs.decode(self.client.action_type.GetResultResponse, data)
         self.status = response.status
         return response.status, response.result
 
     def cancel(self, timeout: float = 5.0) -> Any:
-        request = _CancelGoal.Request(goal_info=_GoalInfo(goal_id=_UUID(uuid=self.goal_id)))
+        request = CancelGoal.Request(goal_info=GoalInfo(goal_id=UUID(uuid=self.goal_id)))
         data = call_raw(self.client.node.session, f"{self.client.key}/cancel_goal", msgs.encode(request), timeout)
-        return msgs.decode(_CancelGoal.Response, data)
+        return msgs.decode(CancelGoal.Response, data)
 
 
 class ActionClient:
@@ -327,7 +323,7 @@ class ActionClient:
         goal_id = os.urandom(16)
         if feedback_callback is not None:
             self._feedback_callbacks[goal_id] = feedback_callback
-        request = self.action_type.SendGoalRequest(goal_id=_UUID(uuid=goal_id), goal=goal)
+        request = self.action_type.SendGoalRequest(goal_id=UUID(uuid=goal_id), goal=goal)
         try:
             data = call_raw(self.node.session, f"{self.key}/send_goal", msgs.encode(request), timeout)
         except ServiceError:

@@ -19,7 +19,7 @@ class NodeClock:
 
     def on_clock(self, msg: Any) -> None:
         """A rosgraph_msgs/Clock message (subscribed inline, on Zenoh's thread)."""
-        t = msg.clock.sec + msg.clock.nanosec * 1e-9
+        t = msgs.time_to_sec(msg.clock)
         if t < self.sim_now - 1e-9:
             self._logger.info(f"sim time jumped back from {self.sim_now:.3f} to {t:.3f} s (reset): timers restart")
             self._executor.restart_sim_timers(t)

@@ -4,12 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-import msgs
+from msgs.lifecycle_msgs import ChangeState, GetState, State
 from nodes.core.node import Node
-
-_State = msgs.get_type("lifecycle_msgs/msg/State")
-_GetState = msgs.get_type("lifecycle_msgs/srv/GetState")
-_ChangeState = msgs.get_type("lifecycle_msgs/srv/ChangeState")
 
 UNCONFIGURED, INACTIVE, ACTIVE, FINALIZED = 1, 2, 3, 4
 STATE_LABELS = {0: "unknown", 1: "unconfigured", 2: "inactive", 3: "active", 4: "finalized"}
@@ -32,8 +28,8 @@ class LifecycleNode(Node):
     def __init__(self, name: str, **kwargs: Any) -> None:
         super().__init__(name, **kwargs)
         self.state = UNCONFIGURED
-        self.create_service(_GetState, "~/get_state", self._srv_get_state)
-        self.create_service(_ChangeState, "~/change_state", self._srv_change_state)
+        self.create_service(GetState, "~/get_state", self._srv_get_state)
+        self.create_service(ChangeState, "~/change_state", self._srv_change_state)
 
     @property
     def state_label(self) -> str:
@@ -80,10 +76,10 @@ class LifecycleNode(Node):
         return True
 
     def _srv_get_state(self, request: Any) -> Any:
-        return _GetState.Response(current_state=_State(id=self.state, label=self.state_label))
+        return GetState.Response(current_state=State(id=self.state, label=self.state_label))
 
     def _srv_change_state(self, request: Any) -> Any:
         tid = request.transition.id
         label = request.transition.label
         ok = self.trigger(label if (tid == 0 and label) else tid)
-        return _ChangeState.Response(success=ok)
+        return ChangeState.Response(success=ok)

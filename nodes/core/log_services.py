@@ -6,13 +6,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-import msgs
+from msgs.rcl_interfaces import GetLoggerLevels, LoggerLevel, SetLoggerLevels, SetLoggerLevelsResult
 from nodes.core.log import Logger, parse_level
-
-_GetLoggerLevels = msgs.get_type("rcl_interfaces/srv/GetLoggerLevels")
-_SetLoggerLevels = msgs.get_type("rcl_interfaces/srv/SetLoggerLevels")
-_LoggerLevel = msgs.get_type("rcl_interfaces/msg/LoggerLevel")
-_SetLoggerLevelsResult = msgs.get_type("rcl_interfaces/msg/SetLoggerLevelsResult")
 
 
 class LoggerLevelServices:
@@ -22,26 +17,26 @@ class LoggerLevelServices:
         self.aliases = aliases
 
     def serve(self, create_service: Callable[..., Any]) -> None:
-        create_service(_GetLoggerLevels, "~/get_logger_levels", self._srv_get)
-        create_service(_SetLoggerLevels, "~/set_logger_levels", self._srv_set)
+        create_service(GetLoggerLevels, "~/get_logger_levels", self._srv_get)
+        create_service(SetLoggerLevels, "~/set_logger_levels", self._srv_set)
 
     def _srv_get(self, request: Any) -> Any:
         names = request.names or [self.logger.name]
-        return _GetLoggerLevels.Response(levels=[
-            _LoggerLevel(name=n, level=self.logger.level if n == self.logger.name else 0) for n in names])
+        return GetLoggerLevels.Response(levels=[
+            LoggerLevel(name=n, level=self.logger.level if n == self.logger.name else 0) for n in names])
 
     def _srv_set(self, request: Any) -> Any:
         results = []
         for item in request.levels:
             if item.name != self.logger.name and item.name not in self.aliases:
-                results.append(_SetLoggerLevelsResult(successful=False, reason=f"no logger '{item.name}' in this "
+                results.append(SetLoggerLevelsResult(successful=False, reason=f"no logger '{item.name}' in this "
                                                       f"node (its logger is '{self.logger.name}')"))
                 continue
             try:
                 self.logger.set_level(parse_level(int(item.level)))
             except ValueError as exc:
-                results.append(_SetLoggerLevelsResult(successful=False, reason=str(exc)))
+                results.append(SetLoggerLevelsResult(successful=False, reason=str(exc)))
                 continue
             self.logger.info(f"log level set to {self.logger.level_name}")
-            results.append(_SetLoggerLevelsResult(successful=True))
-        return _SetLoggerLevels.Response(results=results)
+            results.append(SetLoggerLevelsResult(successful=True))
+        return SetLoggerLevels.Response(results=results)

@@ -22,6 +22,9 @@ from typing import Any
 import zenoh
 
 import msgs
+from msgs.rcl_interfaces import Log
+from msgs.rosgraph_msgs import Clock
+from msgs.std_msgs import Header
 from nodes.core import names
 from nodes.core.action import ActionClient, ActionServer
 from nodes.core.clock import NodeClock
@@ -33,10 +36,6 @@ from nodes.core.log_services import LoggerLevelServices
 from nodes.core.node_parameters import NodeParameters
 from nodes.core.presence import GraphPresence
 from nodes.core.session import open_peer
-
-_Log = msgs.get_type("rcl_interfaces/msg/Log")
-_Clock = msgs.get_type("rosgraph_msgs/msg/Clock")
-_Header = msgs.get_type("std_msgs/msg/Header")
 
 
 @dataclass
@@ -121,10 +120,10 @@ class Node:
             "use_sim_time", False, description="follow sim/clock instead of the wall clock",
             read_only="the clock is chosen at start-up: restart the node with --param use_sim_time:=..."))
         self.clock = NodeClock(self.use_sim_time, self.executor, self.logger)
-        self._rosout = Publisher(self, _Log, "rosout")
+        self._rosout = Publisher(self, Log, "rosout")
         self.logger.set_sink(self._publish_log)
         if self.use_sim_time:
-            self.create_subscription(_Clock, "/sim/clock", self.clock.on_clock, inline=True)
+            self.create_subscription(Clock, "/sim/clock", self.clock.on_clock, inline=True)
         self.parameters.serve(self.create_service)
         LoggerLevelServices(self.logger, (self.name, self.fully_qualified_name)).serve(self.create_service)
 
@@ -143,7 +142,7 @@ class Node:
             return
         # droppable: a log flood on a congested link must never block the caller (the physics loop, the
         # controller manager's hardware cycle); the line is on stdout and in the node's log file anyway
-        self._rosout.publish_raw(msgs.encode(_Log(stamp=self.clock.stamp(wall), level=level, name=name, msg=text)),
+        self._rosout.publish_raw(msgs.encode(Log(stamp=self.clock.stamp(wall), level=level, name=name, msg=text)),
                                  droppable=True)
 
     # ------------------------------------------------------------ parameters (nodes/core/node_parameters.py)
@@ -236,7 +235,7 @@ class Node:
         return msgs.time_from_sec(self.clock.now())
 
     def header(self, frame_id: str = "") -> Any:
-        return _Header(stamp=self.now_msg(), frame_id=frame_id)
+        return Header(stamp=self.now_msg(), frame_id=frame_id)
 
     # ------------------------------------------------------------ executor
     def call_soon(self, fn: Callable[[], None], where: str = "callback") -> None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-import msgs
+from msgs.zenroid_msgs import GetParameters, SetParameters
 from nodes.core.params import (
     ParameterDescriptor,
     ParameterError,
@@ -15,9 +15,6 @@ from nodes.core.params import (
     parse_value,
     type_of_default,
 )
-
-_GetParameters = msgs.get_type("zenroid_msgs/srv/GetParameters")
-_SetParameters = msgs.get_type("zenroid_msgs/srv/SetParameters")
 
 
 class NodeParameters:
@@ -73,13 +70,13 @@ class NodeParameters:
     # ---------------------------------------------------------------- the services
     def serve(self, create_service: Callable[..., Any]) -> None:
         """Offer ``~/get_parameters`` and ``~/set_parameters`` through the node's ``create_service``."""
-        create_service(_GetParameters, "~/get_parameters", self._srv_get)
-        create_service(_SetParameters, "~/set_parameters", self._srv_set)
+        create_service(GetParameters, "~/get_parameters", self._srv_get)
+        create_service(SetParameters, "~/set_parameters", self._srv_set)
 
     def _srv_get(self, request: Any) -> Any:
         wanted = request.names or sorted(self._values)
         found = [n for n in wanted if n in self._values]
-        return _GetParameters.Response(names=found, values_yaml=[dump_value(self._values[n]) for n in found])
+        return GetParameters.Response(names=found, values_yaml=[dump_value(self._values[n]) for n in found])
 
     def _srv_set(self, request: Any) -> Any:
         if len(request.names) != len(request.values_yaml):
@@ -93,4 +90,4 @@ class NodeParameters:
             except ParameterError as exc:
                 ok.append(False)
                 reasons.append(str(exc))
-        return _SetParameters.Response(successful=ok, reasons=reasons)
+        return SetParameters.Response(successful=ok, reasons=reasons)

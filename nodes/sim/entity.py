@@ -134,9 +134,9 @@ class Entity:
             if not isinstance(value, (int, float)) or not math.isfinite(value):
                 raise SpawnError(f"initial position of joint {joint_name!r} is not a finite number: {value!r}")
             joint = self.info.joint(joint_name)
-            if not joint.lower <= value <= joint.upper:
+            if not joint.min_position <= value <= joint.max_position:
                 raise SpawnError(f"initial position {value} of joint {joint_name!r} is outside "
-                                 f"[{joint.lower}, {joint.upper}]")
+                                 f"[{joint.min_position}, {joint.max_position}]")
             self.skeleton.setPosition(self.dof_index[joint_name], float(value))
 
     def reset(self) -> None:

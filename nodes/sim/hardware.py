@@ -284,8 +284,8 @@ class HardwareInterface:
                 "name": joint.name,
                 "command_interfaces": list(joint.command_interfaces),
                 "state_interfaces": list(joint.state_interfaces),
-                "min_position": joint.bounds("position")[0] if math.isfinite(joint.lower) else 0.0,
-                "max_position": joint.bounds("position")[1] if math.isfinite(joint.upper) else 0.0,
+                "min_position": joint.bounds("position")[0] if math.isfinite(joint.min_position) else 0.0,
+                "max_position": joint.bounds("position")[1] if math.isfinite(joint.max_position) else 0.0,
                 "max_velocity": velocity if math.isfinite(velocity) else 0.0,
                 "max_effort": effort if math.isfinite(effort) else 0.0,
             })

@@ -8,11 +8,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import msgs
+from msgs.std_msgs import String
 from nodes.core import Node
 from nodes.core.endpoints import ServiceError, call_raw
 from nodes.share import robot_file
-
-String = msgs.get_type("std_msgs/msg/String")
 
 
 class ConfigError(ValueError):

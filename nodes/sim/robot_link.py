@@ -11,15 +11,13 @@ from collections import deque
 from typing import Any
 
 import msgs
+from msgs.zenroid_msgs import HardwareJoint
 from nodes.core import Node
 from nodes.core.endpoints import SingleSender, source_label
 from nodes.sim.hardware import CommandError, HardwareInterface
 from nodes.sim.interfaces import GetHardwareInfo, HardwareCommand, HardwareState, HumanoidState
 from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import CommandInbox
-
-_HardwareJoint = msgs.get_type("zenroid_msgs/msg/HardwareJoint")
-
 
 # NaN passes the decoder: it is rejected per joint (and logged) when applied, so one bad joint does not
 # cost the others their command.
@@ -171,5 +169,5 @@ class RobotLink:
         return GetHardwareInfo.Response(
             robot_name=self.hardware.entity.name, mode=self.sim.mode,
             physics_rate=self.sim.physics_rate,
-            joints=[_HardwareJoint(**row) for row in self.hardware.joint_table()],
+            joints=[HardwareJoint(**row) for row in self.hardware.joint_table()],
         )

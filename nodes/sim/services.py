@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from typing import Any, Protocol
 
-import msgs
+from msgs.geometry_msgs import Vector3
 from nodes.core.log import Logger
 from nodes.sim.entity import EntitySpec, Pose, SpawnError
 from nodes.sim.interfaces import (
@@ -22,8 +22,6 @@ from nodes.sim.interfaces import (
 from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import Pacer
 from nodes.sim.urdf_info import UrdfError
-
-_Vector3 = msgs.get_type("geometry_msgs/msg/Vector3")
 
 MAX_STEP_REQUEST = 1_000_000
 # Plausible ranges of what a request may set (DART integrates anything, and a gravity of 1e308 or a time step
@@ -170,7 +168,7 @@ class SimServices:
         return GetPhysicsProperties.Response(
             time_step=world.time_step, pause=self.simulator.paused,
             max_update_rate=world.physics_rate * rtf if sim.mode == "realtime" else 0.0,
-            gravity=_Vector3(x=gx, y=gy, z=gz), has_ground=world.has_ground, mode=sim.mode,
+            gravity=Vector3(x=gx, y=gy, z=gz), has_ground=world.has_ground, mode=sim.mode,
             collision_detector=world.collision_detector, real_time_factor=rtf,
             sim_time=world.time, step=sim.step_count, success=True, status_message="")
 

@@ -9,43 +9,14 @@ names other than position/velocity/effort) and the derived per-joint bounds.
 
 from __future__ import annotations
 
-import math
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
+from nodes.control.interfaces import JointInfo
 from nodes.urdf.model import Joint, RobotModel, UrdfError
 from nodes.urdf.model import parse_urdf as parse_model
 
 INTERFACES = ("position", "velocity", "effort")
-
-
-@dataclass
-class JointInfo:
-    """A movable joint with its URDF limits and hardware interfaces (DESIGN §6)."""
-
-    name: str
-    type: str
-    lower: float = -math.inf
-    upper: float = math.inf
-    max_velocity: float = math.inf
-    max_effort: float = math.inf
-    command_interfaces: list[str] = field(default_factory=lambda: ["position"])
-    state_interfaces: list[str] = field(default_factory=lambda: list(INTERFACES))
-    # <ros2_control> min/max params per command interface, on top of the URDF limits
-    command_bounds: dict[str, tuple[float, float]] = field(default_factory=dict)
-
-    def bounds(self, interface: str) -> tuple[float, float]:
-        """The admissible range of a command on ``interface`` (URDF limit ∩ ros2_control min/max)."""
-        if interface == "position":
-            lo, hi = self.lower, self.upper
-        elif interface == "velocity":
-            lo, hi = -self.max_velocity, self.max_velocity
-        else:
-            lo, hi = -self.max_effort, self.max_effort
-        extra = self.command_bounds.get(interface)
-        if extra:
-            lo, hi = max(lo, extra[0]), min(hi, extra[1])
-        return lo, hi
 
 
 @dataclass
@@ -116,9 +87,9 @@ def _check_shapes(model: RobotModel) -> None:
 def _joint_info(joint: Joint) -> JointInfo:
     info = JointInfo(name=joint.name, type=joint.type)
     if joint.lower is not None and joint.upper is not None:  # revolute/prismatic (never continuous)
-        info.lower, info.upper = joint.lower, joint.upper
-        if info.lower > info.upper:
-            raise _error(joint.line, f"joint {joint.name!r} lower limit {info.lower} > upper {info.upper}")
+        info.min_position, info.max_position = joint.lower, joint.upper
+        if joint.lower > joint.upper:
+            raise _error(joint.line, f"joint {joint.name!r} lower limit {joint.lower} > upper {joint.upper}")
     # URDF: velocity/effort <= 0 or absent means "no limit" in practice
     if joint.velocity is not None and joint.velocity > 0:
         info.max_velocity = joint.velocity

@@ -4,16 +4,13 @@ from __future__ import annotations
 
 import argparse
 
-import msgs
+from msgs.lifecycle_msgs import ChangeState, Transition
+from msgs.lifecycle_msgs import GetState as _GetState
 from nodes.core import ServiceError
 from nodes.core.endpoints import Client
 from nodes.core.lifecycle import STATE_LABELS, TRANSITIONS
 from nodes.tools.common import add_common, cli_node, require_node, snapshot, write_line
 from nodes.tools.errors import Failed, UsageError
-
-_GetState = msgs.get_type("lifecycle_msgs/srv/GetState")
-_ChangeState = msgs.get_type("lifecycle_msgs/srv/ChangeState")
-_Transition = msgs.get_type("lifecycle_msgs/msg/Transition")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -56,8 +53,8 @@ def run(args: argparse.Namespace) -> int:
                     if state.id in sources:
                         write_line(f"- {label} [{tid}]\n\tStart: {state.label}\n\tGoal: {STATE_LABELS[goal]}")
                 return 0
-            ok = Client(node, _ChangeState, f"{base}/change_state").call(
-                _ChangeState.Request(transition=_Transition(label=args.transition))).success
+            ok = Client(node, ChangeState, f"{base}/change_state").call(
+                ChangeState.Request(transition=Transition(label=args.transition))).success
         except ServiceError as exc:
             raise Failed(f"{target} is not a lifecycle node or does not answer: {exc}") from None
     finally:

@@ -8,15 +8,13 @@ from __future__ import annotations
 
 import argparse
 
-import msgs
+from msgs.rcl_interfaces import GetLoggerLevels as _Get
+from msgs.rcl_interfaces import LoggerLevel as _Level
+from msgs.rcl_interfaces import SetLoggerLevels as _Set
 from nodes.core import ServiceError
 from nodes.core.log import NAMES, parse_level
 from nodes.tools.common import Failed, add_common, cli_node, require_node
 from nodes.tools.errors import UsageError
-
-_Get = msgs.get_type("rcl_interfaces/srv/GetLoggerLevels")
-_Set = msgs.get_type("rcl_interfaces/srv/SetLoggerLevels")
-_Level = msgs.get_type("rcl_interfaces/msg/LoggerLevel")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

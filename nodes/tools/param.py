@@ -12,14 +12,12 @@ from typing import Any
 
 import yaml
 
-import msgs
+from msgs.zenroid_msgs import GetParameters as _Get
+from msgs.zenroid_msgs import SetParameters as _Set
 from nodes.core import ServiceError
 from nodes.core.params import ParameterError, dump_value, load_params_file, parse_value
 from nodes.tools.common import add_common, cli_node, require_node, write_line
 from nodes.tools.errors import Failed, UsageError
-
-_Get = msgs.get_type("zenroid_msgs/srv/GetParameters")
-_Set = msgs.get_type("zenroid_msgs/srv/SetParameters")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -24,14 +24,12 @@ from typing import Any
 
 import msgs
 from msgs import duration_from_sec
+from msgs.control_msgs import JointTrajectoryControllerState as ControllerState
+from msgs.sensor_msgs import JointState
+from msgs.std_msgs import String
+from msgs.trajectory_msgs import JointTrajectory, JointTrajectoryPoint
 from nodes.tools.cli import UsageError
 from nodes.tools.common import add_common
-
-JointState = msgs.get_type("sensor_msgs/msg/JointState")
-ControllerState = msgs.get_type("control_msgs/msg/JointTrajectoryControllerState")
-JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
-JointTrajectoryPoint = msgs.get_type("trajectory_msgs/msg/JointTrajectoryPoint")
-String = msgs.get_type("std_msgs/msg/String")
 
 KEYS_HELP = "up/down or k/j: select   +/-: nudge   0: zero pose   q: quit"
 

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
+from msgs import duration_to_sec
 from nodes.kinematics import matrix_to_quaternion, pose_matrix
 
 ARROW, CUBE, SPHERE, CYLINDER, LINE_STRIP, LINE_LIST, CUBE_LIST, SPHERE_LIST, POINTS, TEXT_VIEW_FACING, \
@@ -62,10 +63,6 @@ def marker_entity(topic: str, ns: str, marker_id: int) -> str:
 
 def color8(c: Any) -> list[int]:
     return [int(round(max(0.0, min(1.0, v)) * 255)) for v in (c.r, c.g, c.b, c.a)]
-
-
-def _duration(d: Any) -> float:
-    return d.sec + d.nanosec * 1e-9
 
 
 def local_pose(msg: Any) -> np.ndarray:
@@ -203,7 +200,7 @@ class MarkerLayer:
         if key not in self.live and len(self.live) >= self.max_markers:
             raise MarkerError(f"{self.max_markers} markers are shown already: delete some (DELETE, DELETEALL) "
                               "or give them a lifetime")
-        lifetime = _duration(msg.lifetime)
+        lifetime = duration_to_sec(msg.lifetime)
         expires = self.clock() + lifetime if lifetime > 0 else None
         marker = self.live.get(key)
         if marker is None:

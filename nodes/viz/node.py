@@ -22,6 +22,15 @@ import numpy as np
 import rerun as rr
 
 import msgs
+from msgs.control_msgs import JointTrajectoryControllerState as ControllerState
+from msgs.gazebo_msgs import ModelStates
+from msgs.humanoid_msgs import HumanoidState
+from msgs.rosgraph_msgs import Clock
+from msgs.sensor_msgs import JointState
+from msgs.std_msgs import String
+from msgs.tf2_msgs import TFMessage
+from msgs.trajectory_msgs import JointTrajectory
+from msgs.visualization_msgs import Marker, MarkerArray
 from nodes.core import Node, Subscription
 from nodes.core import graph as core_graph
 from nodes.core.latched import fetch_latched
@@ -33,16 +42,6 @@ from .ratelimit import RateLimiter
 from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, SceneTime, is_wall_stamp, parse_model
 from .sink import Output, OutputPlan
 
-String = msgs.get_type("std_msgs/msg/String")
-JointState = msgs.get_type("sensor_msgs/msg/JointState")
-TFMessage = msgs.get_type("tf2_msgs/msg/TFMessage")
-ModelStates = msgs.get_type("gazebo_msgs/msg/ModelStates")
-Clock = msgs.get_type("rosgraph_msgs/msg/Clock")
-ControllerState = msgs.get_type("control_msgs/msg/JointTrajectoryControllerState")
-JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
-HumanoidState = msgs.get_type("humanoid_msgs/msg/HumanoidState")
-Marker = msgs.get_type("visualization_msgs/msg/Marker")
-MarkerArray = msgs.get_type("visualization_msgs/msg/MarkerArray")
 MARKER_TYPES = {"visualization_msgs/msg/Marker": Marker, "visualization_msgs/msg/MarkerArray": MarkerArray}
 # RViz's default marker topics (global and per robot), and seed 002's trajectory marker topic.
 GLOBAL_MARKER_TOPICS = {"visualization_marker": Marker, "visualization_marker_array": MarkerArray,
@@ -70,10 +69,6 @@ class LatchedStream:
     msg_type: Any
     key: str  # for log lines, without the leading slash
     newest: Latest | None = None
-
-
-def stamp_seconds(stamp: Any) -> float:
-    return stamp.sec + stamp.nanosec * 1e-9
 
 
 @dataclass
@@ -357,12 +352,12 @@ class Visualiser(Node):
 
     # -- callbacks -----------------------------------------------------------------------------------
     def on_clock(self, msg: Any) -> None:
-        self.sim_now = stamp_seconds(msg.clock)
+        self.sim_now = msgs.time_to_sec(msg.clock)
         self.sim_clock_seen = True
         self.timeline = SIM_TIMELINE
 
     def stamp_or_now(self, stamp: Any) -> float:
-        seconds = stamp_seconds(stamp)
+        seconds = msgs.time_to_sec(stamp)
         if seconds <= 0:
             return self.sim_now
         self.sim_now = seconds  # stamps keep sim time current between the (rate-limited) clock samples

@@ -38,7 +38,7 @@ def test_humanoid_has_22_position_joints_with_limits():
     assert len(info.joints) == 22
     knee = info.joint("left_knee")
     assert knee.command_interfaces == ["position"]
-    assert math.isfinite(knee.upper) and knee.max_effort > 0
+    assert math.isfinite(knee.max_position) and knee.max_effort > 0
 
 
 def test_without_ros2_control_every_movable_joint_gets_position_control():

@@ -6,8 +6,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from nodes.control.controller import Controller, ControllerError
-from nodes.control.messages import msg_type
+from nodes.control.controller import Controller
 from nodes.core.param_schema import param
 
 
@@ -29,24 +28,16 @@ class ForwardCommandController(Controller):
     fixed_interface: str | None = None
 
     def on_configure(self) -> None:
-        self.joints = list(self.params.joints)
-        if not self.joints:
-            raise ControllerError("parameter 'joints' is empty")
-        if len(set(self.joints)) != len(self.joints):
-            raise ControllerError(f"parameter 'joints' lists a joint twice: {self.joints}")
+        self.take_joints(list(self.params.joints))
         self.interface = self.fixed_interface or self.params.interface_name
         self._latest: list[float] | None = None
-        self.rejected_count = 0
-        self.context.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "~/commands",
-                                         self._on_commands)
+        self.subscribe_joint_values("~/commands", "command", self._on_commands)
 
     def command_interface_configuration(self) -> list[str]:
         return [f"{j}/{self.interface}" for j in self.joints]
 
-    def _on_commands(self, msg) -> None:
-        data = self.one_value_per_joint(msg.data, "command")
-        if data is not None:
-            self._latest = data  # one assignment: atomic hand-over to update()
+    def _on_commands(self, values: list[float]) -> None:
+        self._latest = values  # one assignment: atomic hand-over to update()
 
     def on_activate(self) -> None:
         self._latest = None  # commands sent while inactive are not replayed

@@ -7,9 +7,9 @@ import math
 from dataclasses import dataclass
 
 import msgs
+from msgs.sensor_msgs import JointState
 from nodes.control.controller import Controller, ControllerError
 from nodes.control.interfaces import read_values
-from nodes.control.messages import msg_type
 from nodes.core.param_schema import param
 
 _header = msgs.builder("std_msgs/msg/Header")
@@ -39,8 +39,7 @@ class JointStateBroadcaster(Controller):
             raise ControllerError(f"parameter 'joints': unknown joints {unknown}")
         self.kinds = list(self.params.interfaces)
         topic = "~/joint_states" if self.params.use_local_topics else "joint_states"
-        self._type = msg_type("sensor_msgs/msg/JointState")
-        self._pub = self.context.create_publisher(self._type, topic)
+        self._pub = self.context.create_publisher(JointState, topic)
         rate = self.params.publish_rate
         self._period = 1.0 / rate if rate > 0 else 0.0
         self._last_publish = -math.inf

@@ -23,9 +23,12 @@ from typing import Any
 import numpy as np
 
 import msgs
+from msgs import duration_to_sec
+from msgs.control_msgs import FollowJointTrajectory, JointTrajectoryControllerState
+from msgs.std_msgs import Header
+from msgs.trajectory_msgs import JointTrajectory, JointTrajectoryPoint
 from nodes.control.controller import Controller, ControllerError
 from nodes.control.interfaces import read_values, write_values
-from nodes.control.messages import sec_to_time
 from nodes.control.pid import Gains, Pid
 from nodes.control.trajectory import (
     MAX_DURATION,
@@ -33,7 +36,6 @@ from nodes.control.trajectory import (
     JointLimits,
     Trajectory,
     TrajectoryError,
-    duration_to_sec,
     validate_trajectory,
 )
 from nodes.core.param_schema import namespace, param, per_key
@@ -45,8 +47,6 @@ INVALID_JOINTS = -2
 OLD_HEADER_TIMESTAMP = -3
 PATH_TOLERANCE_VIOLATED = -4
 GOAL_TOLERANCE_VIOLATED = -5
-
-FJT = "control_msgs/action/FollowJointTrajectory"
 
 
 @dataclass
@@ -153,17 +153,12 @@ class JointTrajectoryController(Controller):
     # --- configuration ------------------------------------------------------------------------------
     def on_configure(self) -> None:
         params = self.params
-        joints = list(params.joints)
-        if not joints:
-            raise ControllerError("parameter 'joints' is empty")
-        if len(set(joints)) != len(joints):
-            raise ControllerError(f"parameter 'joints' lists a joint twice: {joints}")
+        joints = self.take_joints(list(params.joints))
         command = list(params.command_interfaces)
         if not command:
             raise ControllerError("parameter 'command_interfaces' is empty")
         if "position" not in params.state_interfaces:
             raise ControllerError("parameter 'state_interfaces' must include 'position'")
-        self.joints = joints
         self.joint_index = {name: i for i, name in enumerate(joints)}
         self.command_kinds: list[str] = command
         self.state_kinds = list(dict.fromkeys(params.state_interfaces))
@@ -206,12 +201,10 @@ class JointTrajectoryController(Controller):
         self.rejected_count = 0
 
         ctx = self.context
-        self._traj_type = _type("trajectory_msgs/msg/JointTrajectory")
-        ctx.create_subscription(self._traj_type, "~/joint_trajectory", self._on_trajectory_msg)
-        self._state_pub = ctx.create_publisher(
-            _type("control_msgs/msg/JointTrajectoryControllerState"), "~/controller_state")
+        ctx.create_subscription(JointTrajectory, "~/joint_trajectory", self._on_trajectory_msg)
+        self._state_pub = ctx.create_publisher(JointTrajectoryControllerState, "~/controller_state")
         self._action = ctx.create_action_server(
-            _type(FJT), "~/follow_joint_trajectory", goal_callback=self._on_goal,
+            FollowJointTrajectory, "~/follow_joint_trajectory", goal_callback=self._on_goal,
             cancel_callback=self._on_cancel, accepted_callback=self._on_accepted)
 
     def command_interface_configuration(self) -> list[str]:
@@ -499,15 +492,8 @@ def _get(obj, name: str):
     return obj.get(name) if isinstance(obj, dict) else getattr(obj, name, None)
 
 
-def _type(name: str):
-    from nodes.control.messages import msg_type
-
-    return msg_type(name)
-
-
 def _result(code: int, text: str):
-    cls = _type(FJT).Result
-    return cls(error_code=code, error_string=text)
+    return FollowJointTrajectory.Result(error_code=code, error_string=text)
 
 
 _header = msgs.builder("std_msgs/msg/Header")
@@ -521,12 +507,11 @@ def _point_map(positions, velocities) -> dict:
 
 def build_feedback(time: float, names, desired_pos, desired_vel, actual_pos, actual_vel):
     """FollowJointTrajectory feedback built from the classes directly (no dict validation on this path)."""
-    point = _type("trajectory_msgs/msg/JointTrajectoryPoint")
-    stamp = sec_to_time(time)
-    header = _type("std_msgs/msg/Header")(stamp=_type("builtin_interfaces/msg/Time")(**stamp), frame_id="")
+    point = JointTrajectoryPoint
+    header = Header(stamp=msgs.time_from_sec(time), frame_id="")
     desired_pos, desired_vel = np.asarray(desired_pos, dtype=float), np.asarray(desired_vel, dtype=float)
     actual_pos, actual_vel = np.asarray(actual_pos, dtype=float), np.asarray(actual_vel, dtype=float)
-    return _type(FJT).Feedback(
+    return FollowJointTrajectory.Feedback(
         header=header, joint_names=list(names),
         desired=point(positions=desired_pos.tolist(), velocities=desired_vel.tolist()),
         actual=point(positions=actual_pos.tolist(), velocities=actual_vel.tolist()),

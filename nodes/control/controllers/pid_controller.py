@@ -11,7 +11,6 @@ import math
 from dataclasses import dataclass
 
 from nodes.control.controller import Controller, ControllerError
-from nodes.control.messages import msg_type
 from nodes.control.pid import Gains, Pid
 from nodes.core.param_schema import param, per_key
 
@@ -51,12 +50,7 @@ class PidController(Controller):
     params: PidParameters
 
     def on_configure(self) -> None:
-        joints = list(self.params.joints) or list(self.params.dof_names)
-        if not joints:
-            raise ControllerError("parameter 'joints' is empty")
-        if len(set(joints)) != len(joints):
-            raise ControllerError(f"parameter 'joints' lists a joint twice: {joints}")
-        self.joints = joints
+        joints = self.take_joints(list(self.params.joints) or list(self.params.dof_names))
         self.command_kind = self.params.command_interface
         self.pids: list[Pid] = []
         for joint in joints:
@@ -68,9 +62,7 @@ class PidController(Controller):
                 raise ControllerError(f"gains.{joint}: p, i and d are all zero")
             self.pids.append(pid)
         self._reference: list[float] | None = None
-        self.rejected_count = 0
-        self.context.create_subscription(msg_type("std_msgs/msg/Float64MultiArray"), "~/reference",
-                                         self._on_reference)
+        self.subscribe_joint_values("~/reference", "reference", self._on_reference)
 
     def command_interface_configuration(self) -> list[str]:
         return [f"{j}/{self.command_kind}" for j in self.joints]
@@ -78,10 +70,8 @@ class PidController(Controller):
     def state_interface_configuration(self) -> list[str]:
         return [f"{j}/{k}" for j in self.joints for k in ("position", "velocity")]
 
-    def _on_reference(self, msg) -> None:
-        data = self.one_value_per_joint(msg.data, "reference")
-        if data is not None:
-            self._reference = data
+    def _on_reference(self, values: list[float]) -> None:
+        self._reference = values
 
     def on_activate(self) -> None:
         _, state = self.loans_by_name()
