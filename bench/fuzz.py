@@ -299,6 +299,20 @@ def discover(session: zenoh.Session) -> list[Target]:
     return sorted(targets.values(), key=lambda t: (t.kind, t.key))
 
 
+def announce_ros2_publishers(session: zenoh.Session, targets: list[Target]) -> list[Any]:
+    """The liveliness tokens of a ROS 2 publisher on every ROS 2 topic target, as rmw_zenoh declares them:
+    our subscription mirrors listen on a data key only while a foreign publisher announces it."""
+    zid = str(session.info.zid())
+    tokens = []
+    for entity_id, target in enumerate((t for t in targets if t.kind == "ros2_topic"), start=1):
+        domain, rest = target.key.split("/", 1)
+        ros_name = "/" + rest.rsplit("/", 2)[0]
+        tokens.append(session.liveliness().declare_token(ros2_names.endpoint_token(
+            int(domain), zid, 0, entity_id, ros2_names.PUBLISHER, "/", "fuzzer", ros_name, target.type_name,
+            ros2_names.DEFAULT_QOS)))
+    return tokens
+
+
 # ---------------------------------------------------------------------------------------------- payloads
 @dataclass
 class Case:
@@ -667,6 +681,8 @@ def run(payloads: int, seconds: float, seed: int, big: int, log_dir: Path, mode:
         job.start()
         time.sleep(3.0)    # settle: the baseline is the job at rest
         targets = discover(job.session)
+        job._subs += announce_ros2_publishers(job.session, targets)
+        time.sleep(1.0)  # the job's subscription mirrors see the tokens and declare their subscribers
         by_key = {t.key: t for t in targets}
         report["targets"] = len(targets)
         report["target_kinds"] = dict(Counter(t.kind for t in targets))

@@ -124,7 +124,7 @@ class Publisher:
             pub = self._droppable_twin()
         pub.put(payload, attachment=_ATTACHMENT.pack(next(self._seq), self._source))
         mirror = self._mirror
-        if mirror is not None and mirror.active:  # a ROS 2 subscriber exists: CDR twin on rmw_zenoh's key
+        if mirror is not None and mirror.active:  # someone subscribes to rmw_zenoh's key: send the CDR twin
             mirror.send(payload)
 
     def destroy(self) -> None:

@@ -13,6 +13,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -25,7 +26,7 @@ from msgs import cdr
 from msgs.type_hash import rihs01
 from nodes.core.node import Node
 from nodes.core.ros2 import attachment, names
-from tests.conftest import wait_until
+from tests.conftest import free_port, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 JAZZY = get_typestore(Stores.ROS2_JAZZY)
@@ -33,15 +34,30 @@ JS = "sensor_msgs/msg/JointState"
 JT = "trajectory_msgs/msg/JointTrajectory"
 
 
-def ros_subscription_token(session: zenoh.Session, topic: str, type_name: str, domain: int = 0):
-    """What a ROS 2 subscription announces (as rmw_zenoh / zenoh-ros2-sdk would), from a non-zenroid session."""
+def ros_endpoint_token(session: zenoh.Session, topic: str, type_name: str, kind: str = names.SUBSCRIPTION,
+                       domain: int = 0):
+    """What a ROS 2 subscription (or publisher) announces, as rmw_zenoh / zenoh-ros2-sdk would, from a
+    non-zenroid session."""
     zid = str(session.info.zid())
     return session.liveliness().declare_token(names.endpoint_token(
-        domain, zid, 0, 1, names.SUBSCRIPTION, "/", "ros_listener", topic, type_name, names.DEFAULT_QOS))
+        domain, zid, 0, 1, kind, "/", "ros_node", topic, type_name, names.DEFAULT_QOS))
 
 
 def ros_tokens(session: zenoh.Session, pattern: str = "@ros2_lv/**") -> list[str]:
     return [str(r.ok.key_expr) for r in session.liveliness().get(pattern, timeout=1.0) if r.ok is not None]
+
+
+# joint_states on rmw_zenoh's wire, whatever the type hash (a recorder or z_sub would subscribe like this)
+JS_WILDCARD_KEY = "0/humanoid/joint_states/sensor_msgs::msg::dds_::JointState_/*"
+
+
+def open_plain_session(endpoint: str) -> zenoh.Session:
+    """A bare zenoh-python client, nothing of ours: it declares no liveliness token, ROS 2 or zenroid."""
+    config = zenoh.Config()
+    config.insert_json5("mode", '"client"')
+    config.insert_json5("connect/endpoints", json.dumps([endpoint]))
+    config.insert_json5("scouting/multicast/enabled", "false")
+    return zenoh.open(config)
 
 
 def test_lazy_mirror_follows_foreign_subscribers_only(router, session):
@@ -57,7 +73,7 @@ def test_lazy_mirror_follows_foreign_subscribers_only(router, session):
         assert not pub._mirror.active, "a zenroid subscriber must not switch CDR encoding on"
         received = []
         ros_sub = session.declare_subscriber(key, lambda s: received.append(s))  # kept: dropping undeclares
-        token = ros_subscription_token(session, "/humanoid/joint_states", JS)
+        token = ros_endpoint_token(session, "/humanoid/joint_states", JS)
         wait_until(lambda: pub._mirror.active, message="mirror active with a ROS 2 subscriber")
 
         def sent() -> bool:
@@ -80,14 +96,83 @@ def test_lazy_mirror_follows_foreign_subscribers_only(router, session):
         talker.destroy()
 
 
+def test_any_zenoh_subscriber_switches_cdr_on_and_nothing_is_encoded_without_one(router, monkeypatch):
+    """Laziness follows Zenoh's matching status: a plain subscriber with no liveliness token (a recorder, a
+    bridge, z_sub) gets CDR; with only zenroid subscribers not one message is encoded."""
+    from nodes.core.ros2 import mirror
+
+    encodes = [0]
+    encode = mirror._to_cdr
+
+    def counted(type_name: str, payload: bytes) -> bytes:
+        encodes[0] += 1
+        return encode(type_name, payload)
+
+    monkeypatch.setattr(mirror, "_to_cdr", counted)
+    talker = Node("talker", namespace="humanoid", connect=[router])
+    listener = Node("listener", namespace="humanoid", connect=[router])
+    heard: list = []
+    try:
+        pub = talker.create_publisher(msgs.get_type(JS), "joint_states")
+        heard_sub = listener.create_subscription(msgs.get_type(JS), "joint_states", heard.append, inline=True)
+        wait_until(lambda: (pub.publish(msgs.get_type(JS)(name=["a"], position=[0.0])), heard)[1],
+                   timeout=10, interval=0.1, message="the zenroid listener hears the talker")
+        for _ in range(200):
+            pub.publish(msgs.get_type(JS)(name=["a"], position=[0.0]))
+        wait_until(lambda: len(heard) > 200, message="all 200 messages at the zenroid listener")
+        assert encodes[0] == 0 and not pub._mirror.active, "no foreign subscriber: nothing may be encoded"
+
+        plain = open_plain_session(router)   # no zenroid runtime, no liveliness token
+        try:
+            received: list = []
+            sub = plain.declare_subscriber(JS_WILDCARD_KEY, received.append)
+            wait_until(lambda: pub._mirror.active, message="mirror active for a plain Zenoh subscriber")
+            wait_until(lambda: (pub.publish(msgs.get_type(JS)(name=["left_knee"], position=[0.5])), received)[1],
+                       timeout=10, interval=0.05, message="CDR at the plain subscriber")
+            decoded = JAZZY.deserialize_cdr(received[-1].payload.to_bytes(), JS)
+            assert list(decoded.name) == ["left_knee"] and decoded.position.tolist() == [0.5]
+            assert not ros_tokens(plain, f"@ros2_lv/*/{plain.info.zid()}/**"), "the plain session declared no token"
+            sub.undeclare()
+            wait_until(lambda: not pub._mirror.active, message="mirror lazy again once the subscriber left")
+            settled = encodes[0]
+            for _ in range(200):
+                pub.publish(msgs.get_type(JS)(name=["a"], position=[0.0]))
+            assert encodes[0] == settled, "the subscriber left: encoding must stop"
+
+            # A ROS 2 publisher on the same topic: the listener's mirror now subscribes to the data key, which
+            # Zenoh's matching cannot tell from a foreign subscriber; a ROS 2 subscription token is needed then.
+            ros_pub_token = ros_endpoint_token(plain, "/humanoid/joint_states", JS, names.PUBLISHER)
+            wait_until(lambda: heard_sub._mirror.listening, message="the listener's mirror on the data key")
+            for _ in range(200):
+                pub.publish(msgs.get_type(JS)(name=["a"], position=[0.0]))
+            assert encodes[0] == settled and not pub._mirror.active, "our own mirror must not switch CDR on"
+            ros_sub_token = ros_endpoint_token(plain, "/humanoid/joint_states", JS)
+            wait_until(lambda: pub._mirror.active, message="mirror active for a ROS 2 subscription token")
+            ros_sub_token.undeclare()
+            ros_pub_token.undeclare()
+            wait_until(lambda: not (pub._mirror.active or heard_sub._mirror.listening), message="all lazy again")
+        finally:
+            plain.close()
+    finally:
+        listener.destroy()
+        talker.destroy()
+
+
 def test_ros2_publisher_drives_our_subscription_once(router, session):
     commander = Node("commander", namespace="humanoid", connect=[router])
     controller = Node("controller", namespace="humanoid", connect=[router])
     got: list = []
     try:
         pub = commander.create_publisher(msgs.get_type(JT), "jtc/joint_trajectory")
-        controller.create_subscription(msgs.get_type(JT), "jtc/joint_trajectory", got.append, inline=True)
-        token = ros_subscription_token(session, "/humanoid/jtc/joint_trajectory", JT)  # CDR twins are on
+        sub = controller.create_subscription(msgs.get_type(JT), "jtc/joint_trajectory", got.append, inline=True)
+        key = names.data_key(0, "/humanoid/jtc/joint_trajectory", JT)
+        assert not sub._mirror.listening, "no ROS 2 publisher yet: our subscription mirror stays off the data key"
+        # A ROS 2 publisher announces itself (MP token): the controller's mirror now listens on the data key;
+        # with a ROS 2 subscription too, the commander's CDR twin is on, so each of our messages reaches the
+        # controller twice (our key, CDR) and must be taken once.
+        ros_pub_token = ros_endpoint_token(session, "/humanoid/jtc/joint_trajectory", JT, names.PUBLISHER)
+        wait_until(lambda: sub._mirror.listening, message="subscription mirror listening")
+        ros_sub_token = ros_endpoint_token(session, "/humanoid/jtc/joint_trajectory", JT)
         wait_until(lambda: pub._mirror.active, message="commander mirror active")
         time.sleep(0.3)
         wait_until(lambda: (pub.publish(msgs.get_type(JT)(joint_names=["a"])), got)[1], timeout=10, interval=0.2,
@@ -102,11 +187,14 @@ def test_ros2_publisher_drives_our_subscription_once(router, session):
         Header, Time = JAZZY.types["std_msgs/msg/Header"], JAZZY.types["builtin_interfaces/msg/Time"]
         raw = bytes(JAZZY.serialize_cdr(Traj(header=Header(stamp=Time(sec=0, nanosec=0), frame_id=""),
                                              joint_names=["from_ros"], points=[]), JT))
-        ros_pub = session.declare_publisher(names.data_key(0, "/humanoid/jtc/joint_trajectory", JT))
+        ros_pub = session.declare_publisher(key)
         wait_until(lambda: (ros_pub.put(raw, attachment=attachment.pack(1, bytes(range(16)))),
                             any(m.joint_names == ["from_ros"] for m in got))[1],
                    timeout=10, interval=0.2, message="the ROS 2 message in our callback")
-        token.undeclare()
+        ros_pub_token.undeclare()
+        wait_until(lambda: not sub._mirror.listening, message="subscription mirror off once the publisher left")
+        wait_until(lambda: not pub._mirror.active, message="commander mirror lazy again (nobody subscribes)")
+        ros_sub_token.undeclare()
     finally:
         controller.destroy()
         commander.destroy()
@@ -198,56 +286,22 @@ def _zenoh_ros2(port: int, *args: str) -> str:
     return done.stdout
 
 
-@pytest.mark.slow
-def test_main_job_seen_and_driven_by_ros2_clients(zenoh_port: int, tmp_path: Path) -> None:
-    env = {k: v for k, v in os.environ.items() if k not in ("ZENOH_CONNECT", "ZENOH_CONFIG", "ROS_DOMAIN_ID")}
+_CLEAN_ENV = {k: v for k, v in os.environ.items() if k not in ("ZENOH_CONNECT", "ZENOH_CONFIG", "ROS_DOMAIN_ID")}
+
+
+@pytest.fixture(scope="module")
+def main_job(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[int, subprocess.Popen, Path]]:
+    """The main job (lockstep, no viewer, no commander) on a free port, shared by the tests below;
+    yields (port, launcher, its output file). It must end cleanly on SIGINT."""
+    zenoh_port, tmp_path = free_port(), tmp_path_factory.mktemp("main_job")
     out_path = tmp_path / "launch.out"
     with open(out_path, "wb") as out:
         launcher = subprocess.Popen(
             [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", "mode:=lockstep", "commander:=none",
              f"zenoh_port:={zenoh_port}", "--log-dir", str(tmp_path / "logs")],
-            cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+            cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=_CLEAN_ENV, start_new_session=True)
     try:
-        expected_topics = {
-            "/humanoid/joint_states [sensor_msgs/msg/JointState]",
-            "/humanoid/joint_trajectory_controller/controller_state [control_msgs/msg/JointTrajectoryControllerState]",
-            "/humanoid/tf [tf2_msgs/msg/TFMessage]", "/clock [rosgraph_msgs/msg/Clock]",
-            "/rosout [rcl_interfaces/msg/Log]", "/humanoid/robot_description [std_msgs/msg/String]",
-        }
-        listed: set[str] = set()
-
-        def topics_listed() -> bool:
-            assert launcher.poll() is None, out_path.read_text(errors="replace")
-            listed.update(_zenoh_ros2(zenoh_port, "topic", "list", "-t").splitlines())
-            return expected_topics <= listed  # a fresh session sees the graph in pieces: ask again
-
-        wait_until(topics_listed, timeout=120, interval=1.0, message=f"ROS 2 topics; listed so far {sorted(listed)}")
-        assert not any("hardware" in t for t in listed), listed
-        services: set[str] = set()
-
-        def services_listed() -> bool:
-            services.update(_zenoh_ros2(zenoh_port, "service", "list", "-t").splitlines())
-            return {"/humanoid/controller_manager/list_controllers [controller_manager_msgs/srv/ListControllers]",
-                    "/humanoid/joint_trajectory_controller/follow_joint_trajectory/_action/send_goal "
-                    "[control_msgs/action/FollowJointTrajectory_SendGoal]"} <= services
-
-        wait_until(services_listed, timeout=60, interval=1.0, message=f"ROS 2 services; listed {sorted(services)}")
-
-        # The outside client (imports nothing of ours): joint_states, /clock, list_controllers, a
-        # JointTrajectory that bends the knees, a FollowJointTrajectory goal that straightens them.
-        client = subprocess.run([sys.executable, str(ROOT / "examples" / "ros2_client.py"),
-                                 "--router", f"127.0.0.1:{zenoh_port}", "--timeout", "60"],
-                                capture_output=True, text=True, timeout=400, cwd=tmp_path,
-                                env={k: v for k, v in env.items() if k != "PYTHONPATH"})
-        assert client.returncode == 0, client.stdout + client.stderr + out_path.read_text(errors="replace")
-        report = json.loads(client.stdout.strip().splitlines()[-1])
-        assert report["joints"] == 22
-        assert report["clock_advances"]
-        assert report["controllers"] == {"joint_state_broadcaster": "active", "joint_trajectory_controller": "active"}
-        assert report["topic_command_reached"]
-        assert report["goal_status"] == "SUCCEEDED" and report["error_code"] == 0
-        assert report["feedback_messages"] > 0
-        assert all(abs(v) < 0.1 for v in report["knees_after_goal"].values()), report
+        yield zenoh_port, launcher, out_path
     finally:
         if launcher.poll() is None:
             launcher.send_signal(signal.SIGINT)
@@ -257,6 +311,90 @@ def test_main_job_seen_and_driven_by_ros2_clients(zenoh_port: int, tmp_path: Pat
             os.killpg(launcher.pid, signal.SIGKILL)
             launcher.wait(timeout=10)
     assert launcher.returncode == 0, out_path.read_text(errors="replace")
+
+
+@pytest.mark.slow
+def test_main_job_joint_states_reach_a_plain_zenoh_subscriber(main_job) -> None:
+    """A bare zenoh-python subscriber on rmw_zenoh's joint_states key, no liveliness token declared (a Zenoh
+    recorder, a bridge, z_sub): CDR arrives, and rosbags decodes it."""
+    zenoh_port, launcher, out_path = main_job
+
+    def opened() -> zenoh.Session | None:
+        assert launcher.poll() is None, out_path.read_text(errors="replace")
+        try:
+            return open_plain_session(f"tcp/127.0.0.1:{zenoh_port}")
+        except zenoh.ZError:
+            return None  # the job's router is not listening yet
+
+    plain = wait_until(opened, timeout=60, interval=0.5, message="the main job's router")
+    try:
+        received: list[zenoh.Sample] = []
+        sub = plain.declare_subscriber(JS_WILDCARD_KEY, received.append)
+
+        def flowing() -> bool:
+            assert launcher.poll() is None, out_path.read_text(errors="replace")
+            return len(received) >= 50
+
+        wait_until(flowing, timeout=120, interval=0.5, message="joint_states CDR at the plain subscriber")
+        sub.undeclare()
+        assert not ros_tokens(plain, f"@ros2_lv/*/{plain.info.zid()}/**"), "the plain session declared no token"
+        sample = received[-1]
+        assert str(sample.key_expr) == names.data_key(0, "/humanoid/joint_states", JS)
+        assert str(sample.encoding).startswith("application/cdr")
+        decoded = JAZZY.deserialize_cdr(sample.payload.to_bytes(), JS)
+        assert len(decoded.name) == 22 and "left_knee" in list(decoded.name), list(decoded.name)
+        assert len(decoded.position) == 22 and all(abs(p) < 4.0 for p in decoded.position)
+        att = attachment.unpack(sample.attachment.to_bytes())
+        assert att is not None and att.sequence >= 50 and len(att.gid) == 16
+    finally:
+        plain.close()
+
+
+@pytest.mark.slow
+def test_main_job_seen_and_driven_by_ros2_clients(main_job) -> None:
+    zenoh_port, launcher, out_path = main_job
+    env = _CLEAN_ENV
+    tmp_path = out_path.parent
+    expected_topics = {
+        "/humanoid/joint_states [sensor_msgs/msg/JointState]",
+        "/humanoid/joint_trajectory_controller/controller_state [control_msgs/msg/JointTrajectoryControllerState]",
+        "/humanoid/tf [tf2_msgs/msg/TFMessage]", "/clock [rosgraph_msgs/msg/Clock]",
+        "/rosout [rcl_interfaces/msg/Log]", "/humanoid/robot_description [std_msgs/msg/String]",
+    }
+    listed: set[str] = set()
+
+    def topics_listed() -> bool:
+        assert launcher.poll() is None, out_path.read_text(errors="replace")
+        listed.update(_zenoh_ros2(zenoh_port, "topic", "list", "-t").splitlines())
+        return expected_topics <= listed  # a fresh session sees the graph in pieces: ask again
+
+    wait_until(topics_listed, timeout=120, interval=1.0, message=f"ROS 2 topics; listed so far {sorted(listed)}")
+    assert not any("hardware" in t for t in listed), listed
+    services: set[str] = set()
+
+    def services_listed() -> bool:
+        services.update(_zenoh_ros2(zenoh_port, "service", "list", "-t").splitlines())
+        return {"/humanoid/controller_manager/list_controllers [controller_manager_msgs/srv/ListControllers]",
+                "/humanoid/joint_trajectory_controller/follow_joint_trajectory/_action/send_goal "
+                "[control_msgs/action/FollowJointTrajectory_SendGoal]"} <= services
+
+    wait_until(services_listed, timeout=60, interval=1.0, message=f"ROS 2 services; listed {sorted(services)}")
+
+    # The outside client (imports nothing of ours): joint_states, /clock, list_controllers, a
+    # JointTrajectory that bends the knees, a FollowJointTrajectory goal that straightens them.
+    client = subprocess.run([sys.executable, str(ROOT / "examples" / "ros2_client.py"),
+                             "--router", f"127.0.0.1:{zenoh_port}", "--timeout", "60"],
+                            capture_output=True, text=True, timeout=400, cwd=tmp_path,
+                            env={k: v for k, v in env.items() if k != "PYTHONPATH"})
+    assert client.returncode == 0, client.stdout + client.stderr + out_path.read_text(errors="replace")
+    report = json.loads(client.stdout.strip().splitlines()[-1])
+    assert report["joints"] == 22
+    assert report["clock_advances"]
+    assert report["controllers"] == {"joint_state_broadcaster": "active", "joint_trajectory_controller": "active"}
+    assert report["topic_command_reached"]
+    assert report["goal_status"] == "SUCCEEDED" and report["error_code"] == 0
+    assert report["feedback_messages"] > 0
+    assert all(abs(v) < 0.1 for v in report["knees_after_goal"].values()), report
 
 
 def test_type_hash_of_a_user_message_is_stable():

@@ -3,12 +3,16 @@
 Our endpoints stay the single implementation: a CDR message or request coming from ROS 2 is converted to
 the msgpack map our endpoint expects and handed to it through a stand-in for the Zenoh sample or query,
 so validation, callbacks, threading and error replies are exactly those of our own wire. Outgoing msgpack
-(which the hot paths pack directly) is converted to CDR only while a ROS 2 subscriber is present.
+(which the hot paths pack directly) is converted to CDR only while some Zenoh subscriber matches the data key
+(Zenoh's matching status: a ROS 2 subscription, a recorder, a bridge, ``z_sub``). Our own subscription mirrors
+listen on a data key only while a foreign ROS 2 publisher announces it (graph.py), so they never count.
 """
 
 from __future__ import annotations
 
+import functools
 import itertools
+import threading
 import time
 from typing import Any, Protocol
 
@@ -67,8 +71,12 @@ class _Entity:
 
 
 class TopicMirror:
-    """A publisher's CDR twin. ``active`` (read on every publish) is True while a ROS 2 subscriber exists;
-    latched topics are always active so their last message waits in the cache for late subscribers."""
+    """A publisher's CDR twin. ``active`` (read on every publish) follows the publisher's Zenoh matching
+    status: True while any subscriber matches the data key, whoever declared it (ROS 2 or plain Zenoh, with
+    or without a liveliness token). While a foreign ROS 2 publisher shares the topic our own subscription
+    mirrors listen there too and matching cannot tell them apart: then a foreign ROS 2 subscription token
+    is needed as well. Latched topics are always active so their last message waits in the cache for late
+    subscribers."""
 
     def __init__(self, owner: MirrorOwner, key: str, type_name: str, *, reliable: bool = True,
                  latched: bool = False) -> None:
@@ -90,11 +98,27 @@ class TopicMirror:
         self._seq = itertools.count(1)
         self._latched = latched
         self.active = latched
-        if not latched:
-            owner.graph.watch(self.entity.data_key, self._set_active)
+        if latched:
+            return
+        self._lock = threading.Lock()
+        self._foreign = {names.PUBLISHER: False, names.SUBSCRIPTION: False}  # ROS 2 tokens on our data key
+        self._watchers = {kind: functools.partial(self._update, kind) for kind in self._foreign}
+        self._matching = self._pub.declare_matching_listener(lambda _status: self._update())
+        for kind, watcher in self._watchers.items():
+            owner.graph.watch(kind, self.entity.data_key, watcher)
+        self._update()  # the listener reports changes only: a subscriber may already be there
 
-    def _set_active(self, active: bool) -> None:
-        self.active = active
+    def _update(self, kind: str | None = None, present: bool = False) -> None:
+        # Reads the matching status itself rather than trusting an event (the first read and a listener call
+        # may interleave); the lock makes whichever runs last also the freshest.
+        with self._lock:
+            if kind is not None:
+                self._foreign[kind] = present
+            try:
+                matching = bool(self._pub.matching_status.matching)
+            except zenoh.ZError:
+                matching = False  # undeclared: closing
+            self.active = matching and (self._foreign[names.SUBSCRIPTION] or not self._foreign[names.PUBLISHER])
 
     def send(self, payload: bytes) -> None:
         """Publish the msgpack ``payload`` as CDR (called by the publisher while ``active``)."""
@@ -110,7 +134,9 @@ class TopicMirror:
 
     def close(self) -> None:
         if not self._latched:
-            self.owner.graph.unwatch(self.entity.data_key, self._set_active)
+            for kind, watcher in self._watchers.items():
+                self.owner.graph.unwatch(kind, self.entity.data_key, watcher)
+            self._matching.undeclare()
         self.entity.close()
         self._pub.undeclare()
 
@@ -136,7 +162,12 @@ class _Sample:
 
 
 class SubscriptionMirror:
-    """CDR from ROS 2 publishers on the data key, delivered to our subscription as if it came on our key."""
+    """CDR from ROS 2 publishers on the data key, delivered to our subscription as if it came on our key.
+
+    Its Zenoh subscriber exists only while a foreign ROS 2 publisher's token names the data key (every
+    rmw_zenoh or zenoh-ros2-sdk publisher declares one): otherwise it would match our own topic mirrors
+    and switch their CDR encoding on for nobody. A plain Zenoh put without a publisher token is not heard.
+    """
 
     def __init__(self, owner: MirrorOwner, subscription: Any) -> None:
         self.owner = owner
@@ -144,7 +175,27 @@ class SubscriptionMirror:
         self.type_name = subscription.msg_type._type
         self.entity = _Entity(owner, names.SUBSCRIPTION, names.ros_topic_name(subscription.key, self.type_name),
                               self.type_name)
-        self._sub = owner.session.declare_subscriber(self.entity.data_key, self._on_sample)
+        self._lock = threading.Lock()
+        self._sub: zenoh.Subscriber | None = None
+        self._closed = False
+        owner.graph.watch(names.PUBLISHER, self.entity.data_key, self._listen)
+
+    @property
+    def listening(self) -> bool:
+        return self._sub is not None
+
+    def _listen(self, publishers: bool) -> None:
+        with self._lock:
+            if self._closed or publishers == (self._sub is not None):
+                return
+            try:
+                if publishers:
+                    self._sub = self.owner.session.declare_subscriber(self.entity.data_key, self._on_sample)
+                else:
+                    sub, self._sub = self._sub, None
+                    sub.undeclare()
+            except zenoh.ZError:
+                pass  # the session is closing
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         att = attachment.unpack(sample.attachment.to_bytes() if sample.attachment is not None else None)
@@ -162,8 +213,13 @@ class SubscriptionMirror:
         self.target.handle_sample(_Sample(self.target.key, payload))
 
     def close(self) -> None:
+        self.owner.graph.unwatch(names.PUBLISHER, self.entity.data_key, self._listen)
+        with self._lock:
+            self._closed = True
+            sub, self._sub = self._sub, None
         self.entity.close()
-        self._sub.undeclare()
+        if sub is not None:
+            sub.undeclare()
 
 
 class _Query:
@@ -234,19 +290,9 @@ class ServiceMirror:
         self._queryable.undeclare()
 
 
-class TokensOnly:
-    """Endpoints ROS 2 should see in its graph but never talks to through us (our clients, action clients)."""
-
-    def __init__(self, entities: list[_Entity]) -> None:
-        self.entities = entities
-
-    def close(self) -> None:
-        for entity in self.entities:
-            entity.close()
-
-
 class Group:
-    """Several mirrors that live and die with one endpoint (an action server's three services)."""
+    """Several mirrors that live and die with one endpoint: an action server's three services, or the bare
+    tokens of endpoints ROS 2 should see in its graph but never talks to through us (clients, action clients)."""
 
     def __init__(self, parts: list[Any]) -> None:
         self.parts = parts
@@ -269,14 +315,14 @@ def action_server(owner: MirrorOwner, server: Any) -> Group:
     return Group(parts)
 
 
-def service_client(owner: MirrorOwner, client: Any) -> TokensOnly:
-    return TokensOnly([_Entity(owner, names.CLIENT, names.ros_service_name(client.key), client.srv_type._type)])
+def service_client(owner: MirrorOwner, client: Any) -> Group:
+    return Group([_Entity(owner, names.CLIENT, names.ros_service_name(client.key), client.srv_type._type)])
 
 
-def action_client(owner: MirrorOwner, client: Any) -> TokensOnly:
+def action_client(owner: MirrorOwner, client: Any) -> Group:
     action = client.action_type._type
     key = client.key
-    return TokensOnly([
+    return Group([
         _Entity(owner, names.CLIENT, names.ros_action_service(key, "send_goal"), f"{action}_SendGoal"),
         _Entity(owner, names.CLIENT, names.ros_action_service(key, "cancel_goal"), "action_msgs/srv/CancelGoal"),
         _Entity(owner, names.CLIENT, names.ros_action_service(key, "get_result"), f"{action}_GetResult"),
