@@ -4,26 +4,30 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import queue
 import signal
 import sys
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 import msgs
+from nodes.bag.qos import is_latched
 from nodes.bag.reader import Bag, BagError, open_bag
-from nodes.bag.rosbag2 import is_latched
-from nodes.bag.writer import BagWriter
+from nodes.bag.writer import STORAGES, BagWriter
 from nodes.tools.cli import UsageError
 from nodes.tools.common import add_common, cli_node, key_of
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("record", help="record keys into a rosbag2 bag (metadata.yaml + MCAP)")
+    p = sub.add_parser("record", help="record keys into a rosbag2 bag (metadata.yaml + MCAP or sqlite3)")
     p.add_argument("keys", nargs="*", help="keys (wildcards allowed, e.g. 'humanoid/**')")
     p.add_argument("-a", "--all", action="store_true", help="record every key")
     p.add_argument("-o", "--output", default="", help="bag directory (or FILE.mcap); default rosbag2_<date>")
+    p.add_argument("-s", "--storage", default="mcap", choices=sorted(STORAGES),
+                   help="storage format, as ros2 bag record -s (default mcap)")
     p.add_argument("-d", "--duration", type=float, default=0.0, help="stop after S seconds")
     p.add_argument("--max-messages", type=int, default=0, help="stop after N messages")
     p.add_argument("--quiet", action="store_true", help="no live progress display")
@@ -62,7 +66,8 @@ def _size(n: int) -> str:
 
 
 def _info(args: argparse.Namespace) -> int:
-    info = open_bag(args.bag).info()
+    with open_bag(args.bag) as bag:
+        info = bag.info()
     sep = "\n" + " " * 19  # continuation lines line up under the first value, as in ros2 bag info
     print(f"Files:             {sep.join(info['files'])}")
     print(f"Bag size:          {_size(info['size_bytes'])}")
@@ -93,16 +98,19 @@ def _record(args: argparse.Namespace) -> int:
     output = args.output or datetime.datetime.now().strftime("rosbag2_%Y_%m_%d-%H_%M_%S")
     node = cli_node(args, "bag_record")  # first: no router, no empty bag left behind
     try:
-        writer = BagWriter(output)
+        writer = BagWriter(output, storage=args.storage)
     except FileExistsError:
         node.destroy()
         raise UsageError(f"output '{output}' already exists") from None
+    except ValueError as exc:
+        node.destroy()
+        raise UsageError(str(exc)) from None
     except BaseException:
         node.destroy()
         raise
-    lock = threading.Lock()
     done = threading.Event()
     skipped: dict[str, str] = {}
+    arrived: queue.SimpleQueue[tuple[str, Any, int]] = queue.SimpleQueue()
 
     def on_sample(sample: Any) -> None:
         key = str(sample.key_expr)
@@ -112,13 +120,19 @@ def _record(args: argparse.Namespace) -> int:
         except (KeyError, msgs.DecodeError, msgs.DefinitionError) as exc:
             skipped.setdefault(key, f"{type_name or 'no schema'}: {exc}")
             return
-        with lock:
-            if done.is_set():
+        if not done.is_set():
+            arrived.put((key, msg, time.time_ns()))
+
+    def store_arrived() -> None:
+        """Write what arrived, from this thread: rosbags' sqlite3 storage is bound to the thread that opened it."""
+        while not (args.max_messages and writer.count >= args.max_messages):
+            try:
+                key, msg, stamp = arrived.get_nowait()
+            except queue.Empty:
                 return
-            if not writer.write(key, msg, time.time_ns()):
-                skipped.setdefault(key, f"{type_name} has no ROS 2 schema name")
-            if args.max_messages and writer.count >= args.max_messages:
-                done.set()
+            if not writer.write(key, msg, stamp):
+                skipped.setdefault(key, f"{msg._type} has no ROS 2 definition a bag can hold")
+        done.set()  # --max-messages reached
 
     # SIGTERM (a launcher or `kill` stopping us) ends the recording cleanly, like Ctrl-C: the bag is
     # only complete (MCAP summary, metadata.yaml) once the writer is closed.
@@ -126,15 +140,15 @@ def _record(args: argparse.Namespace) -> int:
     subs = [node.session.declare_subscriber(k, on_sample) for k in keys]
     print(f"Recording {', '.join('/' + k for k in keys)} to {writer.path} (Ctrl-C to stop)", flush=True)
     try:
-        _wait_recording(args, writer, lock, done)
+        _wait_recording(args, writer, store_arrived, done)
     except KeyboardInterrupt:
         pass
     finally:
         done.set()
         for s in subs:
             s.undeclare()
-        with lock:
-            writer.close()
+        store_arrived()
+        writer.close()
         node.destroy()
         signal.signal(signal.SIGTERM, previous)
     for key, reason in sorted(skipped.items()):
@@ -143,13 +157,15 @@ def _record(args: argparse.Namespace) -> int:
     return 0
 
 
-def _wait_recording(args: argparse.Namespace, writer: BagWriter, lock: threading.Lock,
+def _wait_recording(args: argparse.Namespace, writer: BagWriter, store_arrived: Callable[[], None],
                     done: threading.Event) -> None:
-    """Until done, the duration or Ctrl-C: a live table on a terminal, a line every 2 s otherwise."""
+    """Until done, the duration or Ctrl-C, storing what arrived: a live table on a terminal, a line every
+    2 s otherwise."""
     start = time.monotonic()
     if args.quiet or not sys.stdout.isatty():
         last_report = start
         while not done.wait(0.1):
+            store_arrived()
             now = time.monotonic()
             if args.duration and now - start >= args.duration:
                 return
@@ -159,24 +175,23 @@ def _wait_recording(args: argparse.Namespace, writer: BagWriter, lock: threading
         return
     from rich.live import Live
 
-    with Live(_progress_table(writer, lock, 0.0, {}), refresh_per_second=4, transient=False) as live:
+    with Live(_progress_table(writer, 0.0, {}), refresh_per_second=4, transient=False) as live:
         rates: dict[str, tuple[float, int]] = {}
         while not done.wait(0.25):
+            store_arrived()
             elapsed = time.monotonic() - start
             if args.duration and elapsed >= args.duration:
                 break
-            live.update(_progress_table(writer, lock, elapsed, rates))
-        live.update(_progress_table(writer, lock, time.monotonic() - start, rates))
+            live.update(_progress_table(writer, elapsed, rates))
+        live.update(_progress_table(writer, time.monotonic() - start, rates))
 
 
-def _progress_table(writer: BagWriter, lock: threading.Lock, elapsed: float,
-                    rates: dict[str, tuple[float, int]]) -> Any:
+def _progress_table(writer: BagWriter, elapsed: float, rates: dict[str, tuple[float, int]]) -> Any:
     """Per topic: count and rate (over the last ~second); totals with size and elapsed time in the title."""
     from rich.table import Table
 
-    with lock:
-        counts = writer.topic_counts()
-        total, size = writer.count, writer.bytes
+    counts = writer.topic_counts()
+    total, size = writer.count, writer.bytes
     table = Table(title=f"{total} messages, {size / 1024:.1f} KiB payload, {elapsed:.1f} s", title_justify="left")
     table.add_column("topic")
     table.add_column("count", justify="right")
@@ -196,7 +211,7 @@ def _play(args: argparse.Namespace) -> int:
         raise UsageError(f"--rate must be positive, got {args.rate}")
     bag = open_bag(args.bag)  # fails early, with a clear message, on a bad bag
     wanted = {"/" + k.strip("/") for k in args.topics} if args.topics is not None else None
-    total = sum(t.count for t in bag.meta.topics if wanted is None or t.name in wanted)
+    total = sum(t.count for t in bag.topics if wanted is None or t.name in wanted)
     node = cli_node(args, "bag_play")
     publishers: dict[str, Any] = {}
     try:
@@ -209,6 +224,7 @@ def _play(args: argparse.Namespace) -> int:
         pass
     finally:
         node.destroy()
+        bag.close()
     return 0
 
 
@@ -246,4 +262,4 @@ def _play_once(args: argparse.Namespace, bag: Bag, node: Any, publishers: dict[s
 def _latched(bag: Bag, topic: str) -> bool:
     """Transient-local topics (tf_static, robot_description) are republished latched, as ros2 bag play does."""
     info = bag.topic(topic)
-    return info.durability == "transient_local" if info and info.qos else is_latched(topic)
+    return info.latched if info else is_latched(topic)

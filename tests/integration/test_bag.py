@@ -33,9 +33,9 @@ def zenroid(router: str, *argv: str, timeout: float = 60) -> subprocess.Complete
                           timeout=timeout, cwd=ROOT)
 
 
-def record_live(router: str, bag_dir: Path, count: int | None) -> tuple[list, int]:
-    """Run ``zenroid bag record humanoid/** -o bag_dir --max-messages count`` against a live publisher
-    (count None: no limit, stopped by SIGTERM after 60 messages); returns what the publisher sent and how
+def record_live(router: str, bag_dir: Path, count: int | None, storage: str = "mcap") -> tuple[list, int]:
+    """Run ``zenroid bag record humanoid/** -o bag_dir -s storage --max-messages count`` against a live publisher
+    (count None: no limit, stopped by SIGTERM 60 messages after it said it records); returns what the publisher sent and how
     many messages the recorder says it recorded."""
     from nodes.core import Node
 
@@ -44,10 +44,12 @@ def record_live(router: str, bag_dir: Path, count: int | None) -> tuple[list, in
     env = dict(os.environ, ZENOH_CONNECT=router, PYTHONPATH=str(ROOT))
     limit = ["--max-messages", str(count)] if count is not None else []
     recorder = subprocess.Popen([sys.executable, "-m", "nodes.tools", "bag", "record", "humanoid/**", "-o",
-                                 str(bag_dir), *limit], stdout=subprocess.PIPE,
+                                 str(bag_dir), "-s", storage, *limit], stdout=subprocess.PIPE,
                                 stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT)
     sent = []
     try:
+        ready = recorder.stdout.readline()  # "Recording ... (Ctrl-C to stop)": subscribed, SIGTERM handled
+        assert "Recording" in ready, ready + recorder.stderr.read()
         for i in range(400):
             msg = JointState(name=["left_knee", "right_knee"], position=[0.01 * i, -0.01 * i],
                              velocity=[0.5, -0.5])
@@ -58,10 +60,11 @@ def record_live(router: str, bag_dir: Path, count: int | None) -> tuple[list, in
             time.sleep(0.02)
             if recorder.poll() is not None:
                 break
-            if count is None and i == 120:  # ~60 messages after the recorder's subscription is up
+            if count is None and i == 60:
                 recorder.send_signal(signal.SIGTERM)
                 break
         out, err = recorder.communicate(timeout=20)
+        out = ready + out
     finally:
         if recorder.poll() is None:
             recorder.kill()
@@ -74,14 +77,15 @@ def record_live(router: str, bag_dir: Path, count: int | None) -> tuple[list, in
     return sent, recorded
 
 
-def test_record_info_and_play_round_trip(router, tmp_path) -> None:
+@pytest.mark.parametrize("storage,suffix", [("mcap", "mcap"), ("sqlite3", "db3")], ids=["mcap", "sqlite3"])
+def test_record_info_and_play_round_trip(router, tmp_path, storage: str, suffix: str) -> None:
     bag_dir = tmp_path / "knees"
-    sent, _ = record_live(router, bag_dir, 40)
+    sent, _ = record_live(router, bag_dir, 40, storage)
 
     info = zenroid(router, "bag", "info", str(bag_dir))
     assert info.returncode == 0, info.stderr
     assert "Topic: /humanoid/joint_states | Type: sensor_msgs/msg/JointState | Count: 40" in info.stdout
-    assert "Storage id:        mcap" in info.stdout and "Files:             knees_0.mcap" in info.stdout
+    assert f"Storage id:        {storage}" in info.stdout and f"Files:             knees.{suffix}" in info.stdout
     recorded = [m.msg for m in read_bag(bag_dir)]
     assert len(recorded) == 40
     first = sent.index(recorded[0])  # the bag holds a contiguous run of what was sent, bit for bit
@@ -108,7 +112,7 @@ def test_recorded_bag_is_a_rosbag2_bag_for_rosbags(router, tmp_path) -> None:
     decodes every message to what was sent."""
     bag_dir = tmp_path / "walk"
     sent, n = record_live(router, bag_dir, None)
-    assert sorted(os.listdir(bag_dir)) == ["metadata.yaml", "walk_0.mcap"]
+    assert sorted(os.listdir(bag_dir)) == ["metadata.yaml", "walk.mcap"]
 
     with AnyReader([bag_dir]) as reader:
         assert [(c.topic, c.msgtype) for c in reader.connections] == [("/humanoid/joint_states",
@@ -127,10 +131,10 @@ def test_recorded_bag_is_a_rosbag2_bag_for_rosbags(router, tmp_path) -> None:
 
     info = yaml.safe_load((bag_dir / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
     assert info["version"] == 9 and info["storage_identifier"] == "mcap"
-    assert info["relative_file_paths"] == ["walk_0.mcap"] and info["message_count"] == n
+    assert info["relative_file_paths"] == ["walk.mcap"] and info["message_count"] == n
     assert info["starting_time"]["nanoseconds_since_epoch"] == times[0]
     assert info["duration"]["nanoseconds"] == times[-1] - times[0]
-    assert info["files"][0]["path"] == "walk_0.mcap" and info["files"][0]["message_count"] == n
+    assert info["files"][0]["path"] == "walk.mcap" and info["files"][0]["message_count"] == n
     [topic] = info["topics_with_message_count"]
     assert topic["message_count"] == n
     assert topic["topic_metadata"]["name"] == "/humanoid/joint_states"
@@ -225,6 +229,7 @@ def test_bad_bags_are_clear_errors(router, tmp_path) -> None:
     broken.mkdir()
     (broken / "metadata.yaml").write_text("rosbag2_bagfile_information:\n  version: 9\n")
     result = zenroid(router, "bag", "play", str(broken))
-    assert result.returncode == 2 and "storage_identifier: missing" in result.stderr
+    assert result.returncode == 2 and "metadata key is missing" in result.stderr
+    assert "relative_file_paths" in result.stderr
     result = zenroid(router, "bag", "record")
     assert result.returncode == 2 and "name keys to record" in result.stderr

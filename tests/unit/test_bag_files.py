@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+import sqlite3
 import tempfile
 from pathlib import Path
 from typing import Any
@@ -17,17 +18,19 @@ import pytest
 import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory as Ros2DecoderFactory
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin
 from rosbags.rosbag2 import Reader as Rosbag2Reader
 from rosbags.rosbag2 import Writer as Rosbag2Writer
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 import msgs
 from msgs.registry import get_spec
-from nodes.bag import rosbag2
+from msgs.schema_text import full_definition
+from msgs.type_hash import rihs01
 from nodes.bag.reader import BagError, open_bag, read_bag
-from nodes.bag.type_hash import rihs01
 from nodes.bag.writer import BagWriter
 from tests.support.samples import sample_message
 from tests.unit.test_msgs_properties import ALL, message_strategy
@@ -35,19 +38,19 @@ from tests.unit.test_msgs_properties import ALL, message_strategy
 JAZZY = get_typestore(Stores.ROS2_JAZZY)
 # Types a bag holds: not service request/response halves (rosbag2 records services as */srv/*_Event,
 # which we do not define), nor the action wrappers (FeedbackMessage, SendGoal_Request...), whose nested
-# names (X_Feedback) the .msg grammar of mcap-ros2-support rejects: the recorder reports them as
-# "not recorded".
+# types (pkg/action/X_Feedback) their .msg text cannot name: the recorder reports them as "not recorded".
 ACTION_WRAPPERS = ("_FeedbackMessage", "_SendGoal_Request", "_GetResult_Response")
 TOPIC_TYPES = [t for t in ALL if "/srv/" not in t and not t.endswith(ACTION_WRAPPERS)]
-METADATA_KEYS = ["version", "storage_identifier", "duration", "starting_time", "message_count",
+METADATA_KEYS = {"version", "storage_identifier", "duration", "starting_time", "message_count",
                  "topics_with_message_count", "compression_format", "compression_mode", "relative_file_paths",
-                 "files", "custom_data", "ros_distro"]
-QOS_KEYS = ["history", "depth", "reliability", "durability", "deadline", "lifespan", "liveliness",
-            "liveliness_lease_duration", "avoid_ros_namespace_conventions"]
+                 "files", "custom_data", "ros_distro"}
+QOS_KEYS = {"history", "depth", "reliability", "durability", "deadline", "lifespan", "liveliness",
+            "liveliness_lease_duration", "avoid_ros_namespace_conventions"}
 
 
-def plain_from_rosbags(type_name: str, value: Any) -> dict[str, Any]:
-    """A message deserialized by rosbags → a plain map following our definition (arrays as lists)."""
+def plain_from_decoded(type_name: str, value: Any) -> dict[str, Any]:
+    """A message another implementation decoded (rosbags, mcap-ros2-support) → a plain map following our
+    definition (arrays as lists)."""
     out = {}
     for f in get_spec(type_name).fields:
         v = getattr(value, f.name)
@@ -57,9 +60,9 @@ def plain_from_rosbags(type_name: str, value: Any) -> dict[str, Any]:
             out[f.name] = [x.item() if isinstance(x, np.generic) else x for x in v] if f.is_array else (
                 v.item() if isinstance(v, np.generic) else v)
         elif f.is_array:
-            out[f.name] = [plain_from_rosbags(f.base, x) for x in v]
+            out[f.name] = [plain_from_decoded(f.base, x) for x in v]
         else:
-            out[f.name] = plain_from_rosbags(f.base, v)
+            out[f.name] = plain_from_decoded(f.base, v)
     return out
 
 
@@ -89,19 +92,20 @@ def test_every_topic_type_is_decoded_by_rosbags(tmp_path: Path) -> None:
     assert len(decoded) == len(items)
     for (key, msg), (topic, msgtype, value) in zip(items, decoded):
         assert topic == "/" + key and msgtype == msg._type
-        assert same(plain_from_rosbags(msgtype, value), msgs.to_dict(msg)), msgtype
+        assert same(plain_from_decoded(msgtype, value), msgs.to_dict(msg)), msgtype
     # ...and ours reads it back identically.
     assert [m.msg for m in read_bag(tmp_path / "all")] == [m for _, m in items]
 
 
 def test_types_without_a_ros_schema_are_refused_not_fatal(tmp_path: Path) -> None:
+    """Service halves and action wrappers are no topics, and their .msg text cannot name their nested types
+    (pkg/action/X_Goal reads as pkg/msg/X_Goal): refused, every other type recorded."""
     writer = BagWriter(tmp_path / "b")
-    for t in ALL:
-        if t.endswith(ACTION_WRAPPERS):
-            assert not writer.write("fjt/_action/x", sample_message(t)) and writer.count == 0
-    assert writer.write("j", msgs.get_type("sensor_msgs/msg/JointState")()) and writer.count == 1
+    refused = [t for t in ALL if not writer.write(t.replace("/", "_"), sample_message(t))]
+    assert refused == [t for t in ALL if t not in TOPIC_TYPES] and refused
+    assert writer.count == len(TOPIC_TYPES)
     writer.close()
-    assert open_bag(tmp_path / "b").info()["messages"] == 1
+    assert open_bag(tmp_path / "b").info()["messages"] == len(TOPIC_TYPES)
 
 
 @settings(max_examples=25, deadline=None)
@@ -112,17 +116,20 @@ def test_random_messages_survive_rosbags(msg: Any) -> None:
         with AnyReader([Path(tmp) / "bag"]) as reader:
             [(conn, _, raw)] = list(reader.messages())
             value = reader.deserialize(raw, conn.msgtype)
-    assert same(plain_from_rosbags(msg._type, value), msgs.to_dict(msg))
+    assert same(plain_from_decoded(msg._type, value), msgs.to_dict(msg))
 
 
 def test_type_hashes_are_the_jazzy_ones() -> None:
-    """Our definitions of standard types hash (RIHS01) exactly as rosbags' copy of ROS 2 Jazzy's."""
+    """Our definitions of standard types hash (RIHS01) exactly as rosbags' copy of ROS 2 Jazzy's, and every
+    topic type, ours included, as rosbags hashes the definition text a bag stores for it."""
     standard = [t for t in TOPIC_TYPES if t in JAZZY.types]
     assert "sensor_msgs/msg/JointState" in standard and len(standard) >= 30
     for t in standard:
         assert rihs01(t) == JAZZY.hash_rihs01(t), t
-    for t in TOPIC_TYPES:  # our own packages get a hash too
-        assert rihs01(t).startswith("RIHS01_") and len(rihs01(t)) == 7 + 64, t
+    for t in TOPIC_TYPES:
+        store = get_typestore(Stores.EMPTY)
+        store.register(get_types_from_msg(full_definition(t), t))
+        assert rihs01(t) == store.hash_rihs01(t), t
 
 
 def test_metadata_yaml_follows_rosbag2(tmp_path: Path) -> None:
@@ -130,37 +137,95 @@ def test_metadata_yaml_follows_rosbag2(tmp_path: Path) -> None:
     tf = msgs.get_type("tf2_msgs/msg/TFMessage")
     items = [("humanoid/joint_states", js(name=["a"], position=[float(i)])) for i in range(3)]
     write_bag(tmp_path / "b", [("tf_static", tf()), *items], start_ns=5_000_000_000)
-    assert sorted(os.listdir(tmp_path / "b")) == ["b_0.mcap", "metadata.yaml"]
+    assert sorted(os.listdir(tmp_path / "b")) == ["b.mcap", "metadata.yaml"]
     doc = yaml.safe_load((tmp_path / "b" / "metadata.yaml").read_text())
     info = doc["rosbag2_bagfile_information"]
-    assert list(doc) == ["rosbag2_bagfile_information"] and list(info) == METADATA_KEYS
-    assert info["version"] == 9 and info["storage_identifier"] == "mcap" and info["ros_distro"] == "jazzy"
+    assert list(doc) == ["rosbag2_bagfile_information"] and set(info) == METADATA_KEYS
+    assert info["version"] == 9 and info["storage_identifier"] == "mcap" and info["ros_distro"] == "rosbags"
     assert info["duration"] == {"nanoseconds": 3_000_000} and info["message_count"] == 4
     assert info["starting_time"] == {"nanoseconds_since_epoch": 5_000_000_000}
     assert info["compression_format"] == "" and info["compression_mode"] == ""
-    assert info["relative_file_paths"] == ["b_0.mcap"]
-    assert info["files"] == [{"path": "b_0.mcap", "starting_time": {"nanoseconds_since_epoch": 5_000_000_000},
+    assert info["relative_file_paths"] == ["b.mcap"]
+    assert info["files"] == [{"path": "b.mcap", "starting_time": {"nanoseconds_since_epoch": 5_000_000_000},
                               "duration": {"nanoseconds": 3_000_000}, "message_count": 4}]
-    assert all(isinstance(k, str) and isinstance(v, str) for k, v in info["custom_data"].items())
+    assert info["custom_data"] == {"recorded_by": "zenroid bag record"}
     topics = {t["topic_metadata"]["name"]: t for t in info["topics_with_message_count"]}
     assert set(topics) == {"/tf_static", "/humanoid/joint_states"}
     js_meta = topics["/humanoid/joint_states"]
-    assert list(js_meta) == ["topic_metadata", "message_count"] and js_meta["message_count"] == 3
+    assert set(js_meta) == {"topic_metadata", "message_count"} and js_meta["message_count"] == 3
     tm = js_meta["topic_metadata"]
-    assert list(tm) == ["name", "type", "serialization_format", "offered_qos_profiles", "type_description_hash"]
+    assert set(tm) == {"name", "type", "serialization_format", "offered_qos_profiles", "type_description_hash"}
     assert tm["type"] == "sensor_msgs/msg/JointState" and tm["serialization_format"] == "cdr"
     assert tm["type_description_hash"] == JAZZY.hash_rihs01("sensor_msgs/msg/JointState")
     [qos] = tm["offered_qos_profiles"]
-    assert list(qos) == QOS_KEYS and qos["reliability"] == "reliable" and qos["durability"] == "volatile"
+    assert set(qos) == QOS_KEYS and qos["reliability"] == "reliable" and qos["durability"] == "volatile"
+    assert qos["history"] == "keep_last" and qos["depth"] == 10
     assert qos["deadline"] == {"sec": 9223372036, "nsec": 854775807}
-    assert topics["/tf_static"]["topic_metadata"]["offered_qos_profiles"][0]["durability"] == "transient_local"
-    # rosbags' own rosbag2 reader agrees on everything, QoS included.
+    [latched] = topics["/tf_static"]["topic_metadata"]["offered_qos_profiles"]
+    assert latched["durability"] == "transient_local" and latched["depth"] == 1
     with Rosbag2Reader(tmp_path / "b") as reader:
-        assert reader.message_count == 4 and reader.ros_distro == "jazzy"
+        assert reader.message_count == 4 and reader.ros_distro == "rosbags"
         conns = {c.topic: c for c in reader.connections}
         assert conns["/humanoid/joint_states"].digest == tm["type_description_hash"]
         assert conns["/tf_static"].ext.offered_qos_profiles[0].durability.name == "TRANSIENT_LOCAL"
         assert len(list(reader.messages())) == 4
+
+
+def test_mcap_bag_read_by_the_mcap_libraries(tmp_path: Path) -> None:
+    """A second implementation besides rosbags (which writes our bags): Foxglove's mcap reader and
+    mcap-ros2-support's CDR decoder, working from the schema the file stores, get every type's values back."""
+    items = [(f"types/{t.replace('/', '_')}", sample_message(t)) for t in TOPIC_TYPES]
+    items.append(("tf_static", msgs.get_type("tf2_msgs/msg/TFMessage")()))
+    write_bag(tmp_path / "all", items)
+    with open(tmp_path / "all" / "all.mcap", "rb") as f:
+        reader = make_reader(f, decoder_factories=[Ros2DecoderFactory()])
+        summary = reader.get_summary()
+        assert summary is not None and summary.statistics is not None
+        assert summary.statistics.message_count == len(items)
+        assert all(s.encoding == "ros2msg" for s in summary.schemas.values())
+        channels = {c.topic: c for c in summary.channels.values()}
+        assert all(c.message_encoding == "cdr" for c in channels.values())
+        [qos] = yaml.safe_load(channels["/tf_static"].metadata["offered_qos_profiles"])
+        assert qos["durability"] == "transient_local" and qos["reliability"] == "reliable"
+        [record] = [m for m in reader.iter_metadata() if m.name == "rosbag2"]  # what ros2 bag info reads
+        assert yaml.safe_load(record.metadata["serialized_metadata"])["message_count"] == len(items)
+        decoded = [(channel.topic, schema.name, value, message.log_time)
+                   for schema, channel, message, value in reader.iter_decoded_messages(log_time_order=True)]
+    assert [(topic, name) for topic, name, _, _ in decoded] == [("/" + k, m._type) for k, m in items]
+    for (_, msg), (_, name, value, _) in zip(items, decoded):
+        assert same(plain_from_decoded(name, value), msgs.to_dict(msg)), name
+
+
+def test_sqlite3_bag_read_with_plain_sqlite(tmp_path: Path) -> None:
+    """``-s sqlite3`` bags hold rosbag2's tables: read with Python's sqlite3 (no rosbags reader), each
+    payload decoded by rosbags' CDR from the definition the file stores, to the values written."""
+    items = [(f"types/{t.replace('/', '_')}", sample_message(t)) for t in TOPIC_TYPES]
+    writer = BagWriter(tmp_path / "db", storage="sqlite3")
+    for i, (key, msg) in enumerate(items):
+        assert writer.write(key, msg, 1_000 + i)
+    writer.close()
+    assert sorted(os.listdir(tmp_path / "db")) == ["db.db3", "metadata.yaml"]
+    with sqlite3.connect(tmp_path / "db" / "db.db3") as db:
+        topics = {row[0]: row[1:] for row in db.execute(
+            "SELECT id, name, type, serialization_format, offered_qos_profiles, type_description_hash FROM topics")}
+        definitions = {row[0]: row[1:] for row in db.execute(
+            "SELECT topic_type, encoding, encoded_message_definition, type_description_hash "
+            "FROM message_definitions")}
+        rows = db.execute("SELECT topic_id, timestamp, data FROM messages ORDER BY timestamp").fetchall()
+    assert len(rows) == len(items)
+    for i, ((key, msg), (topic_id, timestamp, data)) in enumerate(zip(items, rows)):
+        name, type_name, fmt, qos, type_hash = topics[topic_id]
+        assert timestamp == 1_000 + i
+        assert (name, type_name, fmt) == ("/" + key, msg._type, "cdr") and type_hash == rihs01(msg._type)
+        assert yaml.safe_load(qos)[0]["reliability"] == "reliable"
+        encoding, definition, _ = definitions[type_name]
+        assert encoding == "ros2msg"
+        store = get_typestore(Stores.EMPTY)
+        store.register(get_types_from_msg(definition, type_name))
+        value = store.deserialize_cdr(bytes(data), type_name)
+        assert same(plain_from_decoded(type_name, value), msgs.to_dict(msg)), type_name
+    assert [m.msg for m in read_bag(tmp_path / "db")] == [m for _, m in items]
+    assert open_bag(tmp_path / "db").info()["storage"] == "sqlite3"
 
 
 def test_single_mcap_file_stays_a_single_file(tmp_path: Path) -> None:
@@ -170,9 +235,11 @@ def test_single_mcap_file_stays_a_single_file(tmp_path: Path) -> None:
     with AnyReader([tmp_path / "one.mcap"]) as reader:
         [(conn, _, raw)] = list(reader.messages())
         assert list(reader.deserialize(raw, conn.msgtype).position) == [1.0]
-    assert open_bag(tmp_path / "one.mcap").info()["ros_distro"] == "jazzy"  # from the rosbag2 record inside
+    assert open_bag(tmp_path / "one.mcap").info()["messages"] == 1
     with pytest.raises(FileExistsError):
         BagWriter(tmp_path / "one.mcap")
+    with pytest.raises(ValueError, match="storage: a .mcap file is MCAP storage, not sqlite3"):
+        BagWriter(tmp_path / "two.mcap", storage="sqlite3")
 
 
 def test_directory_without_metadata_still_opens(tmp_path: Path) -> None:
@@ -244,17 +311,18 @@ def test_reads_bags_written_by_rosbags(tmp_path: Path, storage: StoragePlugin,
 
 
 @pytest.mark.parametrize("mutate,expected", [
-    (lambda d: d.pop("rosbag2_bagfile_information"), "rosbag2_bagfile_information: missing"),
-    (lambda d: d["rosbag2_bagfile_information"].update(version=12), "version: 12"),
+    (lambda d: d.pop("rosbag2_bagfile_information"), "metadata key is missing.*rosbag2_bagfile_information"),
+    (lambda d: d["rosbag2_bagfile_information"].update(version=12), "version 12 not supported"),
     (lambda d: d["rosbag2_bagfile_information"].update(storage_identifier="rosbag_v1"),
-     "storage_identifier: 'rosbag_v1' is not supported"),
+     "Storage plugin 'rosbag_v1' not supported"),
     (lambda d: d["rosbag2_bagfile_information"].update(relative_file_paths=["gone.mcap"]),
-     "relative_file_paths: 'gone.mcap' does not exist"),
+     "files are missing.*gone.mcap"),
     (lambda d: d["rosbag2_bagfile_information"].update(compression_mode="file", compression_format="lz4"),
-     "compression_format: 'lz4' is not supported"),
+     "Compression format 'lz4' is not supported"),
     (lambda d: d["rosbag2_bagfile_information"]["topics_with_message_count"][0]["topic_metadata"].pop("type"),
-     r"topics_with_message_count\[0\]: type: missing"),
-    (lambda d: d["rosbag2_bagfile_information"].update(message_count="many"), "message_count: expected int"),
+     "metadata key is missing.*'type'"),
+    (lambda d: d["rosbag2_bagfile_information"].update(message_count="many"),
+     "message_count, starting_time, duration: expected integers"),
 ])
 def test_bad_metadata_is_a_clear_error(tmp_path: Path, mutate: Any, expected: str) -> None:
     js = msgs.get_type("sensor_msgs/msg/JointState")
@@ -270,7 +338,7 @@ def test_bad_metadata_is_a_clear_error(tmp_path: Path, mutate: Any, expected: st
 def test_garbage_is_a_clear_error(tmp_path: Path) -> None:
     (tmp_path / "b").mkdir()
     (tmp_path / "b" / "metadata.yaml").write_text("rosbag2_bagfile_information: [unclosed")
-    with pytest.raises(BagError, match="not readable YAML"):
+    with pytest.raises(BagError, match="Could not load YAML"):
         open_bag(tmp_path / "b")
     (tmp_path / "x.db3").write_bytes(b"SQLite format 3\x00" + os.urandom(100))
     with pytest.raises(BagError, match="not a readable rosbag2 sqlite3 file"):
@@ -280,6 +348,26 @@ def test_garbage_is_a_clear_error(tmp_path: Path) -> None:
         open_bag(tmp_path / "x.txt")
 
 
-def test_qos_dump_matches_rosbag2_layout() -> None:
-    text = rosbag2.qos_yaml(rosbag2.offered_qos("/tf_static"))
-    assert text.startswith("- history: keep_last\n  depth: 1\n  reliability: reliable\n  durability: transient_local")
+def test_a_bags_own_definition_decodes_its_payloads(tmp_path: Path) -> None:
+    """A type the bag defines otherwise than we do (another distro's): its payloads decode by the bag's
+    definition and map onto ours field by field; a field of ours the bag's type lacks is a clear error."""
+    js = "sensor_msgs/msg/JointState"
+    ours = full_definition(js)
+    assert "string[] name\n" in ours.split("=" * 80)[0] and "float64[] effort\n" in ours.split("=" * 80)[0]
+    wider = ours.replace("string[] name\n", "string[] name\nuint32 extra\n", 1)  # read as ours: garbage
+    narrower = ours.replace("float64[] effort\n", "", 1)
+    for name, definition, fields in (("wider", wider, {"effort": np.array([3.0]), "extra": 7}),
+                                     ("narrower", narrower, {})):
+        store = get_typestore(Stores.EMPTY)
+        store.register(get_types_from_msg(definition, js))
+        stamp = store.types["builtin_interfaces/msg/Time"](sec=4, nanosec=5)
+        value = store.types[js](header=store.types["std_msgs/msg/Header"](stamp=stamp, frame_id="f"),
+                                name=["a"], position=np.array([1.0]), velocity=np.array([2.0]), **fields)
+        with Rosbag2Writer(tmp_path / name, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+            conn = writer.add_connection("/j", js, msgdef=definition, rihs01=store.hash_rihs01(js))
+            writer.write(conn, 10, store.serialize_cdr(value, js))
+    [got] = list(open_bag(tmp_path / "wider").messages())
+    assert got.key == "j" and got.msg.header.stamp.sec == 4 and got.msg.header.frame_id == "f"
+    assert (got.msg.name, got.msg.position, got.msg.velocity, got.msg.effort) == (["a"], [1.0], [2.0], [3.0])
+    with pytest.raises(BagError, match="topic /j: the bag's sensor_msgs/msg/JointState lacks a field.*effort"):
+        list(open_bag(tmp_path / "narrower").messages())
