@@ -29,6 +29,7 @@ _FORMATS = {
 }
 _ZERO = {"bool": "False", "float32": "0.0", "float64": "0.0", "string": "''", "wstring": "''"}
 _PAD = tuple(b"\x00" * n for n in range(8))
+_STRINGS = ("string", "wstring")
 
 
 class CdrError(ValueError):
@@ -69,14 +70,19 @@ def _default_expr(src: _Source, f: FieldSpec) -> str:
     return _ZERO.get(f.base, "0")
 
 
-# ---------------------------------------------------------------- encoder
+# ---------------------------------------------------------------- one value, either way
 
 def _align(src: _Source, depth: int, size: int) -> None:
     if size > 1:
         src.emit(depth, f"out += _PAD[(4 - len(out)) & {size - 1}]")
 
 
-def _enc_string(src: _Source, depth: int, value: str) -> None:
+def _dalign(src: _Source, depth: int, size: int) -> None:
+    if size > 1:
+        src.emit(depth, f"p += (4 - p) & {size - 1}")
+
+
+def _enc_string(src: _Source, depth: int, _base: str, value: str) -> None:
     raw = src.var("s")
     src.emit(depth, f"{raw} = {value}.encode()")
     _align(src, depth, 4)
@@ -85,17 +91,53 @@ def _enc_string(src: _Source, depth: int, value: str) -> None:
     src.emit(depth, "out.append(0)")
 
 
-def _enc_field(src: _Source, depth: int, f: FieldSpec, value: str) -> None:
+def _dec_string(src: _Source, depth: int, _base: str, target: str) -> None:
+    n = src.var("n")
+    _dalign(src, depth, 4)
+    src.emit(depth, f"{n}, = _unpack_from('<I', b, p)")
+    src.emit(depth, f"if {n} == 0 or p + 4 + {n} > len(b): raise CdrError('bad string length')")
+    src.emit(depth, f"{target} = b[p + 4:p + 3 + {n}].decode()")
+    src.emit(depth, f"p += 4 + {n}")
+
+
+def _enc_primitive(src: _Source, depth: int, base: str, value: str) -> None:
+    _align(src, depth, _size(base))
+    src.emit(depth, f"out += _pack('<{_FORMATS[base]}', {value})")
+
+
+def _dec_primitive(src: _Source, depth: int, base: str, target: str) -> None:
+    _dalign(src, depth, _size(base))
+    src.emit(depth, f"{target}, = _unpack_from('<{_FORMATS[base]}', b, p)")
+    src.emit(depth, f"p += {_size(base)}")
+
+
+_ENCODE, _DECODE = 0, 1
+# How one value of each kind is written (value: an expression) and read (target: where it goes).
+_ONE_VALUE: dict[str, tuple[Callable[[_Source, int, str, str], None], ...]] = {
+    "string": (_enc_string, _dec_string),
+    "primitive": (_enc_primitive, _dec_primitive),
+    "nested": (lambda src, depth, base, value: src.emit(depth, f"_enc[{base!r}]({value}, out)"),
+               lambda src, depth, base, target: src.emit(depth, f"{target}, p = _dec[{base!r}](b, p)")),
+}
+
+
+def _one_value(src: _Source, depth: int, base: str, slot: str, direction: int) -> None:
+    """Code for one value of type ``base``: a fixed-size primitive, a string or a nested message."""
+    kind = "string" if base in _STRINGS else "primitive" if base in _FORMATS else "nested"
+    _ONE_VALUE[kind][direction](src, depth, base, slot)
+
+
+def _field(src: _Source, depth: int, f: FieldSpec, slot: str, direction: int) -> None:
+    if f.is_array:
+        (_enc_array, _dec_array)[direction](src, depth, f, slot)
+    else:
+        _one_value(src, depth, f.base, slot, direction)
+
+
+# ---------------------------------------------------------------- encoder
+
+def _enc_array(src: _Source, depth: int, f: FieldSpec, value: str) -> None:
     base = f.base
-    if not f.is_array:
-        if not f.is_primitive:
-            src.emit(depth, f"_enc[{base!r}]({value}, out)")
-        elif base in ("string", "wstring"):
-            _enc_string(src, depth, value)
-        else:
-            _align(src, depth, _size(base))
-            src.emit(depth, f"out += _pack('<{_FORMATS[base]}', {value})")
-        return
     items = src.var("a")
     src.emit(depth, f"{items} = {value}")
     if f.array_size is None:  # sequence: uint32 count first
@@ -107,7 +149,7 @@ def _enc_field(src: _Source, depth: int, f: FieldSpec, value: str) -> None:
     else:
         src.emit(depth, f"if len({items}) != {f.array_size}: raise CdrError('{f.name}: needs exactly "
                         f"{f.array_size} elements')")
-    if f.is_primitive and base not in ("string", "wstring"):
+    if base in _FORMATS:  # primitive arrays in one go
         if base in ("uint8", "byte", "char"):
             src.emit(depth, f"out += bytes({items})")
             return
@@ -117,10 +159,7 @@ def _enc_field(src: _Source, depth: int, f: FieldSpec, value: str) -> None:
         return
     item = src.var("e")
     src.emit(depth, f"for {item} in {items}:")
-    if base in ("string", "wstring"):
-        _enc_string(src, depth + 1, item)
-    else:
-        src.emit(depth + 1, f"_enc[{base!r}]({item}, out)")
+    _one_value(src, depth + 1, base, item, _ENCODE)
 
 
 def _build_encoder(type_name: str) -> Callable[[dict, bytearray], None]:
@@ -130,39 +169,14 @@ def _build_encoder(type_name: str) -> Callable[[dict, bytearray], None]:
     if not spec.fields:
         src.emit(1, "out.append(0)  # structure_needs_at_least_one_member")
     for f in spec.fields:
-        _enc_field(src, 1, f, f"d.get({f.name!r}, {_default_expr(src, f)})")
+        _field(src, 1, f, f"d.get({f.name!r}, {_default_expr(src, f)})", _ENCODE)
     return _compile(src, "encode")
 
 
 # ---------------------------------------------------------------- decoder
 
-def _dalign(src: _Source, depth: int, size: int) -> None:
-    if size > 1:
-        src.emit(depth, f"p += (4 - p) & {size - 1}")
-
-
-def _dec_string(src: _Source, depth: int, target: str) -> None:
-    n = src.var("n")
-    _dalign(src, depth, 4)
-    src.emit(depth, f"{n}, = _unpack_from('<I', b, p)")
-    src.emit(depth, f"if {n} == 0 or p + 4 + {n} > len(b): raise CdrError('bad string length')")
-    src.emit(depth, f"{target} = b[p + 4:p + 3 + {n}].decode()")
-    src.emit(depth, f"p += 4 + {n}")
-
-
-def _dec_field(src: _Source, depth: int, f: FieldSpec, target: str) -> None:
+def _dec_array(src: _Source, depth: int, f: FieldSpec, target: str) -> None:
     base = f.base
-    if not f.is_array:
-        if not f.is_primitive:
-            src.emit(depth, f"{target}, p = _dec[{base!r}](b, p)")
-        elif base in ("string", "wstring"):
-            _dec_string(src, depth, target)
-        else:
-            size = _size(base)
-            _dalign(src, depth, size)
-            src.emit(depth, f"{target}, = _unpack_from('<{_FORMATS[base]}', b, p)")
-            src.emit(depth, f"p += {size}")
-        return
     count = src.var("c")
     if f.array_size is None:
         _dalign(src, depth, 4)
@@ -171,7 +185,7 @@ def _dec_field(src: _Source, depth: int, f: FieldSpec, target: str) -> None:
         src.emit(depth, f"if {count} > len(b) - p: raise CdrError('{f.name}: sequence longer than the payload')")
     else:
         src.emit(depth, f"{count} = {f.array_size}")
-    if f.is_primitive and base not in ("string", "wstring"):
+    if base in _FORMATS:  # primitive arrays in one go
         if base in ("uint8", "byte", "char"):
             src.emit(depth, f"if p + {count} > len(b): raise CdrError('{f.name}: truncated')")
             src.emit(depth, f"{target} = bytes(b[p:p + {count}])")
@@ -188,10 +202,7 @@ def _dec_field(src: _Source, depth: int, f: FieldSpec, target: str) -> None:
     items, item = src.var("l"), src.var("x")
     src.emit(depth, f"{items} = []")
     src.emit(depth, f"for _ in range({count}):")
-    if base in ("string", "wstring"):
-        _dec_string(src, depth + 1, item)
-    else:
-        src.emit(depth + 1, f"{item}, p = _dec[{base!r}](b, p)")
+    _one_value(src, depth + 1, base, item, _DECODE)
     src.emit(depth + 1, f"{items}.append({item})")
     src.emit(depth, f"{target} = {items}")
 
@@ -204,7 +215,7 @@ def _build_decoder(type_name: str) -> Callable[[bytes, int], tuple[dict, int]]:
     if not spec.fields:
         src.emit(1, "p += 1  # structure_needs_at_least_one_member")
     for f in spec.fields:
-        _dec_field(src, 1, f, f"d[{f.name!r}]")
+        _field(src, 1, f, f"d[{f.name!r}]", _DECODE)
     src.emit(1, "return d, p")
     return _compile(src, "decode")
 
