@@ -68,11 +68,15 @@ class Bag:
         self.storage = storage
         self.has_metadata_file = has_metadata_file
         self._readers = readers
+        # One line per topic and type, over storage files (and QoS variants rosbag2 keeps apart).
+        self.topics: list[TopicInfo] = []
         conns = sorted((c for r in readers for c in r.connections), key=lambda c: (c.topic, c.msgtype))
-        self.topics = [TopicInfo(topic, msgtype, sum(c.msgcount for c in group), group[0].ext.serialization_format,
-                                 group[0].digest, list(group[0].ext.offered_qos_profiles))
-                       for (topic, msgtype), group in ((k, list(g)) for k, g in
-                                                      groupby(conns, key=lambda c: (c.topic, c.msgtype)))]
+        for (topic, msgtype), same in groupby(conns, key=lambda c: (c.topic, c.msgtype)):
+            group = list(same)
+            first_conn = group[0]
+            self.topics.append(TopicInfo(topic, msgtype, sum(c.msgcount for c in group),
+                                         first_conn.ext.serialization_format, first_conn.digest,
+                                         list(first_conn.ext.offered_qos_profiles)))
         counted = [r for r in readers if r.message_count]
         self.message_count = sum(r.message_count for r in readers)
         self.start_ns = min((r.start_time for r in counted), default=0)
