@@ -285,20 +285,24 @@ class Replay:
         self._stop.set()
         if self._watcher.is_alive():
             self._watcher.join(5)
-        procs = [run.proc for run in self.running.values() if run.proc is not None]
-        for proc in procs:
-            if proc.poll() is None:
-                try:
-                    os.killpg(proc.pid, signal.SIGINT)
-                except ProcessLookupError:
-                    pass
-        deadline = time.monotonic() + 15
-        for proc in procs:
+        stop_all([run.proc for run in self.running.values() if run.proc is not None])
+
+
+def stop_all(procs: list[subprocess.Popen], grace: float = 15.0) -> None:
+    """Ctrl-C to each process group (every ``Network.popen`` has its own), SIGKILL after ``grace`` seconds."""
+    for proc in procs:
+        if proc.poll() is None:
             try:
-                proc.wait(max(0.1, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                try:
-                    os.killpg(proc.pid, signal.SIGKILL)
-                except ProcessLookupError:
-                    pass
-                proc.wait()
+                os.killpg(proc.pid, signal.SIGINT)
+            except ProcessLookupError:
+                pass
+    deadline = time.monotonic() + grace
+    for proc in procs:
+        try:
+            proc.wait(max(0.1, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            try:
+                os.killpg(proc.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            proc.wait()

@@ -11,7 +11,8 @@ manager's services, answer a simulator service in its place.
 
 ``call KEY``: one service call with an empty request; prints the replies (ok/error).
 
-Connects like a node (``ZENOH_CONNECT``, ``ZENOH_CONFIG`` for its identity).
+Connects like a node (``ZENOH_CONNECT``, ``ZENOH_CONFIG`` for its identity); ``RUST_LOG=warn`` logs why
+Zenoh refused a connection.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import time
 
 import msgpack
 
-from nodes.core.session import is_connected, open_peer
+from nodes.core.session import init_zenoh_log, is_connected, open_peer
 
 ROGUE = b"rogue"
 COMMAND_KEYS = ("humanoid/hardware/**", "humanoid/*/joint_trajectory")
@@ -180,6 +181,7 @@ def call(key: str) -> dict:
 
 
 def main(argv: list[str]) -> int:
+    init_zenoh_log()  # zenoh's own reasons on stderr at RUST_LOG's level (why a handshake was refused)
     verb = argv[0]
     if verb == "watch":
         result = watch(float(argv[1]))
