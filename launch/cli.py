@@ -3,15 +3,18 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import time
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
 
 import yaml
 
 from launch import interrupts
-from launch.description import parse_file
+from launch.description import LaunchDeprecationWarning, parse_file
 from launch.resolve import LaunchPlan, find_launch_file, resolve
 from launch.yaml_source import LaunchError, Source
 from nodes.tools.cli import UsageError
@@ -113,6 +116,21 @@ def _late_options(args: argparse.Namespace) -> None:
     args.arguments = rest
 
 
+@contextlib.contextmanager
+def _deprecations_logged() -> Iterator[None]:
+    """Old spellings in launch files (``param_file``) work and are reported as the launcher's warnings."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", LaunchDeprecationWarning)
+        try:
+            yield
+        finally:
+            for warning in caught:
+                if issubclass(warning.category, LaunchDeprecationWarning):
+                    print(f"[launch] [WARN] {warning.message}", file=sys.stderr, flush=True)
+                else:
+                    warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
+
+
 def load_plan(args: argparse.Namespace) -> tuple[Path, LaunchPlan | None]:
     _late_options(args)
     try:
@@ -123,7 +141,8 @@ def load_plan(args: argparse.Namespace) -> tuple[Path, LaunchPlan | None]:
     try:
         if args.show_args:
             return path, None
-        return path, resolve(path, values)
+        with _deprecations_logged():
+            return path, resolve(path, values)
     except LaunchError as exc:
         raise _usage_error(str(exc)) from None
 

@@ -13,6 +13,7 @@ Format (DESIGN §7)::
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -21,8 +22,10 @@ from launch.yaml_source import LaunchError, LocatedDict, LocatedList, Source, lo
 
 CONDITION_KEYS = ("if", "unless")
 
+# Old spellings still read, with a warning naming the new one: old key -> new key.
+DEPRECATED_NODE_KEYS = {"param_file": "params_file"}
 NODE_KEYS = (
-    "name", "module", "exec", "args", "namespace", "params", "param_file", "remap", "env",
+    "name", "module", "exec", "args", "namespace", "params", "params_file", "remap", "env",
     "respawn", "respawn_delay", "respawn_max", "required", "output", "wait_for", "wait_timeout",
     "health_timeout", "exclusive_cpu", *CONDITION_KEYS,
 )
@@ -31,6 +34,10 @@ INCLUDE_KEYS = ("file", "args", *CONDITION_KEYS)
 GROUP_KEYS = ("namespace", "actions", *CONDITION_KEYS)
 ON_EXIT_KEYS = ("node", "log", "shutdown", *CONDITION_KEYS)
 ON_SHUTDOWN_KEYS = ("log", *CONDITION_KEYS)
+
+
+class LaunchDeprecationWarning(UserWarning):
+    """An old spelling in a launch file: it still works; the launcher prints the warning with file:line."""
 
 
 @dataclass
@@ -138,7 +145,22 @@ def _conditions(mapping: LocatedDict, file: Path) -> dict[str, Any]:
     return out
 
 
+def _rename_deprecated_keys(body: LocatedDict, file: Path) -> None:
+    """Read an old key as its new spelling (same value, same line), warning once per use."""
+    for old, new in DEPRECATED_NODE_KEYS.items():
+        if old not in body:
+            continue
+        where = Source(file, body.line_of(old))
+        if new in body:
+            raise LaunchError(f"node has both '{new}' and its old spelling '{old}': keep '{new}'", where)
+        warnings.warn(LaunchDeprecationWarning(f"{where}: node key '{old}' is deprecated: use '{new}' (the "
+                                               f"spelling of --params-file)"), stacklevel=2)
+        body[new] = body.pop(old)
+        body.key_lines[new] = where.line
+
+
 def _parse_node(body: LocatedDict, file: Path, source: Source) -> NodeDecl:
+    _rename_deprecated_keys(body, file)
     _check_keys(body, NODE_KEYS, "node", file)
     at = lambda key: Source(file, body.line_of(key))  # noqa: E731 - tiny local helper
     if "name" not in body:
@@ -151,7 +173,7 @@ def _parse_node(body: LocatedDict, file: Path, source: Source) -> NodeDecl:
             _require_mapping(body[key], f"node '{key}'", at(key))
     if "remap" in body and not isinstance(body["remap"], (LocatedDict, LocatedList)):
         raise LaunchError("node 'remap' must be a mapping {from: to} or a list of 'from:=to'", at("remap"))
-    for key in ("args", "param_file", "wait_for"):
+    for key in ("args", "params_file", "wait_for"):
         if key in body and not isinstance(body[key], (LocatedList, str)):
             raise LaunchError(f"node '{key}' must be a list or a string, not {_kind(body[key])}", at(key))
     return NodeDecl(source=source, fields=body, **_conditions(body, file))

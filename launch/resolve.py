@@ -336,11 +336,11 @@ class _Resolver:
             params = {str(k): self.param_value(v, scope, _line(f["params"], k, at("params")))
                       for k, v in f["params"].items()}
         param_files = []
-        for entry in self.word_list(f.get("param_file"), scope, decl, "param_file"):
+        for entry in self.word_list(f.get("params_file"), scope, decl, "params_file"):
             path = Path(entry).expanduser()
             path = path if path.is_absolute() else scope.file.resolve().parent / path
             if not path.is_file():
-                raise LaunchError(f"node '{name}': parameter file not found: {entry}", at("param_file"))
+                raise LaunchError(f"node '{name}': parameter file not found: {entry}", at("params_file"))
             param_files.append(str(path.resolve()))
         remaps = self.remaps(f.get("remap"), scope, decl)
         env = {}

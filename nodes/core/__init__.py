@@ -4,12 +4,12 @@ from nodes.core.action import ActionClient, ActionServer, ClientGoalHandle, Serv
 from nodes.core.endpoints import Client, Publisher, ServiceError, ServiceServer, Subscription
 from nodes.core.lifecycle import LifecycleNode
 from nodes.core.log import Logger
-from nodes.core.node import Event, Node, Timer
+from nodes.core.node import Node, Timer
 from nodes.core.params import ParameterError
 from nodes.core.runner import add_connection_arguments, add_node_arguments, connect_from_args, run_node
 
 __all__ = [
-    "ActionClient", "ActionServer", "Client", "ClientGoalHandle", "Event", "LifecycleNode", "Logger", "Node",
+    "ActionClient", "ActionServer", "Client", "ClientGoalHandle", "LifecycleNode", "Logger", "Node",
     "ParameterError", "Publisher", "ServerGoalHandle", "ServiceError", "ServiceServer", "Subscription", "Timer",
     "add_connection_arguments", "add_node_arguments", "connect_from_args", "run_node",
 ]

@@ -150,9 +150,11 @@ class Subscription:
     forth; pulling costs no thread hand-off at all.
     """
 
-    def __init__(self, node: NodeRuntime, msg_type: Any, key: str, callback: Callable[[Any], None] | None, *,
+    def __init__(self, node: NodeRuntime, msg_type: Any, key: str, callback: Callable[..., None], *,
                  inline: bool = False, raw: bool = False, with_key: bool = False, with_source: bool = False,
                  max_rate: float | None = None, backlog: int = 256, pulled: bool = False) -> None:
+        if not callable(callback):
+            raise TypeError(f"the subscription to '{key}' needs a callback")
         self.node = node
         self.msg_type = msg_type
         self.key = key
@@ -265,11 +267,7 @@ class Subscription:
                 self.node.logger.warn_throttle(
                     1.0, f"dropped a message on '{sample.key_expr}': {exc}", key=f"decode:{self.key}")
                 return
-        topic = str(sample.key_expr)
-        if self.callback is None:
-            self.node.deliver_event(topic, msg)
-            return
-        args = (msg, topic) if self.with_key else (msg,)
+        args = (msg, str(sample.key_expr)) if self.with_key else (msg,)
         if self.with_source:
             attachment = parse_attachment(sample)
             args += (attachment[1] if attachment is not None else None,)

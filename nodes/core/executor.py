@@ -151,12 +151,12 @@ class Executor:
             self.run_callback(fn, *args, where=where)
         return True
 
-    def request_stop(self) -> None:
+    def request_shutdown(self) -> None:
         self._stop.set()
         self.call_soon(_nothing, where="wake")
 
     @property
-    def stopped(self) -> bool:
+    def shutdown_requested(self) -> bool:
         return self._stop.is_set()
 
 

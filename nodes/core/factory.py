@@ -34,7 +34,7 @@ class EndpointFactory:
     def fetch_latched(self, msg_type: Any, topic: str, timeout: float) -> Any | None:
         return fetch_latched(self._runtime.session, msg_type, self._resolve(topic), timeout)
 
-    def subscription(self, msg_type: Any, topic: str, callback: Callable[..., None] | None, *, inline: bool,
+    def subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *, inline: bool,
                      raw: bool, with_key: bool, max_rate: float | None, with_source: bool = False,
                      pulled: bool = False, backlog: int = 256) -> Subscription:
         return self._keep(Subscription(self._runtime, msg_type, self._resolve(topic, wildcards=True), callback,

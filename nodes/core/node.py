@@ -13,10 +13,9 @@ that ask for it); ``inline=True`` endpoints run on Zenoh's thread without the lo
 from __future__ import annotations
 
 import functools
-import queue
 import time
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass
+import warnings
+from collections.abc import Callable
 from typing import Any
 
 import zenoh
@@ -36,15 +35,6 @@ from nodes.core.log_services import LoggerLevelServices
 from nodes.core.node_parameters import NodeParameters
 from nodes.core.presence import GraphPresence
 from nodes.core.session import open_peer
-
-
-@dataclass
-class Event:
-    """A dora-style event from ``Node.events()``: ``kind`` is "input" (topic + msg) or "stop"."""
-
-    kind: str
-    topic: str = ""
-    msg: Any = None
 
 
 class Node:
@@ -110,7 +100,6 @@ class Node:
 
     def _init_runtime(self, params: dict[str, Any] | None, remap: dict[str, str] | None) -> None:
         self._remap = dict(remap or {})
-        self._events: queue.SimpleQueue = queue.SimpleQueue()
         self._closed = False
         self.presence = GraphPresence(self.session, self.fully_qualified_name, self.logger)
         self.session_id = self.presence.session_id
@@ -189,7 +178,7 @@ class Node:
         """The last message of a latched topic (None when nobody answers within ``timeout`` s)."""
         return self._endpoints.fetch_latched(msg_type, topic, timeout)
 
-    def create_subscription(self, msg_type: Any, topic: str, callback: Callable[[Any], None] | None = None, *,
+    def create_subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *,
                             inline: bool = False, raw: bool = False, with_key: bool = False,
                             with_source: bool = False, max_rate: float | None = None,
                             pulled: bool = False, backlog: int = 256) -> Subscription:
@@ -242,45 +231,27 @@ class Node:
         """Run ``fn`` on the spinning thread (from any thread), after what is already queued."""
         self.executor.call_soon(fn, where=where)
 
-    def deliver_event(self, topic: str, msg: Any) -> None:
-        """A message for ``events()`` (subscriptions created without a callback)."""
-        self._events.put(Event("input", topic, msg))
-
     def spin_once(self, timeout: float | None = None) -> bool:
         """Run due timers and at most one queued callback, waiting up to ``timeout`` s. True if work ran."""
         return self.executor.spin_once(timeout)
 
     def spin(self) -> None:
-        """Process callbacks until ``shutdown()`` / SIGINT / SIGTERM."""
-        while not self.executor.stopped:
+        """Process callbacks until ``request_shutdown()`` / SIGINT / SIGTERM."""
+        while not self.executor.shutdown_requested:
             self.executor.spin_once(0.1)
-
-    def events(self, timeout: float | None = None) -> Iterator[Event]:
-        """Yield messages of subscriptions created without a callback (dora-rs style) until stop.
-
-        Timers and callback-based endpoints keep running between events. ``timeout`` ends the iteration
-        after that many seconds without an event.
-        """
-        last = time.monotonic()
-        while not self.executor.stopped:
-            self.spin_once(0.0)
-            try:
-                event = self._events.get(timeout=0.01)
-            except queue.Empty:
-                if timeout is not None and time.monotonic() - last > timeout:
-                    return
-                continue
-            last = time.monotonic()
-            yield event
-        yield Event("stop")
 
     def request_shutdown(self) -> None:
         """Ask ``spin()`` to return (safe from signal handlers and other threads)."""
-        self.executor.request_stop()
+        self.executor.request_shutdown()
 
     @property
     def ok(self) -> bool:
-        return not self.executor.stopped
+        return not self.executor.shutdown_requested
+
+    def on_process_exit(self) -> None:
+        """The shutdown hook: ``run_node`` calls it once ``spin()`` has returned (SIGINT, SIGTERM or
+        ``request_shutdown()``), on the executor like a callback and before ``destroy()``, so endpoints still
+        work (end running goals, say goodbye on rosout, save state). Override it; the default does nothing."""
 
     def destroy(self) -> None:
         """Undeclare everything and close the session (if this node opened it)."""
@@ -294,7 +265,10 @@ class Node:
         if self._owns_session:
             self.session.close()
 
-    shutdown = destroy
+    def shutdown(self) -> None:
+        """Deprecated spelling of ``destroy()`` (a "shutdown" that closes the node, unlike ``request_shutdown``)."""
+        warnings.warn("Node.shutdown() is deprecated: use Node.destroy()", DeprecationWarning, stacklevel=2)
+        self.destroy()
 
     def __enter__(self) -> Node:
         return self

@@ -83,18 +83,16 @@ def run_node(factory: Callable[..., Any], argv: list[str] | None = None, *,
         print(f"{default_name}: interrupted while starting", file=sys.stderr)
         return 130
 
-    def stop(signum: int, _frame: Any) -> None:
+    def on_signal(signum: int, _frame: Any) -> None:
         node.logger.info(f"received {signal.Signals(signum).name}, shutting down")
         node.request_shutdown()
 
-    signal.signal(signal.SIGINT, stop)
-    signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, on_signal)
+    signal.signal(signal.SIGTERM, on_signal)
     try:
         node.spin()
     finally:
-        on_shutdown = getattr(node, "on_process_exit", None)
-        if callable(on_shutdown):
-            node.executor.run_callback(on_shutdown, where="on_process_exit")
+        node.executor.run_callback(node.on_process_exit, where="on_process_exit")  # the shutdown hook
         node.destroy()
     return 0
 

@@ -27,10 +27,6 @@ class NodeRuntime(Protocol):
         """True once the node is being destroyed: publishing becomes a no-op."""
         ...
 
-    def deliver_event(self, topic: str, msg: Any) -> None:
-        """A message of a subscription without a callback, for ``Node.events()``."""
-        ...
-
     def now_msg(self) -> Any:
         """The node clock as builtin_interfaces/Time (action goal stamps)."""
         ...

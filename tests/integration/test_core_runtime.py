@@ -297,6 +297,54 @@ def test_ctrl_c_while_a_node_starts_ends_it_quietly(router, client) -> None:
                message="slow_start gone from the graph")
 
 
+HOOKED_NODE = """
+from nodes.core import Node, run_node
+from msgs.std_msgs import String
+class Hooked(Node):
+    def __init__(self, **kw):
+        super().__init__("hooked", **kw)
+        self.said = self.create_publisher(String, "/hooked/said")
+        print("ready", flush=True)
+    def on_process_exit(self):
+        self.said.publish(String(data="bye"))   # endpoints still work in the hook
+        print(f"hook ran, closed={self.closed}", flush=True)
+raise SystemExit(run_node(Hooked))
+"""
+
+
+def test_shutdown_hook_runs_once_before_the_node_closes(router, client) -> None:
+    """SIGTERM: ``spin()`` returns, ``run_node`` calls the one shutdown hook (``on_process_exit``) while the
+    node's endpoints still work, then destroys the node; the process exits 0."""
+    String = msgs.get_type("std_msgs/msg/String")
+    said: list[str] = []
+    client.create_subscription(String, "/hooked/said", lambda m: said.append(m.data), inline=True)
+    env = dict(os.environ, ZENOH_CONNECT=router, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, "-c", HOOKED_NODE], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=env, cwd=ROOT)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline().strip() == "ready"
+        wait_until(lambda: "/hooked" in graph.node_names(client.session, 0.3), timeout=10, message="/hooked")
+        time.sleep(0.5)  # our subscription meets the node's publisher through the router
+        proc.send_signal(signal.SIGTERM)
+        stdout, stderr = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 0, stderr
+    assert stdout.count("hook ran") == 1 and "hook ran, closed=False" in stdout, stdout
+    wait_until(lambda: said == ["bye"], timeout=5, message="the hook's message")
+
+
+def test_deprecated_shutdown_destroys_and_a_subscription_needs_a_callback(router, client) -> None:
+    JointState = msgs.get_type("sensor_msgs/msg/JointState")
+    with pytest.raises(TypeError, match="needs a callback"):
+        client.create_subscription(JointState, "/no/callback", None)
+    node = Node("old_spelling", connect=[router])
+    with pytest.warns(DeprecationWarning, match=r"Node.shutdown\(\) is deprecated: use Node.destroy\(\)"):
+        node.shutdown()
+    assert node.closed and not node.ok
+
+
 def test_publisher_knows_whether_anyone_listens(router, client) -> None:
     JointState = msgs.get_type("sensor_msgs/msg/JointState")
     pub = client.create_publisher(JointState, "/lonely/joint_states")

@@ -226,7 +226,7 @@ launch:
       name: controller_manager
       module: nodes.control
       namespace: humanoid
-      param_file: CONTROLLERS
+      params_file: CONTROLLERS
       respawn: true
       respawn_delay: 0.3
   - node:

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from launch.description import LaunchDeprecationWarning
 from launch.resolve import find_launch_file, resolve
 from launch.substitutions import SubstitutionContext, substitute
 from launch.yaml_source import LaunchError, Source
@@ -89,8 +90,10 @@ def test_good_file_resolves_with_typed_params_namespaces_and_conditions(tmp_path
         ("launch:\n  - node: {name: a, module: tests.support.dummy_node, args: [\"$(env ZENROID_SURELY_UNSET_VAR)\"]}\n",
          2, "is not set"),
         ("launch:\n  - include: {file: missing.yaml}\n", 2, "included launch file not found: missing.yaml"),
-        ("launch:\n  - node:\n      name: a\n      module: tests.support.dummy_node\n      param_file: nope.yaml\n", 5,
+        ("launch:\n  - node:\n      name: a\n      module: tests.support.dummy_node\n      params_file: nope.yaml\n", 5,
          "parameter file not found: nope.yaml"),
+        ("launch:\n  - node:\n      name: a\n      module: tests.support.dummy_node\n      params_file: a.yaml\n"
+         "      param_file: b.yaml\n", 6, "both 'params_file' and its old spelling 'param_file'"),
         ("launch:\n  - node: {name: a, module: nodes.no_such_module_here}\n", 2, "module 'nodes.no_such_module_here'"),
         ("launch:\n  - node: {name: a, exec: zenroid-no-such-program}\n", 2, "program 'zenroid-no-such-program'"),
         ("launch:\n  - node: {name: a, module: tests.support.dummy_node, exec: ls}\n", 2, "exactly one of 'module'"),
@@ -228,6 +231,33 @@ def test_cli_show_args_and_print(tmp_path: Path) -> None:
     assert "[launch]" not in printed.stdout  # nothing was started
     bad = run_cli(str(path), "x")
     assert bad.returncode == 2 and "name:=value" in bad.stderr
+
+
+OLD_SPELLING = """
+launch:
+  - node:
+      name: a
+      module: tests.support.dummy_node
+      param_file: [params.yaml]
+"""
+
+
+def test_param_file_still_works_with_a_warning_naming_params_file(tmp_path: Path) -> None:
+    """``param_file`` (the old key) reads as ``params_file``; the launcher warns once, with file:line."""
+    (tmp_path / "params.yaml").write_text("a:\n  ros__parameters: {rate: 5}\n")
+    path = write(tmp_path, OLD_SPELLING)
+    with pytest.warns(LaunchDeprecationWarning, match=rf"{path}:5: node key 'param_file' is deprecated: use "
+                                                       r"'params_file'"):
+        plan = resolve(path, {})
+    assert plan.nodes[0].param_files == [str(tmp_path / "params.yaml")]
+    assert "--params-file" in plan.nodes[0].command("python", None)
+    printed = run_cli(str(path), "--print")
+    assert printed.returncode == 0, printed.stderr
+    assert printed.stderr.count(f"[launch] [WARN] {path}:5: node key 'param_file' is deprecated: use "
+                                "'params_file'") == 1, printed.stderr
+    current = write(tmp_path, OLD_SPELLING.replace("param_file", "params_file"), "current.yaml")
+    printed = run_cli(str(current), "--print")
+    assert printed.returncode == 0 and "WARN" not in printed.stderr, printed.stderr
 
 
 SHIPPED = {
