@@ -34,6 +34,14 @@ INCLUDE_KEYS = ("file", "args", *CONDITION_KEYS)
 GROUP_KEYS = ("namespace", "actions", *CONDITION_KEYS)
 ON_EXIT_KEYS = ("node", "log", "shutdown", *CONDITION_KEYS)
 ON_SHUTDOWN_KEYS = ("log", *CONDITION_KEYS)
+# action -> (allowed keys, the key it cannot do without, how the error says so)
+_ACTION_KEYS = {
+    "arg": (ARG_KEYS, "name", "a 'name'"),
+    "include": (INCLUDE_KEYS, "file", "a 'file'"),
+    "group": (GROUP_KEYS, "", ""),
+    "on_exit": (ON_EXIT_KEYS, "node", "the 'node' it watches"),
+    "on_shutdown": (ON_SHUTDOWN_KEYS, "", ""),
+}
 
 
 class LaunchDeprecationWarning(UserWarning):
@@ -193,10 +201,11 @@ def _parse_action(item: Any, file: Path, line: int) -> Action:
     at = lambda key: Source(file, body.line_of(key))  # noqa: E731 - tiny local helper
     if kind == "node":
         return _parse_node(body, file, source)
+    allowed, required, needs = _ACTION_KEYS[kind]
+    _check_keys(body, allowed, kind, file)
+    if required and required not in body:
+        raise LaunchError(f"{kind} needs {needs}", source)
     if kind == "arg":
-        _check_keys(body, ARG_KEYS, "arg", file)
-        if "name" not in body:
-            raise LaunchError("arg needs a 'name'", source)
         choices = body.get("choices")
         if choices is not None:
             if not isinstance(choices, list) or not choices:
@@ -210,16 +219,12 @@ def _parse_action(item: Any, file: Path, line: int) -> Action:
             choices=choices,
         )
     if kind == "include":
-        _check_keys(body, INCLUDE_KEYS, "include", file)
-        if "file" not in body:
-            raise LaunchError("include needs a 'file'", source)
         args = body.get("args")
         if args is not None:
             _require_mapping(args, "include 'args'", at("args"))
         return IncludeDecl(source=source, file=_scalar_text(body["file"], "include 'file'", at("file")),
                            args=args, **_conditions(body, file))
     if kind == "group":
-        _check_keys(body, GROUP_KEYS, "group", file)
         actions = body.get("actions")
         if not isinstance(actions, LocatedList):
             raise LaunchError("group needs 'actions': a list of actions", source)
@@ -227,14 +232,10 @@ def _parse_action(item: Any, file: Path, line: int) -> Action:
         return GroupDecl(source=source, namespace=namespace, actions=parse_actions(actions, file),
                          **_conditions(body, file))
     if kind == "on_exit":
-        _check_keys(body, ON_EXIT_KEYS, "on_exit", file)
-        if "node" not in body:
-            raise LaunchError("on_exit needs the 'node' it watches", source)
         return OnExitDecl(source=source, node=_scalar_text(body["node"], "on_exit 'node'", at("node")),
                           log=_scalar_text(body.get("log"), "'log'", at("log"), allow_none=True),
                           shutdown=_scalar_text(body.get("shutdown", False), "'shutdown'", at("shutdown")),
                           **_conditions(body, file))
-    _check_keys(body, ON_SHUTDOWN_KEYS, "on_shutdown", file)
     return OnShutdownDecl(source=source, log=_scalar_text(body.get("log"), "'log'", at("log"), allow_none=True),
                           **_conditions(body, file))
 

@@ -26,6 +26,8 @@ from nodes.core.cpu import EXCLUSIVE_CPU_ENV
 
 SIGTERM_AFTER_S = 4.0
 SIGKILL_AFTER_S = 7.0
+# The shutdown's stages after the first SIGINT: (seconds after it, signal sent, the one sent before, log level)
+_ESCALATION = ((SIGTERM_AFTER_S, signal.SIGTERM, "SIGINT", "WARN"), (SIGKILL_AFTER_S, signal.SIGKILL, "SIGTERM", "ERROR"))
 POLL_S = 0.02
 # A process that ran this long before it exited starts a fresh respawn count: respawn_max caps crash
 # loops, not the number of unrelated faults over a long run.
@@ -336,18 +338,13 @@ class Supervisor:
     def _step_shutdown(self, now: float) -> bool:
         """Advance the shutdown; True once every process has ended."""
         elapsed = now - self._shutdown_started
-        if self._escalation == 0 and elapsed >= SIGTERM_AFTER_S:
-            self._escalation = 1
-            for managed in self.nodes:
-                if managed.proc is not None and managed.proc.poll() is None:
-                    self.say(f"'{managed.spec.name}' still running after SIGINT: sending SIGTERM", "WARN")
-                    self._kill_group(managed, signal.SIGTERM)
-        if self._escalation == 1 and elapsed >= SIGKILL_AFTER_S:
-            self._escalation = 2
-            for managed in self.nodes:
-                if managed.proc is not None and managed.proc.poll() is None:
-                    self.say(f"'{managed.spec.name}' still running after SIGTERM: sending SIGKILL", "ERROR")
-                    self._kill_group(managed, signal.SIGKILL)
+        for stage, (after, sig, before, level) in enumerate(_ESCALATION, start=1):
+            if self._escalation == stage - 1 and elapsed >= after:
+                self._escalation = stage
+                for managed in self.nodes:
+                    if managed.proc is not None and managed.proc.poll() is None:
+                        self.say(f"'{managed.spec.name}' still running after {before}: sending {sig.name}", level)
+                        self._kill_group(managed, sig)
         done = True
         for managed in self.nodes:
             if managed.state == "running":

@@ -13,10 +13,11 @@ from __future__ import annotations
 import math
 import sys
 
+from msgs import time_to_sec
 from msgs.control_msgs import JointTrajectoryControllerState as ControllerState
 from msgs.rosgraph_msgs import Clock
 from msgs.trajectory_msgs import JointTrajectory
-from nodes.commanders.live import restart
+from nodes.commanders.live import declare_controller
 from nodes.commanders.trajectories import point, trajectory
 from nodes.core import Node, run_node
 
@@ -56,9 +57,7 @@ class JointAnimation(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__("joint_control", **kwargs)
-        controller = self.declare_parameter("controller", "joint_trajectory_controller",
-                                            description="the trajectory controller that plays the animation",
-                                            read_only=restart("controller"))
+        controller = declare_controller(self, "the trajectory controller that plays the animation")
         self.points = self.declare_parameter("points", 1500, min_value=1, description="n in the tutorial")
         self.dt = self.declare_parameter("dt", 0.01, min_value=0.0001, description="seconds between points")
         self.rps = self.declare_parameter("rps", 0.05, description="wave frequency (revolutions per second)")
@@ -82,7 +81,7 @@ class JointAnimation(Node):
         return None
 
     def on_clock(self, msg: Clock) -> None:
-        self.clock_seen = self.clock_seen or (msg.clock.sec, msg.clock.nanosec) != (0, 0)
+        self.clock_seen = self.clock_seen or time_to_sec(msg.clock) != 0.0
 
     def on_controller_state(self, _msg: object) -> None:
         self.controller_seen = True

@@ -10,7 +10,7 @@ import sys
 
 from msgs import time_from_sec
 from msgs.trajectory_msgs import JointTrajectory
-from nodes.commanders.live import restart
+from nodes.commanders.live import declare_controller
 from nodes.commanders.trajectories import single_point
 from nodes.core import Node, run_node
 
@@ -38,9 +38,7 @@ class JointCommander(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__("joint_commander", **kwargs)
-        controller = self.declare_parameter("controller", "joint_trajectory_controller",
-                                            description="joint trajectory controller to command",
-                                            read_only=restart("controller"))
+        controller = declare_controller(self, "joint trajectory controller to command")
         self.joints = self.declare_parameter("joints", list(LEG_JOINTS), description="joints to command (URDF names)",
                                              validator=lambda v: None if v else "needs at least one joint")
         period = self.declare_parameter("period", 2.0, description="seconds between commands", min_value=0.05)

@@ -30,7 +30,7 @@ from msgs.control_msgs import JointTrajectoryControllerState as ControllerState
 from msgs.std_msgs import String
 from msgs.trajectory_msgs import JointTrajectory, JointTrajectoryPoint
 from nodes.commanders.joint_commander import LEG_JOINTS
-from nodes.commanders.live import restart
+from nodes.commanders.live import declare_controller, restart
 from nodes.commanders.trajectories import trajectory
 from nodes.core import Node, run_node
 from nodes.urdf.model import RobotModel, UrdfError, parse_urdf
@@ -149,9 +149,7 @@ class Squat(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__("squat", **kwargs)
-        self.controller = self.declare_parameter("controller", "joint_trajectory_controller",
-                                                 description="joint trajectory controller to command",
-                                                 read_only=restart("controller"))
+        self.controller = declare_controller(self, "joint trajectory controller to command")
         self.declare_parameter("depth", 0.785, description="knee angle at the bottom (rad); 0.785 = 45°")
         self.declare_parameter("down_time", 2.0, description="s to go down", min_value=0.1)
         self.declare_parameter("hold_time", 1.0, description="s at the bottom", min_value=0.0)

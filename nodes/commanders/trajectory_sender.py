@@ -11,8 +11,9 @@ from __future__ import annotations
 import sys
 import threading
 
+from msgs import duration_to_sec
 from msgs.control_msgs import FollowJointTrajectory
-from nodes.commanders.live import restart
+from nodes.commanders.live import declare_controller, restart
 from nodes.commanders.trajectories import single_point, trajectory, waveform_points
 from nodes.core import Node, run_node
 
@@ -31,9 +32,7 @@ class TrajectorySender(Node):
 
     def __init__(self, **kwargs) -> None:
         super().__init__("trajectory_sender", **kwargs)
-        controller = self.declare_parameter("controller", "joint_trajectory_controller",
-                                            description="the JTC whose follow_joint_trajectory action is used",
-                                            read_only=restart("controller"))
+        controller = declare_controller(self, "the JTC whose follow_joint_trajectory action is used")
         self.joints = self.declare_parameter("joints", ["joint1"], description="joints of the goal")
         self.waveforms = self.declare_parameter("waveforms", ["sine"], description="goals to send, in order",
                                                 validator=_check_waveforms, read_only=restart("waveforms"))
@@ -88,7 +87,7 @@ class TrajectorySender(Node):
                     self.logger.error(f"{waveform} trajectory goal was rejected")
                     continue
                 length = goal.trajectory.points[-1].time_from_start
-                status, result = handle.get_result(timeout=length.sec + 60.0)
+                status, result = handle.get_result(timeout=duration_to_sec(length) + 60.0)
             except Exception as exc:  # ServiceError / timeouts: report and go on with the next goal
                 self.logger.error(f"{waveform} trajectory failed: {exc}")
                 continue

@@ -8,6 +8,7 @@ import threading
 import time
 from collections import OrderedDict
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import zenoh
@@ -26,16 +27,16 @@ STATUS_NAMES = {0: "UNKNOWN", 1: "ACCEPTED", 2: "EXECUTING", 3: "CANCELING", 4: 
 _KEEP_FINISHED = 64  # terminal goals remembered for late get_result calls
 
 
+@dataclass(eq=False)
 class ServerGoalHandle:
-    def __init__(self, server: ActionServer, goal_id: bytes, goal: Any, stamp: Any) -> None:
-        self.server = server
-        self.goal_id = goal_id
-        self.goal = goal
-        self.stamp = stamp
-        self.status = ACCEPTED
-        self.result: Any = None
-        self._waiting: list[zenoh.Query] = []
-        self._lock = threading.Lock()
+    server: ActionServer
+    goal_id: bytes
+    goal: Any
+    stamp: Any
+    status: int = ACCEPTED
+    result: Any = None
+    _waiting: list[zenoh.Query] = field(default_factory=list, init=False, repr=False)  # get_result queries
+    _lock: threading.Lock = field(default_factory=threading.Lock, init=False, repr=False)
 
     @property
     def is_active(self) -> bool:
@@ -81,6 +82,17 @@ class ServerGoalHandle:
         self.server._on_terminal(self)
 
 
+@dataclass(frozen=True)
+class _ServerCallbacks:
+    """An action server's callbacks (rclpy's names without ``_callback``); None: the default behaviour."""
+
+    goal: Callable[[Any], bool | tuple[bool, str]] | None
+    cancel: Callable[[ServerGoalHandle], bool] | None
+    accepted: Callable[[ServerGoalHandle], None] | None
+    execute: Callable[[ServerGoalHandle], Any] | None
+    preempt: Callable[[ServerGoalHandle], None] | None
+
+
 class ActionServer:
     def __init__(self, node: NodeRuntime, action_type: Any, key: str, *,
                  goal_callback: Callable[[Any], bool | tuple[bool, str]] | None = None,
@@ -90,15 +102,10 @@ class ActionServer:
                  single_goal: bool = False,
                  preempt_callback: Callable[[ServerGoalHandle], None] | None = None) -> None:
         """``single_goal``: a newly accepted goal preempts (aborts) the active one, after ``preempt_callback``."""
-        self.node = node
-        self.action_type = action_type
-        self.key = key
-        self.goal_callback = goal_callback
-        self.cancel_callback = cancel_callback
-        self.accepted_callback = accepted_callback
-        self.execute_callback = execute_callback
+        self.node, self.action_type, self.key = node, action_type, key
+        self.callbacks = _ServerCallbacks(goal_callback, cancel_callback, accepted_callback, execute_callback,
+                                          preempt_callback)
         self.single_goal = single_goal
-        self.preempt_callback = preempt_callback
         self.goals: OrderedDict[bytes, ServerGoalHandle] = OrderedDict()
         self._lock = threading.RLock()
         self._feedback = Publisher(node, action_type.FeedbackMessage, f"{key}/feedback")
@@ -152,8 +159,8 @@ class ActionServer:
         try:
             if goal_id in self.goals:
                 accepted, reason = False, "duplicate goal id"
-            elif self.goal_callback is not None:
-                verdict = self.goal_callback(request.goal)
+            elif self.callbacks.goal is not None:
+                verdict = self.callbacks.goal(request.goal)
                 accepted, reason = verdict if isinstance(verdict, tuple) else (bool(verdict), "")
         except Exception as exc:  # noqa: BLE001 - a failing goal callback rejects the goal
             accepted, reason = False, f"{type(exc).__name__}: {exc}"
@@ -166,17 +173,17 @@ class ActionServer:
         handle = ServerGoalHandle(self, goal_id, request.goal, stamp)
         if self.single_goal:
             for old in [h for h in self.goals.values() if h.is_active]:
-                if self.preempt_callback is not None:
-                    self.node.executor.run_callback(self.preempt_callback, old, where="preempt callback")
+                if self.callbacks.preempt is not None:
+                    self.node.executor.run_callback(self.callbacks.preempt, old, where="preempt callback")
                 old.abort()
         with self._lock:
             self.goals[goal_id] = handle
             self._trim()
         self._reply(query, response)
         self._publish_status()
-        if self.accepted_callback is not None:
-            self.node.executor.run_callback(self.accepted_callback, handle, where="accepted callback")
-        elif self.execute_callback is not None:
+        if self.callbacks.accepted is not None:
+            self.node.executor.run_callback(self.callbacks.accepted, handle, where="accepted callback")
+        elif self.callbacks.execute is not None:
             handle.execute()
             threading.Thread(target=self._run_execute, args=(handle,), daemon=True,
                              name=f"action:{self.key}").start()
@@ -185,7 +192,7 @@ class ActionServer:
 
     def _run_execute(self, handle: ServerGoalHandle) -> None:
         try:
-            result = self.execute_callback(handle)  # type: ignore[misc]
+            result = self.callbacks.execute(handle)  # type: ignore[misc]
         except Exception as exc:  # noqa: BLE001
             self.node.logger.error(f"action '{self.key}' execute failed: {type(exc).__name__}: {exc}")
             handle.abort()
@@ -210,9 +217,9 @@ class ActionServer:
                     code = 3  # ERROR_GOAL_TERMINATED
                 continue
             allowed = True
-            if self.cancel_callback is not None:
+            if self.callbacks.cancel is not None:
                 try:
-                    allowed = bool(self.cancel_callback(handle))
+                    allowed = bool(self.callbacks.cancel(handle))
                 except Exception as exc:  # noqa: BLE001
                     self.node.logger.error(f"cancel callback failed: {exc}")
                     allowed = False
@@ -266,13 +273,16 @@ class ActionServer:
             self._mirror.close()
 
 
+@dataclass(eq=False)
 class ClientGoalHandle:
-    def __init__(self, client: ActionClient, goal_id: bytes, accepted: bool, stamp: Any) -> None:
-        self.client = client
-        self.goal_id = goal_id
-        self.accepted = accepted
-        self.stamp = stamp
-        self.status = ACCEPTED if accepted else 0
+    client: ActionClient
+    goal_id: bytes
+    accepted: bool
+    stamp: Any
+    status: int = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.status = ACCEPTED if self.accepted else 0
 
     def get_result(self, timeout: float = 30.0) -> tuple[int, Any]:
         """Block until the goal ends; returns (status, result). Raises ServiceError on timeout."""

@@ -7,39 +7,29 @@ import threading
 from typing import Any
 
 import msgs
-from nodes.core import ServiceError
 from nodes.core.action import STATUS_NAMES, ActionClient
 from nodes.tools.common import (
-    add_common,
     add_list_verb,
-    call_failure,
-    cli_node,
-    interface_type,
+    add_verb,
+    calling,
+    endpoints_at,
     key_of,
-    message_from_yaml,
     print_endpoints,
-    snapshot_until,
-    suggest,
     to_yaml,
+    typed_request,
     write_line,
 )
-from nodes.tools.errors import Failed
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
     add_list_verb(sub, "action servers")
-    p = sub.add_parser("info", help="an action's servers and clients")
-    p.add_argument("key")
-    p.add_argument("-t", "--show-types", action="store_true")
-    add_common(p)
-    p = sub.add_parser("send_goal", help="send a goal given as YAML and wait for the result")
-    p.add_argument("key")
-    p.add_argument("type", help="e.g. control_msgs/action/FollowJointTrajectory")
-    p.add_argument("values", nargs="?", default="{}")
-    p.add_argument("-f", "--feedback", action="store_true", help="print feedback")
-    p.add_argument("--timeout", type=float, default=60.0, help="seconds to wait for the result")
-    add_common(p)
+    add_verb(sub, "info", "an action's servers and clients", "key", ("-t", "--show-types", {"action": "store_true"}))
+    add_verb(sub, "send_goal", "send a goal given as YAML and wait for the result", "key",
+             ("type", {"help": "e.g. control_msgs/action/FollowJointTrajectory"}),
+             ("values", {"nargs": "?", "default": "{}"}),
+             ("-f", "--feedback", {"action": "store_true", "help": "print feedback"}),
+             ("--timeout", {"type": float, "default": 60.0, "help": "seconds to wait for the result"}))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -47,9 +37,7 @@ def run(args: argparse.Namespace) -> int:
         return print_endpoints(args, "act", "action")
     if args.cmd == "info":
         return _info(args)
-    action = interface_type(args.type, msgs.Action)
-    goal = message_from_yaml(action.Goal, args.values)
-    node = cli_node(args, "action")
+    action, goal, key = typed_request(args, msgs.Action)
     finished = threading.Event()
     outcome: dict[str, Any] = {}
 
@@ -60,8 +48,8 @@ def run(args: argparse.Namespace) -> int:
             outcome.setdefault("error", exc)
             finished.set()
 
-    try:
-        client = ActionClient(node, action, key_of(args.key))
+    with calling(args, "action", "act", f"no action server for '{key}'") as node:
+        client = ActionClient(node, action, key)
         write_line("Waiting for an action server to become available...")
         handle = client.send_goal(goal, feedback_callback=on_feedback if args.feedback else None, timeout=5.0)
         if not handle.accepted:
@@ -83,11 +71,6 @@ def run(args: argparse.Namespace) -> int:
         if "result" not in outcome:
             raise outcome["error"]
         status, result = outcome["result"]
-    except ServiceError as exc:
-        key = key_of(args.key)
-        raise call_failure(node, "act", key, exc, f"no action server for '{key}'") from None
-    finally:
-        node.destroy()
     write_line("Result:\n" + to_yaml(msgs.to_dict(result)))
     write_line(f"Goal finished with status: {STATUS_NAMES.get(status, status)}")
     return 0 if status == 4 else 1
@@ -96,15 +79,7 @@ def run(args: argparse.Namespace) -> int:
 def _info(args: argparse.Namespace) -> int:
     """``ros2 action info``: who serves the action and who uses it."""
     key = key_of(args.key)
-    node = cli_node(args, "action")
-    try:
-        entries = snapshot_until(node, lambda es: any(e.kind in ("act", "actc") and e.name == key for e in es))
-    finally:
-        node.destroy()
-    mine = [e for e in entries if e.kind in ("act", "actc") and e.name == key]
-    if not mine:
-        servers = {e.name for e in entries if e.kind == "act"}
-        raise Failed(f"no action server or client for '{key}'{suggest(key, servers)}")
+    mine = endpoints_at(args, "action", key, ("act", "actc"), f"no action server or client for '{key}'")
     write_line(f"Action: /{key}")
     for kind, title in (("actc", "Action clients"), ("act", "Action servers")):
         found = sorted({(e.node, e.type_name) for e in mine if e.kind == kind})

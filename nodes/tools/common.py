@@ -4,17 +4,18 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import difflib
 import os
 import sys
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 import yaml
 
 import msgs
-from nodes.core import Node, add_connection_arguments, connect_from_args
+from nodes.core import Node, ServiceError, add_connection_arguments, connect_from_args
 from nodes.tools.errors import Failed, UsageError
 
 GRAPH_WAIT = 2.0  # s a verb re-reads the graph before concluding that a node or topic is missing
@@ -84,13 +85,18 @@ def require_nodes(entries: Iterable[Any], args: argparse.Namespace) -> None:
                      "start them with `python -m launch humanoid.yaml`)")
 
 
-def graph_entries(args: argparse.Namespace, purpose: str, *, require: bool = True) -> list[Any]:
-    """The live graph as seen by a short-lived CLI node (``require``: fail when no node runs)."""
+def graph_until(args: argparse.Namespace, purpose: str, found: Callable[[list[Any]], bool]) -> list[Any]:
+    """The live graph as seen by a short-lived CLI node, re-read until ``found(entries)`` (``snapshot_until``)."""
     node = cli_node(args, purpose)
     try:
-        entries = snapshot_until(node, lambda es: any(e.kind == "node" and not is_cli_node(e.node) for e in es))
+        return snapshot_until(node, found)
     finally:
         node.destroy()
+
+
+def graph_entries(args: argparse.Namespace, purpose: str, *, require: bool = True) -> list[Any]:
+    """The live graph as seen by a short-lived CLI node (``require``: fail when no node runs)."""
+    entries = graph_until(args, purpose, lambda es: any(e.kind == "node" and not is_cli_node(e.node) for e in es))
     if require:
         require_nodes(entries, args)
     return entries
@@ -125,12 +131,23 @@ def require_node(node: Node, name: str) -> str:
     raise Failed(f"no node '{target}' is running{hint or ' (see `zenroid node list`)'}")
 
 
-def add_list_verb(sub: Any, help_text: str) -> argparse.ArgumentParser:
-    """``list [-t]`` of ``service``/``action``/``topic``: endpoints, with their types on ``-t``."""
-    parser = sub.add_parser("list", help=help_text)
-    parser.add_argument("-t", "--show-types", action="store_true", help="also print each one's type")
+Argument = str | tuple[Any, ...]  # a positional name, or (name or flags..., add_argument keywords)
+
+
+def add_verb(sub: Any, name: str, help_text: str, *arguments: Argument) -> argparse.ArgumentParser:
+    """A sub-command with its ``arguments`` and the connection options every verb takes."""
+    parser = sub.add_parser(name, help=help_text)
+    for argument in arguments:
+        *flags, options = (argument, {}) if isinstance(argument, str) else argument
+        parser.add_argument(*flags, **options)
     add_common(parser)
     return parser
+
+
+def add_list_verb(sub: Any, help_text: str) -> argparse.ArgumentParser:
+    """``list [-t]`` of ``service``/``action``/``topic``: endpoints, with their types on ``-t``."""
+    return add_verb(sub, "list", help_text,
+                    ("-t", "--show-types", {"action": "store_true", "help": "also print each one's type"}))
 
 
 def offered(entries: Iterable[Any], kind: str) -> dict[str, str]:
@@ -145,6 +162,37 @@ def call_failure(node: Node, kind: str, key: str, exc: Exception, missing: str) 
     if key not in servers:
         return Failed(f"{missing}{suggest(key, servers)}")
     return Failed(str(exc))
+
+
+@contextlib.contextmanager
+def calling(args: argparse.Namespace, purpose: str, kind: str, missing: str) -> Iterator[Node]:
+    """A short-lived CLI node for calls to the ``kind`` endpoint (``srv``, ``act``) ``args.key``: a failed call
+    (``ServiceError``) ends as ``Failed`` with ``missing`` and a hint when nobody offers it, else its reason."""
+    node = cli_node(args, purpose)
+    try:
+        yield node
+    except ServiceError as exc:
+        raise call_failure(node, kind, key_of(args.key), exc, missing) from None
+    finally:
+        node.destroy()
+
+
+def endpoints_at(args: argparse.Namespace, purpose: str, key: str, kinds: tuple[str, ...], missing: str) -> list[Any]:
+    """The graph entries of ``kinds`` (``("srv",)``, ``("act", "actc")``) named ``key``; ``Failed`` with
+    ``missing`` and a hint among the endpoints of ``kinds[0]`` when there are none."""
+    entries = graph_until(args, purpose, lambda es: any(e.kind in kinds and e.name == key for e in es))
+    found = [e for e in entries if e.kind in kinds and e.name == key]
+    if not found:
+        raise Failed(f"{missing}{suggest(key, {e.name for e in entries if e.kind == kinds[0]})}")
+    return found
+
+
+def typed_request(args: argparse.Namespace, kind: type) -> tuple[Any, Any, str]:
+    """``KEY TYPE VALUES`` of ``service call`` / ``action send_goal``: the interface (``kind``: ``msgs.Service``
+    or ``msgs.Action``), its request or goal built from the YAML, and the key."""
+    interface = interface_type(args.type, kind)
+    request = message_from_yaml(interface.Request if kind is msgs.Service else interface.Goal, args.values)
+    return interface, request, key_of(args.key)
 
 
 def interface_type(type_name: str, kind: type) -> Any:

@@ -9,24 +9,17 @@ from msgs.lifecycle_msgs import GetState as _GetState
 from nodes.core import ServiceError
 from nodes.core.endpoints import Client
 from nodes.core.lifecycle import STATE_LABELS, TRANSITIONS
-from nodes.tools.common import add_common, cli_node, require_node, snapshot, write_line
+from nodes.tools.common import add_verb, cli_node, require_node, snapshot, write_line
 from nodes.tools.errors import Failed, UsageError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("nodes", help="the lifecycle (managed) nodes that are running")
-    add_common(p)
-    p = sub.add_parser("get", help="a node's current state")
-    p.add_argument("node")
-    add_common(p)
-    p = sub.add_parser("list", help="the transitions available from the node's current state")
-    p.add_argument("node")
-    add_common(p)
-    p = sub.add_parser("set", help="trigger a transition")
-    p.add_argument("node")
-    p.add_argument("transition", help="configure, activate, deactivate, cleanup, shutdown")
-    add_common(p)
+    add_verb(sub, "nodes", "the lifecycle (managed) nodes that are running")
+    add_verb(sub, "get", "a node's current state", "node")
+    add_verb(sub, "list", "the transitions available from the node's current state", "node")
+    add_verb(sub, "set", "trigger a transition", "node",
+             ("transition", {"help": "configure, activate, deactivate, cleanup, shutdown"}))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -13,16 +13,14 @@ from msgs.rcl_interfaces import LoggerLevel as _Level
 from msgs.rcl_interfaces import SetLoggerLevels as _Set
 from nodes.core import ServiceError
 from nodes.core.log import NAMES, parse_level
-from nodes.tools.common import Failed, add_common, cli_node, require_node
+from nodes.tools.common import Failed, add_verb, cli_node, require_node
 from nodes.tools.errors import UsageError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("level", help="print or set a node's log level")
-    p.add_argument("node", help="e.g. /humanoid/joint_commander")
-    p.add_argument("level", nargs="?", help="debug, info, warn, error or fatal (omit to print the current one)")
-    add_common(p)
+    add_verb(sub, "level", "print or set a node's log level", ("node", {"help": "e.g. /humanoid/joint_commander"}),
+             ("level", {"nargs": "?", "help": "debug, info, warn, error or fatal (omit to print the current one)"}))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from nodes.tools.common import add_common, graph_entries, is_cli_node, suggest, write_line
+from nodes.tools.common import add_verb, graph_entries, is_cli_node, suggest, write_line
 from nodes.tools.errors import Failed
 
 _SECTIONS = (("pub", "Publishers"), ("sub", "Subscribers"), ("srv", "Service Servers"), ("cli", "Service Clients"),
@@ -13,12 +13,10 @@ _SECTIONS = (("pub", "Publishers"), ("sub", "Subscribers"), ("srv", "Service Ser
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
-    p = sub.add_parser("list", help="running nodes")
-    p.add_argument("-a", "--all", action="store_true", help="include zenroid CLI helper nodes")
-    add_common(p)
-    p = sub.add_parser("info", help="a node's endpoints")
-    p.add_argument("node", help="fully qualified node name, e.g. /humanoid/controller_manager")
-    add_common(p)
+    add_verb(sub, "list", "running nodes",
+             ("-a", "--all", {"action": "store_true", "help": "include zenroid CLI helper nodes"}))
+    add_verb(sub, "info", "a node's endpoints",
+             ("node", {"help": "fully qualified node name, e.g. /humanoid/controller_manager"}))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -9,11 +9,13 @@ pipe (``| head``) ends every streaming verb quietly.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 import threading
 import time
 from collections import defaultdict
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import msgpack
@@ -24,13 +26,14 @@ from nodes.core.endpoints import parse_attachment
 from nodes.core.latched import latest_sample
 from nodes.core.names import check_key, keys_intersect
 from nodes.tools.common import (
-    add_common,
     add_list_verb,
+    add_verb,
     cli_node,
+    graph_entries,
+    graph_until,
     is_cli_node,
     key_of,
     message_from_yaml,
-    require_nodes,
     resolve_type,
     snapshot,
     snapshot_until,
@@ -41,49 +44,37 @@ from nodes.tools.common import (
 from nodes.tools.errors import Failed, UsageError
 
 PUBLISHER_WAIT = 5.0  # s echo/hz/bw wait for a publisher to exist before giving up (--wait)
+_WAIT_FOR_PUBLISHER = ("--wait", {"type": float, "default": PUBLISHER_WAIT,
+                                  "help": f"seconds to wait for a publisher to appear (default {PUBLISHER_WAIT:g}; "
+                                          "0: forever)"})
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     sub = parser.add_subparsers(dest="cmd", required=True)
     add_list_verb(sub, "topics with publishers or subscribers")
-    p = sub.add_parser("echo", help="print messages on a key (decoded by their schema)")
-    p.add_argument("key")
-    p.add_argument("--once", action="store_true", help="print one message and exit")
-    p.add_argument("-n", "--count", type=int, default=0, help="exit after N messages")
-    p.add_argument("--timeout", type=float, default=0.0,
-                   help="give up after S seconds without a message (default: wait while a publisher exists)")
-    _wait_argument(p)
-    p.add_argument("--field", default="", help="print only this field (dotted path, e.g. position or position.0)")
-    p.add_argument("--json", action="store_true", help="one JSON object per line instead of YAML")
-    add_common(p)
-    p = sub.add_parser("pub", help="publish a message given as YAML")
-    p.add_argument("key")
-    p.add_argument("type")
-    p.add_argument("values", nargs="?", default="{}")
-    p.add_argument("--once", "-1", action="store_true", help="publish once and exit")
-    p.add_argument("-r", "--rate", type=float, default=1.0, help="Hz (default 1)")
-    p.add_argument("-t", "--times", type=int, default=0, help="publish N times and exit")
-    p.add_argument("--wait", type=float, default=2.0,
-                   help="seconds to wait for a subscriber before sending (default 2; sends as soon as one matches)")
-    add_common(p)
+    add_verb(sub, "echo", "print messages on a key (decoded by their schema)", "key",
+             ("--once", {"action": "store_true", "help": "print one message and exit"}),
+             ("-n", "--count", {"type": int, "default": 0, "help": "exit after N messages"}),
+             ("--timeout", {"type": float, "default": 0.0,
+                            "help": "give up after S seconds without a message (default: wait while a publisher "
+                                    "exists)"}),
+             _WAIT_FOR_PUBLISHER,
+             ("--field", {"default": "", "help": "print only this field (dotted path, e.g. position or position.0)"}),
+             ("--json", {"action": "store_true", "help": "one JSON object per line instead of YAML"}))
+    add_verb(sub, "pub", "publish a message given as YAML", "key", "type", ("values", {"nargs": "?", "default": "{}"}),
+             ("--once", "-1", {"action": "store_true", "help": "publish once and exit"}),
+             ("-r", "--rate", {"type": float, "default": 1.0, "help": "Hz (default 1)"}),
+             ("-t", "--times", {"type": int, "default": 0, "help": "publish N times and exit"}),
+             ("--wait", {"type": float, "default": 2.0,
+                         "help": "seconds to wait for a subscriber before sending (default 2; sends as soon as one "
+                                 "matches)"}))
     for name, help_text in (("hz", "publishing rate"), ("bw", "bandwidth")):
-        p = sub.add_parser(name, help=help_text)
-        p.add_argument("key")
-        p.add_argument("--window", type=float, default=2.0, help="report every S seconds")
-        p.add_argument("--duration", type=float, default=0.0, help="stop after S seconds (0: until Ctrl-C)")
-        _wait_argument(p)
-        add_common(p)
-    p = sub.add_parser("info", help="type, publishers and subscribers of a topic")
-    p.add_argument("key")
-    add_common(p)
-    p = sub.add_parser("type", help="the message type of a topic")
-    p.add_argument("key")
-    add_common(p)
-
-
-def _wait_argument(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--wait", type=float, default=PUBLISHER_WAIT,
-                   help=f"seconds to wait for a publisher to appear (default {PUBLISHER_WAIT:g}; 0: forever)")
+        add_verb(sub, name, help_text, "key",
+                 ("--window", {"type": float, "default": 2.0, "help": "report every S seconds"}),
+                 ("--duration", {"type": float, "default": 0.0, "help": "stop after S seconds (0: until Ctrl-C)"}),
+                 _WAIT_FOR_PUBLISHER)
+    add_verb(sub, "info", "type, publishers and subscribers of a topic", "key")
+    add_verb(sub, "type", "the message type of a topic", "key")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -115,12 +106,7 @@ def _hint(key: str, entries: list[graph.GraphEntry], kinds: tuple[str, ...] = ("
 
 
 def _list(args: argparse.Namespace) -> int:
-    node = cli_node(args, "topic")
-    try:
-        entries = snapshot_until(node, lambda es: any(e.kind == "node" and not is_cli_node(e.node) for e in es))
-    finally:
-        node.destroy()
-    require_nodes(entries, args)
+    entries = graph_entries(args, "topic")
     topics: dict[str, str] = {}
     for e in _topics(entries):
         if e.name not in topics or topics[e.name] == "*":
@@ -213,11 +199,29 @@ class _Waiter:
         return not any(e.kind == "srv" and e.name == self.key for e in self.entries)
 
 
+@contextlib.contextmanager
+def _listening(args: argparse.Namespace, verb: str, on_sample: Callable[[Any], None]) -> Iterator[_Waiter]:
+    """A CLI node subscribed to ``args.key`` for the block (Ctrl-C ends the block quietly); the waiter says
+    what it waits for and gives up on a key nobody publishes."""
+    node = cli_node(args, verb)
+    try:
+        waiter = _Waiter(node, key_of(args.key), verb, args.wait)
+        sub = node.session.declare_subscriber(waiter.key, on_sample)
+        try:
+            waiter.announce()
+            yield waiter
+        except KeyboardInterrupt:
+            pass
+        finally:
+            sub.undeclare()
+    finally:
+        node.destroy()
+
+
 def _echo(args: argparse.Namespace) -> int:
     import json
 
     key = key_of(args.key)
-    node = cli_node(args, "echo")
     limit = 1 if args.once else args.count
     done = threading.Event()
     count = 0
@@ -247,40 +251,30 @@ def _echo(args: argparse.Namespace) -> int:
             if limit and count >= limit:
                 done.set()
 
-    try:
-        waiter = _Waiter(node, key, "echo", args.wait)
-        sub = node.session.declare_subscriber(key, show)
-        try:
-            # A latched topic is asked for its last message for a few seconds (a fresh session may not
-            # know the queryable's route yet: an unanswered get is repeated, as fetch_latched does).
-            latched_until: float | None = None
-            waiter.announce()
-            last_count, last_change, quiet_noted = 0, time.monotonic(), False
-            while not done.is_set():
-                if not count and waiter.latched_source():
-                    latched_until = latched_until or time.monotonic() + 3.0
-                    if time.monotonic() < latched_until:
-                        sample = latest_sample(node.session, key, timeout=1.0)
-                        if sample is not None:
-                            show(sample)
-                if done.wait(0.1):
-                    break
-                waiter.give_up(count)
-                now = time.monotonic()
-                if count != last_count:
-                    last_count, last_change = count, now
-                elif args.timeout and now - last_change > args.timeout:
-                    raise Failed(f"no message on '{key}' within {args.timeout:g} s")
-                elif waiter.publishers and not count and not quiet_noted and now - last_change > 3.0:
-                    quiet_noted = True
-                    print(f"zenroid topic echo: no message on '{key}' yet from {', '.join(waiter.publishers)}; "
-                          "waiting (Ctrl-C to stop, --timeout S to give up)", file=sys.stderr, flush=True)
-        except KeyboardInterrupt:
-            pass
-        finally:
-            sub.undeclare()
-    finally:
-        node.destroy()
+    with _listening(args, "echo", show) as waiter:
+        # A latched topic is asked for its last message for a few seconds (a fresh session may not
+        # know the queryable's route yet: an unanswered get is repeated, as fetch_latched does).
+        latched_until: float | None = None
+        last_count, last_change, quiet_noted = 0, time.monotonic(), False
+        while not done.is_set():
+            if not count and waiter.latched_source():
+                latched_until = latched_until or time.monotonic() + 3.0
+                if time.monotonic() < latched_until:
+                    sample = latest_sample(waiter.node.session, key, timeout=1.0)
+                    if sample is not None:
+                        show(sample)
+            if done.wait(0.1):
+                break
+            waiter.give_up(count)
+            now = time.monotonic()
+            if count != last_count:
+                last_count, last_change = count, now
+            elif args.timeout and now - last_change > args.timeout:
+                raise Failed(f"no message on '{key}' within {args.timeout:g} s")
+            elif waiter.publishers and not count and not quiet_noted and now - last_change > 3.0:
+                quiet_noted = True
+                print(f"zenroid topic echo: no message on '{key}' yet from {', '.join(waiter.publishers)}; "
+                      "waiting (Ctrl-C to stop, --timeout S to give up)", file=sys.stderr, flush=True)
     if problems:
         raise problems[0]
     return 0
@@ -336,8 +330,6 @@ def _pub(args: argparse.Namespace) -> int:
 def _hz(args: argparse.Namespace) -> int:
     if not args.window > 0:
         raise UsageError(f"--window must be positive, got {args.window}")
-    key = key_of(args.key)
-    node = cli_node(args, args.cmd)
     stamps: list[float] = []
     sizes: list[int] = []
     last_seq: dict[bytes, int] = {}
@@ -359,54 +351,40 @@ def _hz(args: argparse.Namespace) -> int:
                     lost[src] += seq - prev - 1
                 last_seq[src] = seq
 
-    try:
-        waiter = _Waiter(node, key, args.cmd, args.wait)
-        sub = node.session.declare_subscriber(key, on_sample)
-        try:
-            waiter.announce()
-            start = time.monotonic()
-            next_report = start + min(args.window, args.duration or args.window)
-            while not args.duration or time.monotonic() - start < args.duration:
-                time.sleep(0.1)
-                with lock:
-                    received = len(stamps)
-                waiter.give_up(received)
-                if time.monotonic() < next_report:
-                    continue
-                next_report += args.window
-                with lock:
-                    window = [t for t in stamps if t >= time.monotonic() - args.window]
-                    nbytes = sum(sizes[-len(window):]) if window else 0
-                    total_lost = sum(lost.values())
-                if len(window) < 2:
-                    write_line("no new messages")
-                    continue
-                span = window[-1] - window[0]
-                rate = (len(window) - 1) / span if span > 0 else float("inf")
-                if args.cmd == "hz":
-                    gaps = [b - a for a, b in zip(window, window[1:])]
-                    write_line(f"average rate: {rate:.3f}\n\tmin: {min(gaps):.4f}s max: {max(gaps):.4f}s "
-                               f"window: {len(window)} lost: {total_lost}")
-                else:
-                    write_line(f"{nbytes / args.window / 1024:.2f} KB/s from {len(window)} messages "
-                               f"(mean {nbytes / len(window):.0f} B)")
-        except KeyboardInterrupt:
-            pass
-        finally:
-            sub.undeclare()
-    finally:
-        node.destroy()
+    with _listening(args, args.cmd, on_sample) as waiter:
+        start = time.monotonic()
+        next_report = start + min(args.window, args.duration or args.window)
+        while not args.duration or time.monotonic() - start < args.duration:
+            time.sleep(0.1)
+            with lock:
+                received = len(stamps)
+            waiter.give_up(received)
+            if time.monotonic() < next_report:
+                continue
+            next_report += args.window
+            with lock:
+                window = [t for t in stamps if t >= time.monotonic() - args.window]
+                nbytes = sum(sizes[-len(window):]) if window else 0
+                total_lost = sum(lost.values())
+            if len(window) < 2:
+                write_line("no new messages")
+                continue
+            span = window[-1] - window[0]
+            rate = (len(window) - 1) / span if span > 0 else float("inf")
+            if args.cmd == "hz":
+                gaps = [b - a for a, b in zip(window, window[1:])]
+                write_line(f"average rate: {rate:.3f}\n\tmin: {min(gaps):.4f}s max: {max(gaps):.4f}s "
+                           f"window: {len(window)} lost: {total_lost}")
+            else:
+                write_line(f"{nbytes / args.window / 1024:.2f} KB/s from {len(window)} messages "
+                           f"(mean {nbytes / len(window):.0f} B)")
     return 0
 
 
 def _graph_with_topic(args: argparse.Namespace) -> tuple[str, list[graph.GraphEntry]]:
     """The topic's key and the graph, waited for until some publisher or subscriber of it shows."""
-    node = cli_node(args, "topic")
     key = key_of(args.key)
-    try:
-        return key, snapshot_until(node, lambda es: any(e.name == key for e in _topics(es)))
-    finally:
-        node.destroy()
+    return key, graph_until(args, "topic", lambda es: any(e.name == key for e in _topics(es)))
 
 
 def _info(args: argparse.Namespace) -> int:

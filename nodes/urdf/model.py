@@ -1,6 +1,6 @@
 """A small, strict URDF model: links (inertial, visual and collision geometry, material colours), joints,
 mimic and the ``<ros2_control>`` block. The one URDF parser of the project: the state publisher, the URDF tools,
-the visualiser and the simulator all build on it, so every description goes through the XML safety check.
+the viewer and the simulator all build on it, so every description goes through the XML safety check.
 
 Why our own parser (and not only yourdfpy): the CLI must report *why* a broken file is broken (missing links,
 bad numbers, limits), the input may be untrusted (entity attacks), and the kinematics code needs exactly the

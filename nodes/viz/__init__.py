@@ -1,1 +1,1 @@
-"""The visualiser: RViz and rqt_plot for the stack, on Rerun (``python -m nodes.viz``)."""
+"""The viewer: RViz and rqt_plot for the stack, on Rerun (``python -m nodes.viz``)."""

@@ -1,4 +1,4 @@
-"""``python -m nodes.viz``: the visualiser (shared node options plus --save / --serve / --spawn)."""
+"""``python -m nodes.viz``: the viewer (shared node options plus --save / --serve / --spawn)."""
 
 from __future__ import annotations
 
@@ -7,13 +7,13 @@ import sys
 
 from nodes.core import run_node
 
-from .node import Visualiser, add_arguments
+from .node import Viewer, add_arguments
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m nodes.viz", description=Visualiser.__doc__)
+    parser = argparse.ArgumentParser(prog="python -m nodes.viz", description=Viewer.__doc__)
     add_arguments(parser)
-    return run_node(Visualiser, argv, parser=parser)
+    return run_node(Viewer, argv, parser=parser)
 
 
 if __name__ == "__main__":

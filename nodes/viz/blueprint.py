@@ -22,7 +22,7 @@ from rerun.blueprint.encodings import ComponentSourceKind, VisualizerComponentMa
 
 from .scene import BALANCE_SERIES, PALETTE, SIM_TIMELINE, PlotGroup, lighter, robot_entity, series_component
 
-# The side panel's tabs, in this order (the visualiser's ``plots`` parameter picks some).
+# The side panel's tabs, in this order (the viewer's ``plots`` parameter picks some).
 PLOT_TABS = ("positions", "velocities", "efforts", "commanded", "balance")
 QUANTITY_TABS = {"positions": "position", "velocities": "velocity", "efforts": "effort"}
 PLOT_SECONDS = 8.0  # history shown in a plot, up to the time cursor

@@ -1,7 +1,7 @@
 """visualization_msgs/Marker and MarkerArray drawn in Rerun, as RViz's Marker display draws them.
 
 Each marker (topic, ``ns``, ``id``) is one entity, ``world/markers/<topic>/<ns>/<id>``, placed in the world
-through the visualiser's tf tree (``header.frame_id``). Types: ARROW, CUBE, SPHERE, CYLINDER, LINE_STRIP,
+through the viewer's tf tree (``header.frame_id``). Types: ARROW, CUBE, SPHERE, CYLINDER, LINE_STRIP,
 LINE_LIST, CUBE_LIST, SPHERE_LIST, POINTS, TEXT_VIEW_FACING, TRIANGLE_LIST and MESH_RESOURCE (a local mesh
 file); actions ADD/MODIFY, DELETE, DELETEALL (all of the topic, or of ``ns`` when set); ``lifetime``;
 ``frame_locked`` markers follow their frame, others stay where their frame was when they came.

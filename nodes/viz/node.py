@@ -1,4 +1,4 @@
-"""The visualiser node: subscribes to the robots' Zenoh keys and writes them to Rerun.
+"""The viewer node: subscribes to the robots' Zenoh keys and writes them to Rerun.
 
 It needs nothing but the keys (DESIGN §4): ``<ns>/robot_description`` (topic + latched queryable),
 ``<ns>/tf``, ``<ns>/tf_static``, ``<ns>/joint_states``, ``<ns>/<jtc>/controller_state``,
@@ -64,7 +64,7 @@ class Latest:
 
 @dataclass
 class LatchedStream:
-    """A stream of which only the newest message is kept (``Visualiser.latch``)."""
+    """A stream of which only the newest message is kept (``Viewer.latch``)."""
 
     msg_type: Any
     key: str  # for log lines, without the leading slash
@@ -91,13 +91,13 @@ class RobotView:
     first_state: float = 0.0  # monotonic time of the first joint_states with a model
 
 
-class Visualiser(Node):
+class Viewer(Node):
     """RViz and rqt_plot on Rerun: robot model, link frames, joint plots and markers."""
 
-    default_name = "visualiser"
+    default_name = "viewer"
 
     def __init__(self, cli_args: argparse.Namespace | None = None, **kwargs: Any) -> None:
-        super().__init__("visualiser", **kwargs)
+        super().__init__("viewer", **kwargs)
         p = self.declare_parameter
         self.robot_list = [r.strip("/") for r in p("robots", [""], description="robot namespaces to show") if r]
         if cli_args is not None and getattr(cli_args, "robots", ""):
@@ -111,7 +111,7 @@ class Visualiser(Node):
         self.world_frames = [w for w in p("world_frames", ["world", "map", "odom"],
                                           description="tf frames drawn as the scene root") if w]
         # Rates and batching come from measuring a software-rendered browser on a 2-core machine
-        # (bench/viz.py; README "Visualiser"): what it can take in while staying within 1 s of the simulation.
+        # (bench/viz.py; docs/viewer.md): what it can take in while staying within 1 s of the simulation.
         self.rates = {
             "joint_states": p("joint_states_rate", 10.0, min_value=0.0, description=(
                 "Hz of the plot rows: positions, velocities, efforts, the latest commanded vs actual and balance")),
@@ -594,7 +594,7 @@ class Visualiser(Node):
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    out = parser.add_argument_group("visualiser output")
+    out = parser.add_argument_group("viewer output")
     out.add_argument("--save", metavar="FILE.rrd", help="also write the recording to this file")
     out.add_argument("--serve", action="store_true", help="serve the web viewer (default without a display)")
     out.add_argument("--spawn", action="store_true", help="open the native viewer (default with a display)")
@@ -610,3 +610,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                           "1KiB: the layout and the newest message; a late viewer starts at the present)")
     out.add_argument("--robots", default="", help="comma-separated robot namespaces (same as robots:=[...])")
 
+
+
+def __getattr__(name: str) -> Any:
+    """``Visualiser``: the class's old name, kept with a warning (the process is the viewer everywhere)."""
+    if name == "Visualiser":
+        import warnings
+
+        warnings.warn("nodes.viz.node.Visualiser is deprecated: use nodes.viz.node.Viewer", DeprecationWarning,
+                      stacklevel=2)
+        return Viewer
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,8 +1,8 @@
-"""Everything the visualiser writes to Rerun, with plain numbers in (no Zenoh, no messages).
+"""Everything the viewer writes to Rerun, with plain numbers in (no Zenoh, no messages).
 
 Entity layout (one subtree per robot namespace, so a deleted robot is one recursive Clear). A browser viewer
 takes in a bounded number of *chunks* per second, whatever their size, and the SDK batches one chunk per
-entity and flush for rows with the same components (README "Visualiser"). So everything of a robot that
+entity and flush for rows with the same components (docs/viewer.md). So everything of a robot that
 changes is one row of one entity, logged with each joint_states sample:
 
 - ``world/<ns>/robot``                               the robot: its URDF primitive visuals (Boxes3D,
@@ -412,7 +412,7 @@ class RobotScene:
 
         # Every kind on every row, empty when nothing of it is placed: rows with the same components are
         # batched into one chunk per flush. Sizes and colours come from ``shape_fields`` (fixed per model) and
-        # the poses are converted in one vectorised call: this is the visualiser's per-row cost.
+        # the poses are converted in one vectorised call: this is the viewer's per-row cost.
         archetypes = []
         for kind, visuals in self.shapes.items():
             link_poses = [link_pose(link) for link, _ in visuals]

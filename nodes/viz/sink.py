@@ -79,10 +79,10 @@ def wait_for_port(port: int, timeout: float) -> bool:
 # What the web viewer server keeps for viewers that connect later. A viewer takes in everything the server
 # sends it, in order, before it shows the present: the layouts (the server always keeps every blueprint, and
 # counts them toward this limit), then the kept rows, then whatever arrived meanwhile; a software-rendered page
-# takes in only a few chunks per frame at 1-3 frames per second (bench/viz.py, README "Visualiser"), so every
+# takes in only a few chunks per frame at 1-3 frames per second (bench/viz.py, docs/viewer.md), so every
 # kept row delays the present. The server drops the oldest data beyond the limit before it stores a new
 # message, and the layouts alone are larger than this, so it keeps just the newest message: nothing the
-# visualiser logs is static, every robot row holds the whole robot, its markers and its plotted values, and
+# viewer logs is static, every robot row holds the whole robot, its markers and its plotted values, and
 # the ground is the layout's grid, so that one row draws a complete scene (the plots fill from there).
 SERVER_HISTORY = "1KiB"
 
@@ -138,7 +138,7 @@ class Output:
         if plan.spawn:
             sinks.append(rr.GrpcSink(self._spawn_viewer()))
         if sinks:
-            recording.set_sinks(*sinks)   # no start-up layout: the visualiser sends one once joints are known
+            recording.set_sinks(*sinks)   # no start-up layout: the viewer sends one once joints are known
 
     def _spawn_viewer(self) -> str:
         """The native viewer, started like ``rr.spawn`` (detached: the window outlives the node) but with
@@ -158,9 +158,9 @@ class Output:
             [*rerun_cli(), "--serve-web", "--bind", self.plan.bind, "--port", str(grpc_port),
              "--web-viewer-port", str(web_port), "--server-memory-limit", self.plan.server_history],
             # Its own session: a Ctrl-C (SIGINT to the terminal's process group) or a launcher stopping the
-            # group reaches the visualiser only, which sends what it still holds and then stops the server
+            # group reaches the viewer only, which sends what it still holds and then stops the server
             # (``close``); were the server stopped first, the SDK would log "gRPC connection severed" errors.
-            # On Linux the server also gets SIGTERM if the visualiser dies without cleaning up (kill -9).
+            # On Linux the server also gets SIGTERM if the viewer dies without cleaning up (kill -9).
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, preexec_fn=_die_with_parent,
             start_new_session=True,
         )

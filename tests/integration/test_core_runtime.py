@@ -276,22 +276,30 @@ raise SystemExit(run_node(SlowStart))
 """
 
 
-def test_ctrl_c_while_a_node_starts_ends_it_quietly(router, client) -> None:
-    """Ctrl-C during a slow start (the README test's streaming examples on a loaded machine) ends the process
-    with a short line and status 130, no traceback, and the half-built node leaves the graph."""
+def signal_node_script(router: str, client: Node, script: str, first_line: str, node: str, signum: int,
+                       settle: float = 0.0) -> tuple[int, str, str]:
+    """Run a node program given as Python source; once it printed ``first_line`` and ``node`` is in the graph
+    (and ``settle`` s more), send it ``signum``: (exit status, the rest of its stdout, its stderr)."""
     env = dict(os.environ, ZENOH_CONNECT=router, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen([sys.executable, "-c", SLOW_START_NODE], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, env=env, cwd=ROOT)
     try:
-        assert proc.stdout is not None and proc.stdout.readline().strip() == "starting"
-        wait_until(lambda: "/slow_start" in graph.node_names(client.session, 0.3), timeout=10,
-                   message="slow_start in the graph")
-        proc.send_signal(signal.SIGINT)
-        _, stderr = proc.communicate(timeout=30)
+        assert proc.stdout is not None and proc.stdout.readline().strip() == first_line
+        wait_until(lambda: node in graph.node_names(client.session, 0.3), timeout=10, message=f"{node} in the graph")
+        time.sleep(settle)
+        proc.send_signal(signum)
+        stdout, stderr = proc.communicate(timeout=30)
     finally:
         if proc.poll() is None:
             proc.kill()
-    assert proc.returncode == 130, stderr
+    return proc.returncode, stdout, stderr
+
+
+def test_ctrl_c_while_a_node_starts_ends_it_quietly(router, client) -> None:
+    """Ctrl-C during a slow start (the README test's streaming examples on a loaded machine) ends the process
+    with a short line and status 130, no traceback, and the half-built node leaves the graph."""
+    status, _, stderr = signal_node_script(router, client, SLOW_START_NODE, "starting", "/slow_start", signal.SIGINT)
+    assert status == 130, stderr
     assert "Traceback" not in stderr and "interrupted while starting" in stderr, stderr
     wait_until(lambda: "/slow_start" not in graph.node_names(client.session, 0.3), timeout=5,
                message="slow_start gone from the graph")
@@ -318,19 +326,10 @@ def test_shutdown_hook_runs_once_before_the_node_closes(router, client) -> None:
     String = msgs.get_type("std_msgs/msg/String")
     said: list[str] = []
     client.create_subscription(String, "/hooked/said", lambda m: said.append(m.data), inline=True)
-    env = dict(os.environ, ZENOH_CONNECT=router, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen([sys.executable, "-c", HOOKED_NODE], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env=env, cwd=ROOT)
-    try:
-        assert proc.stdout is not None and proc.stdout.readline().strip() == "ready"
-        wait_until(lambda: "/hooked" in graph.node_names(client.session, 0.3), timeout=10, message="/hooked")
-        time.sleep(0.5)  # our subscription meets the node's publisher through the router
-        proc.send_signal(signal.SIGTERM)
-        stdout, stderr = proc.communicate(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    assert proc.returncode == 0, stderr
+    # settle: our subscription meets the node's publisher through the router
+    status, stdout, stderr = signal_node_script(router, client, HOOKED_NODE, "ready", "/hooked", signal.SIGTERM,
+                                                settle=0.5)
+    assert status == 0, stderr
     assert stdout.count("hook ran") == 1 and "hook ran, closed=False" in stdout, stdout
     wait_until(lambda: said == ["bye"], timeout=5, message="the hook's message")
 
