@@ -132,6 +132,51 @@ class Joint:
         return "\n".join(lines)
 
 
+IMU_AXES_NOISE = {   # Gazebo's usual IMU noise (its sensor tutorials' values): gyro and accelerometer
+    "angular_velocity": (2e-4, 7.5e-6, 8e-7),
+    "linear_acceleration": (1.7e-2, 0.1, 1e-3),
+}
+IMU_INTERFACES = [f"orientation.{a}" for a in "xyzw"] + [f"{q}.{a}" for q in IMU_AXES_NOISE for a in "xyz"]
+FT_INTERFACES = [f"{q}.{a}" for q in ("force", "torque") for a in "xyz"]
+
+
+@dataclass
+class SensorDecl:
+    """A sensor as a ROS user declares it: ``<ros2_control><sensor>`` plus ``<gazebo reference><sensor>``."""
+
+    name: str
+    kind: str          # imu | force_torque
+    reference: str     # a link (imu) or the measured joint (force_torque)
+    frame_id: str      # the TF frame its readings are in
+    update_rate: float = 1000.0
+
+    def ros2_control_xml(self) -> str:
+        interfaces = IMU_INTERFACES if self.kind == "imu" else FT_INTERFACES
+        lines = [f'    <sensor name="{self.name}">']
+        lines += [f'      <state_interface name="{i}"/>' for i in interfaces]
+        lines += [f'      <param name="frame_id">{self.frame_id}</param>', "    </sensor>"]
+        return "\n".join(lines)
+
+    def gazebo_xml(self) -> str:
+        lines = [f'  <gazebo reference="{self.reference}">', f'    <sensor name="{self.name}" type="{self.kind}">',
+                 "      <always_on>true</always_on>", f"      <update_rate>{fmt(self.update_rate)}</update_rate>"]
+        if self.kind == "imu":
+            lines.append("      <imu>")
+            for quantity, (stddev, bias_mean, bias_stddev) in IMU_AXES_NOISE.items():
+                lines.append(f"        <{quantity}>")
+                for axis in "xyz":
+                    lines.append(f'          <{axis}><noise type="gaussian"><mean>0</mean><stddev>{stddev:g}</stddev>'
+                                 f"<bias_mean>{bias_mean:g}</bias_mean><bias_stddev>{bias_stddev:g}</bias_stddev>"
+                                 f"</noise></{axis}>")
+                lines.append(f"        </{quantity}>")
+            lines.append("      </imu>")
+        else:
+            lines += ["      <force_torque>", "        <frame>child</frame>",
+                      "        <measure_direction>child_to_parent</measure_direction>", "      </force_torque>"]
+        lines += ["    </sensor>", "  </gazebo>\n"]
+        return "\n".join(lines)
+
+
 @dataclass
 class Robot:
     name: str
@@ -139,6 +184,7 @@ class Robot:
     links: list[Link] = field(default_factory=list)
     joints: list[Joint] = field(default_factory=list)
     ros2_control_joints: list[str] = field(default_factory=list)
+    sensors: list[SensorDecl] = field(default_factory=list)
 
     def add(self, link: Link, joint: Joint | None = None) -> None:
         self.links.append(link)
@@ -180,7 +226,11 @@ class Robot:
             out.append("    <hardware>\n      <plugin>gazebo_ros2_control/GazeboSystem</plugin>\n    </hardware>")
             for name in self.ros2_control_joints:
                 out.append(control_joint_xml(name))
+            for sensor in self.sensors:
+                out.append(sensor.ros2_control_xml())
             out.append("  </ros2_control>\n")
+            for sensor in self.sensors:
+                out.append(sensor.gazebo_xml())
             out.append(
                 '  <gazebo>\n    <plugin filename="libgazebo_ros2_control.so" name="gazebo_ros2_control">\n'
                 "      <robot_param>robot_description</robot_param>\n"
@@ -290,6 +340,10 @@ def humanoid() -> Robot:
                   axis=(0, 1, 0), lower=-2.5, upper=0.5, effort=40, velocity=8.0, damping=0.2),
         )
     r.ros2_control_joints = [j.name for j in r.joints if j.kind != "fixed"]
+    # a pelvis IMU and a force/torque sensor in each ankle, measuring the load between the leg and the foot
+    r.sensors = [SensorDecl("imu_sensor", "imu", "pelvis", "pelvis")]
+    r.sensors += [SensorDecl(f"{side}_foot_ft", "force_torque", f"{side}_ankle_roll", f"{side}_foot")
+                  for side in ("left", "right")]
     return r
 
 
@@ -542,6 +596,9 @@ def atlas() -> Robot:
               Joint(f"{p}_arm_mwx", "revolute", f"{p}_farm", f"{p}_hand", (0, sign * 0.058, 0), axis=(1, 0, 0),
                     lower=-1.18, upper=1.18, effort=60, velocity=12))
     r.ros2_control_joints = [j.name for j in r.joints]
+    r.sensors = [SensorDecl("imu_sensor", "imu", "pelvis", "pelvis")]
+    r.sensors += [SensorDecl(f"{side}_foot_ft", "force_torque", f"{p}_leg_lax", f"{p}_foot")
+                  for side, p in (("left", "l"), ("right", "r"))]
     return r
 
 

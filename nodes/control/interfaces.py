@@ -60,6 +60,17 @@ class JointInfo:
         return lo, hi
 
 
+@dataclass
+class SensorInfo:
+    """One sensor as the hardware describes it (zenroid_msgs/HardwareSensor): its state interfaces
+    (``imu_sensor/orientation.x``...), whose values come in every state frame's ``sensor_values``."""
+
+    name: str
+    type: str = ""
+    frame_id: str = ""
+    state_interfaces: list[str] = field(default_factory=list)
+
+
 class _Slot:
     """A single float shared between the manager and a loan (a plain attribute: cheap at 1 kHz)."""
 
@@ -105,12 +116,14 @@ class HardwareInterfaces:
     """All state and command slots of one robot, filled from ``hardware/state`` frames.
 
     Every joint gets position/velocity/effort state interfaces (the state frame carries all three) and
-    the command interfaces the hardware declares. Command slots start as NaN: "no command", which the
+    the command interfaces the hardware declares; every sensor its declared state interfaces
+    (``<sensor>/<interface>``, as ros2_control names them), filled from the frame's ``sensor_values``. Command slots start as NaN: "no command", which the
     manager leaves out of ``hardware/command`` so the simulator keeps its previous one.
     """
 
-    def __init__(self, joints: list[JointInfo]) -> None:
+    def __init__(self, joints: list[JointInfo], sensors: list[SensorInfo] | tuple[SensorInfo, ...] = ()) -> None:
         self.joints: dict[str, JointInfo] = {j.name: j for j in joints}
+        self.sensors: dict[str, SensorInfo] = {s.name: s for s in sensors}
         self.joint_names = [j.name for j in joints]
         self._state: dict[str, _Slot] = {}
         self._command: dict[str, _Slot] = {}
@@ -121,6 +134,13 @@ class HardwareInterfaces:
                 if kind not in COMMAND_KINDS:
                     raise ValueError(f"joint '{joint.name}': unknown command interface '{kind}'")
                 self._command[interface_name(joint.name, kind)] = _Slot()
+        # Sensor slots in frame order (the hardware's sensor list), so reading a frame is one pass.
+        self._sensor_slots: list[_Slot] = []
+        for sensor in sensors:
+            for kind in sensor.state_interfaces:
+                slot = _Slot()
+                self._state[interface_name(sensor.name, kind)] = slot
+                self._sensor_slots.append(slot)
         # Per-joint slot triples in frame order, rebuilt when the frame's name list changes.
         self._frame_names: list[str] | None = None
         self._frame_slots: list[tuple[_Slot, _Slot, _Slot] | None] = []
@@ -153,8 +173,9 @@ class HardwareInterfaces:
         return self._command[name]
 
     def read_state(self, names: list[str], position: list[float], velocity: list[float],
-                   effort: list[float]) -> None:
-        """Copy one ``hardware/state`` frame into the state slots (unknown joints are ignored)."""
+                   effort: list[float], sensor_values: list[float] = ()) -> None:
+        """Copy one ``hardware/state`` frame into the state slots (unknown joints are ignored; sensor values
+        beyond the declared interfaces too, missing ones read NaN)."""
         if names != self._frame_names:
             self._frame_names = list(names)
             self._frame_slots = []
@@ -170,6 +191,14 @@ class HardwareInterfaces:
             slots[0].value = position[i] if i < n_pos else math.nan
             slots[1].value = velocity[i] if i < n_vel else 0.0
             slots[2].value = effort[i] if i < n_eff else 0.0
+        sensor_slots = self._sensor_slots
+        if sensor_slots:
+            if len(sensor_values) == len(sensor_slots):
+                for slot, value in zip(sensor_slots, sensor_values, strict=True):
+                    slot.value = value
+            else:
+                for i, slot in enumerate(sensor_slots):
+                    slot.value = sensor_values[i] if i < len(sensor_values) else math.nan
         self.has_state = True
 
     def commands(self, only: set[str] | None = None) -> tuple[list[str], list[str], list[float]]:

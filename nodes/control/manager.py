@@ -132,6 +132,7 @@ class ControllerManager:
             if entry.state == INACTIVE:  # reconfigure, as ros2_control does: cleanup first
                 self._cleanup(entry)
             controller.hardware_joints = list(self.hardware.joint_names)  # type: ignore[attr-defined]
+            controller.hardware_sensors = dict(self.hardware.sensors)  # type: ignore[attr-defined]
             controller.joint_info = dict(self.hardware.joints)  # limits, as the hardware describes them
             try:
                 controller.on_configure()

@@ -39,7 +39,7 @@ from nodes.control.config import (
     parse_controller_yaml,
 )
 from nodes.control.controller import ACTIVE
-from nodes.control.interfaces import COMMAND_KINDS, HardwareInterfaces, JointInfo
+from nodes.control.interfaces import COMMAND_KINDS, HardwareInterfaces, JointInfo, SensorInfo
 from nodes.control.manager import BEST_EFFORT, STRICT, ControllerManager, ManagerError
 from nodes.core import Node, ServiceError, realtime
 from nodes.core.endpoints import SingleSender, source_label
@@ -261,12 +261,14 @@ class ControllerManagerNode(Node):
             kinds = [k for k in j.command_interfaces if k in COMMAND_KINDS]
             joints.append(JointInfo(j.name, kinds, list(j.state_interfaces), j.min_position, j.max_position,
                                     j.max_velocity, j.max_effort))
-        self.hardware = HardwareInterfaces(joints)
+        sensors = [SensorInfo(s.name, s.type, s.frame_id, list(s.state_interfaces)) for s in info.sensors]
+        self.hardware = HardwareInterfaces(joints, sensors)
         self.realtime_hardware = info.mode == "realtime"
         self._raise_priority(self.thread_priority, info.mode)
         self.manager = ControllerManager(self.hardware, self.config, self.update_rate, self._make_context,
                                          self.logger)
-        self.logger.info(f"hardware '{info.robot_name}' ({info.mode}, {len(joints)} joints); "
+        self.logger.info(f"hardware '{info.robot_name}' ({info.mode}, {len(joints)} joints, sensors "
+                         f"{[s.name for s in sensors]}); "
                          f"update rate {self.update_rate} Hz; controllers in config: "
                          f"{sorted(self.config.controllers)}")
         # Reliable so that in lockstep a congested link delays a command instead of losing it (the
@@ -346,12 +348,12 @@ class ControllerManagerNode(Node):
                 "(two publishers on hardware/state: a second simulator, a replay or a forgery)", key="foreign state")
             return
         step, names, positions = state.step, state.name, state.position
-        velocities, efforts = state.velocity, state.effort
+        velocities, efforts, sensor_values = state.velocity, state.effort, state.sensor_values
         t = msgs.time_to_sec(state.stamp)
         manager = self.manager
         self._cycle_since = time.monotonic()   # the watchdog's view of a cycle that never ends
         with manager.lock:
-            self.hardware.read_state(names, positions, velocities, efforts)
+            self.hardware.read_state(names, positions, velocities, efforts, sensor_values)
             wall = time.monotonic()
             if self._lost:
                 self._lost = False

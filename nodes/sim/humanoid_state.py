@@ -3,7 +3,12 @@
 The ZMP is the cart-table estimate from the CoM and its acceleration (DART's, after the contact impulses):
 x_zmp = x_com - h * a_x / (a_z + g). Standing still it equals the centre of pressure of the contact forces;
 under a push or while tipping it leaves the support polygon, which the centre of pressure by construction
-never does - so ``is_balanced`` (ZMP inside the polygon) carries information.
+never does.
+
+The centre of pressure is also *measured*, as a real robot measures it: from the foot force/torque sensors
+(``center_of_pressure``). When the robot has them and they carry its weight, ``is_balanced`` says whether the
+measured centre of pressure keeps COP_MARGIN inside the support polygon (a robot starting to tip presses on the
+edge it tips over); otherwise whether the model-based ZMP is inside. ``source`` says which was used.
 """
 
 from __future__ import annotations
@@ -13,6 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+# The measured centre of pressure must stay this far inside the support polygon (m) for is_balanced.
+COP_MARGIN = 0.01
+# Below this share of the robot's weight on the foot sensors (in the air, lifted), the measured centre of
+# pressure means nothing: is_balanced falls back to the ZMP.
+COP_MIN_LOAD = 0.2
+
 
 @dataclass
 class BalanceState:
@@ -20,6 +31,41 @@ class BalanceState:
     support_polygon: list[tuple[float, float, float]]   # convex hull of contact points, counter-clockwise
     zmp: tuple[float, float]
     is_balanced: bool
+    cop: tuple[float, float] | None = None    # measured by the foot force/torque sensors, when there are some
+    source: str = "zmp"                       # what is_balanced judged: "cop" (measured) or "zmp" (model)
+
+
+@dataclass
+class FootWrench:
+    """A foot sensor's reading in the world frame: the wrench the foot passes to the leg (≈ the ground's
+    reaction) about the sensor point."""
+
+    point: np.ndarray    # sensor (joint origin) position
+    force: np.ndarray
+    torque: np.ndarray
+
+
+def center_of_pressure(feet: list[FootWrench], ground_z: float) -> tuple[tuple[float, float] | None, float]:
+    """(x, y) where the measured ground reaction acts on the plane ``z = ground_z``, and the vertical load.
+
+    A force f acting at p on the ground has the moment τ = (p - s) × f about the sensor point s, d above the
+    ground: p_x = s_x + (-τ_y - d f_x) / f_z, p_y = s_y + (τ_x - d f_y) / f_z; the feet combine weighted by f_z.
+    """
+    total = 0.0
+    x = y = 0.0
+    for foot in feet:
+        fz = float(foot.force[2])
+        if fz <= 1e-6:
+            continue   # not pressing on the ground
+        d = float(foot.point[2]) - ground_z
+        px = foot.point[0] + (-foot.torque[1] - d * foot.force[0]) / fz
+        py = foot.point[1] + (foot.torque[0] - d * foot.force[1]) / fz
+        x += fz * float(px)
+        y += fz * float(py)
+        total += fz
+    if total <= 0:
+        return None, 0.0
+    return (x / total, y / total), total
 
 
 def convex_hull(points: Iterable[tuple[float, float]]) -> list[tuple[float, float]]:
@@ -73,8 +119,10 @@ def robot_contacts(contacts, skeleton_name: str) -> list[tuple[np.ndarray, float
 
 
 def balance_state(com: np.ndarray, com_acceleration: np.ndarray, gravity_z: float,
-                  contacts: list[tuple[np.ndarray, float]]) -> BalanceState:
-    """Compute the balance quantities from the CoM and this robot's contacts (world frame)."""
+                  contacts: list[tuple[np.ndarray, float]], feet: list[FootWrench] | None = None,
+                  weight: float = 0.0) -> BalanceState:
+    """Compute the balance quantities from the CoM and this robot's contacts (world frame), with the measured
+    centre of pressure when foot sensors are given (``weight``: the robot's, N)."""
     com = np.asarray(com, dtype=float)
     hull = convex_hull((float(p[0]), float(p[1])) for p, _ in contacts)
     ground_z = float(np.mean([p[2] for p, _ in contacts])) if contacts else 0.0
@@ -86,9 +134,16 @@ def balance_state(com: np.ndarray, com_acceleration: np.ndarray, gravity_z: floa
     else:
         zmp = com[:2].copy()    # free fall or no gravity: the estimate is undefined, use the CoM
     zmp_xy = (float(zmp[0]), float(zmp[1]))
+    cop, load = center_of_pressure(feet, ground_z) if feet else (None, 0.0)
+    if cop is not None and contacts and load >= COP_MIN_LOAD * weight:
+        balanced, source = inside_polygon(cop, hull, tolerance=-COP_MARGIN), "cop"
+    else:
+        balanced, source = inside_polygon(zmp_xy, hull), "zmp"
     return BalanceState(
         center_of_mass=(float(com[0]), float(com[1]), float(com[2])),
         support_polygon=polygon,
         zmp=zmp_xy,
-        is_balanced=inside_polygon(zmp_xy, hull),
+        is_balanced=balanced,
+        cop=cop,
+        source=source,
     )

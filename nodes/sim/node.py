@@ -81,6 +81,10 @@ class SimulatorNode(Node):
         gains_table = p("gains", {"*": {"p": 2000.0, "d": 20.0}}, description="joint pattern -> {p, d}",
                         type=dict)
         entities = p("entities", [], description="entities spawned at start", type=list)
+        sensor_seed = int(p("sensor_seed", 0, type=int, min_value=0, max_value=2**63 - 1,
+                            description="seed of the sensors' noise (the same seed, the same noise)"))
+        sensors = p("sensors", True, description="simulate the URDF's IMU, force/torque and contact sensors "
+                    "(false: left out, with their state interfaces)")
         try:
             gains_for = parse_gains(gains_table)
             self._startup: list[StartupEntity] = parse_entities(entities)
@@ -90,7 +94,8 @@ class SimulatorNode(Node):
         self.world = PhysicsWorld(physics_rate, tuple(gravity), detector)
         if ground:
             self.world.add_ground(ground_size, ground_friction)
-        self.sim = Simulation(self.world, gains_for, self.logger.warn, mode)
+        self.sim = Simulation(self.world, gains_for, self.logger.warn, mode, sensor_seed=sensor_seed,
+                              sensors_enabled=sensors)
         self.robots: dict[str, RobotLink] = {}
         self.outputs = SimOutputs(self, self.sim, self.robots, clock_rate=clock_rate, state_rate=state_rate)
         self._startup_deadline = time.monotonic() + 30.0
@@ -207,6 +212,7 @@ class SimulatorNode(Node):
         """One control period: hardware frames out, commands in (waiting for them in lockstep), physics."""
         step, t = self.sim.step_count, self.world.time
         lockstep = self.sim.mode != "realtime"
+        self.sim.sample_sensors()
         for link in self.robots.values():
             link.publish_state(step, t)
         # clock / model_states / humanoid_state of this same instant, while the controllers compute

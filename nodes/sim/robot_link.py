@@ -11,7 +11,7 @@ from collections import deque
 from typing import Any
 
 import msgs
-from msgs.zenroid_msgs import HardwareJoint
+from msgs.zenroid_msgs import HardwareJoint, HardwareSensor
 from nodes.core import Node
 from nodes.core.endpoints import SingleSender, source_label
 from nodes.sim.hardware import CommandError, HardwareInterface
@@ -47,6 +47,7 @@ class RobotLink:
         self.node = node
         self.sim = sim
         self.hardware = hardware
+        self.sensors = sim.sensors[hardware.entity.namespace]
         self.command_timeout = command_timeout
         self.namespace = hardware.entity.namespace
         self.inbox = CommandInbox()
@@ -125,7 +126,8 @@ class RobotLink:
         hw = self.hardware
         self.state_pub.publish_raw(_pack_state(
             step=step, stamp=msgs.time_map(sim_time), name=hw.names, position=hw.positions().tolist(),
-            velocity=hw.velocities().tolist(), effort=hw.efforts().tolist()), droppable=self.sim.mode == "realtime")
+            velocity=hw.velocities().tolist(), effort=hw.efforts().tolist(),
+            sensor_values=self.sensors.state_values()), droppable=self.sim.mode == "realtime")
         self._last_state_step = step
 
     def apply(self, command) -> None:
@@ -156,18 +158,21 @@ class RobotLink:
         """humanoid_msgs/HumanoidState."""
         hw = self.hardware
         balance = self.sim.balance(self.namespace)
-        com = balance.center_of_mass
+        com, cop = balance.center_of_mass, balance.cop
         self.humanoid_pub.publish_raw(_pack_humanoid_state(
             header=_header(stamp=msgs.time_map(sim_time), frame_id="world"),
             joint_names=hw.names, joint_positions=hw.positions().tolist(),
             joint_velocities=hw.velocities().tolist(), joint_efforts=hw.efforts().tolist(),
             center_of_mass=_point(x=float(com[0]), y=float(com[1]), z=float(com[2])),
             support_polygon=[_point(x=float(x), y=float(y), z=float(z)) for x, y, z in balance.support_polygon],
-            zmp_x=float(balance.zmp[0]), zmp_y=float(balance.zmp[1]), is_balanced=bool(balance.is_balanced)))
+            zmp_x=float(balance.zmp[0]), zmp_y=float(balance.zmp[1]), is_balanced=bool(balance.is_balanced),
+            cop_measured=cop is not None, cop_x=float(cop[0]) if cop else 0.0, cop_y=float(cop[1]) if cop else 0.0,
+            balance_source=balance.source))
 
     def _on_info(self, _request) -> object:
         return GetHardwareInfo.Response(
             robot_name=self.hardware.entity.name, mode=self.sim.mode,
             physics_rate=self.sim.physics_rate,
             joints=[HardwareJoint(**row) for row in self.hardware.joint_table()],
+            sensors=[HardwareSensor(**row) for row in self.sensors.table()],
         )

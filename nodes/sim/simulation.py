@@ -12,8 +12,9 @@ import numpy as np
 from nodes.sim.config import Gains
 from nodes.sim.entity import Entity, EntitySpec, Pose, SpawnError
 from nodes.sim.hardware import HardwareInterface
-from nodes.sim.humanoid_state import BalanceState, balance_state, robot_contacts
+from nodes.sim.humanoid_state import BalanceState, FootWrench, balance_state, robot_contacts
 from nodes.sim.interfaces import MODES
+from nodes.sim.sensors import SensorSuite
 from nodes.sim.world import GROUND_NAME, PhysicsWorld
 
 SUPPORT_WINDOW = 0.015  # s of contacts the support polygon spans (1.5 periods of the 100 Hz humanoid_state)
@@ -21,7 +22,10 @@ SUPPORT_WINDOW = 0.015  # s of contacts the support polygon spans (1.5 periods o
 
 class Simulation:
     def __init__(self, world: PhysicsWorld, gains_for: Callable[[str], Gains],
-                 warn: Callable[[str], None] | None = None, mode: str = "lockstep") -> None:
+                 warn: Callable[[str], None] | None = None, mode: str = "lockstep", *, sensor_seed: int = 0,
+                 sensors_enabled: bool = True) -> None:
+        """``sensor_seed``: the sensors' noise generators start from it; ``sensors_enabled``: False leaves every
+        URDF sensor out (their state interfaces too), for measuring what they cost."""
         if mode not in MODES:
             raise ValueError(f"mode {mode!r} is not one of {', '.join(MODES)}")
         self.world = world
@@ -30,6 +34,9 @@ class Simulation:
         self.mode = mode
         self.entities: dict[str, Entity] = {}
         self.hardware: dict[str, HardwareInterface] = {}   # by robot namespace
+        self.sensors: dict[str, SensorSuite] = {}           # by robot namespace
+        self.sensor_seed = sensor_seed
+        self.sensors_enabled = sensors_enabled
         self.step_count = 0                                  # physics steps since start / reset_simulation
         self._com_velocity: dict[str, tuple[float, np.ndarray]] = {}  # namespace -> (time, CoM velocity)
         self._recent_contacts: dict[str, list[tuple[float, list]]] = {}  # namespace -> [(time, contacts)]
@@ -59,9 +66,15 @@ class Simulation:
             raise SpawnError(f"robot namespace {entity.namespace!r} is already used by entity "
                              f"{self.hardware[entity.namespace].entity.name!r}")
         hardware = HardwareInterface(entity, self.gains_for, self.warn)
+        try:
+            sensors = SensorSuite(entity.info.sensors if self.sensors_enabled else [], entity.skeleton, entity.name,
+                                  self.sensor_seed, self.world.contacts)
+        except ValueError as exc:
+            raise SpawnError(str(exc)) from None
         self.world.world.addSkeleton(entity.skeleton)
         self.entities[entity.name] = entity
         self.hardware[entity.namespace] = hardware
+        self.sensors[entity.namespace] = sensors
         return entity
 
     def delete(self, name: str) -> bool:
@@ -71,6 +84,7 @@ class Simulation:
         if entity is None:
             return False
         self.hardware.pop(entity.namespace, None)
+        self.sensors.pop(entity.namespace, None)
         self._com_velocity.pop(entity.namespace, None)
         self._recent_contacts.pop(entity.namespace, None)
         self.world.remove_skeleton(entity.skeleton)
@@ -100,6 +114,14 @@ class Simulation:
                     hw.after_step()
             self.step_count += 1
 
+    def sample_sensors(self) -> None:
+        """Every sensor that is due at the current sim time takes its reading (once per control period)."""
+        if not self.sensors:
+            return
+        t, gravity = self.world.time, self.world.gravity
+        for suite in self.sensors.values():
+            suite.sample(t, gravity)
+
     def hold_all(self) -> None:
         for hw in self.hardware.values():
             hw.hold_position()
@@ -110,6 +132,8 @@ class Simulation:
         self._recent_contacts.clear()
         for entity in self.entities.values():
             entity.reset()
+        for suite in self.sensors.values():
+            suite.reset()
         self.world.reset_collision()
         self.hold_all()
 
@@ -151,4 +175,21 @@ class Simulation:
             acceleration = (velocity - previous[1]) / (now - previous[0])
         else:
             acceleration = np.asarray(skeleton.getCOMLinearAcceleration())
-        return balance_state(np.asarray(skeleton.getCOM()), acceleration, self.world.gravity[2], contacts)
+        feet = [FootWrench(*wrench) for wrench in self.sensors[namespace].force_torque(self._links_in_contact(skeleton))]
+        weight = skeleton.getMass() * abs(self.world.gravity[2])
+        return balance_state(np.asarray(skeleton.getCOM()), acceleration, self.world.gravity[2], contacts, feet,
+                             weight)
+
+    def _links_in_contact(self, skeleton) -> set[str]:
+        """Links of ``skeleton`` touching something else in the last step (where foot sensors carry load)."""
+        if self.kinematic or not self.sensors:
+            return set()
+        name = skeleton.getName()
+        links = set()
+        for contact in self.world.contacts():
+            first = contact.collisionObject1.getShapeFrame()
+            second = contact.collisionObject2.getShapeFrame()
+            for mine, other in ((first, second), (second, first)):
+                if mine.getSkeleton().getName() == name and other.getSkeleton().getName() != name:
+                    links.add(mine.getBodyNodePtr().getName())
+        return links

@@ -10,11 +10,12 @@ names other than position/velocity/effort) and the derived per-joint bounds.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from nodes.control.interfaces import JointInfo
 from nodes.urdf.model import Joint, RobotModel, UrdfError
 from nodes.urdf.model import parse_urdf as parse_model
+from nodes.urdf.sensors import SensorSpec, sensor_problems
 
 INTERFACES = ("position", "velocity", "effort")
 
@@ -26,6 +27,7 @@ class RobotInfo:
     links: list[str]
     joints: list[JointInfo]            # movable joints, URDF order
     has_ros2_control: bool = False
+    sensors: list[SensorSpec] = field(default_factory=list)   # checked, with their links and joints
 
     def joint(self, name: str) -> JointInfo:
         for joint in self.joints:
@@ -134,8 +136,12 @@ def parse_urdf(xml: str) -> RobotInfo:
         raise _error(model.line, f"robot {model.name!r} must have exactly one root link, found {roots}")
 
     has_block = _apply_ros2_control(model, joints)
+    problems = sensor_problems(model.sensors, model.ros2_control_sensors, model.links, model.joints)
+    if problems:
+        shown = problems[:5] + ([f"... and {len(problems) - 5} more"] if len(problems) > 5 else [])
+        raise UrdfError("; ".join(shown))
     return RobotInfo(name=model.name, root_link=roots[0], links=list(model.links), joints=joints,
-                     has_ros2_control=has_block)
+                     has_ros2_control=has_block, sensors=model.sensors)
 
 
 def _apply_ros2_control(model: RobotModel, joints: list[JointInfo]) -> bool:

@@ -17,6 +17,14 @@ from dataclasses import dataclass, field
 import numpy as np
 from lxml import etree
 
+from nodes.urdf.rotation import rpy_matrix
+from nodes.urdf.sensors import (
+    Ros2ControlSensor,
+    SensorDeclarationError,
+    SensorSpec,
+    parse_gazebo_sensors,
+    parse_ros2_control_sensors,
+)
 from nodes.urdf.xml_safety import UnsafeXmlError, parse_xml
 
 JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
@@ -129,6 +137,9 @@ class RobotModel:
     materials: dict[str, tuple[float, float, float, float]] = field(default_factory=dict)  # top-level, with colour
     line: int | None = None  # of <robot>
     duplicate_lines: dict[tuple[str, str], int | None] = field(default_factory=dict)  # ("link"|"joint", name)
+    # sensors as declared (nodes.urdf.sensors): <gazebo reference><sensor> and <ros2_control><sensor>
+    sensors: list[SensorSpec] = field(default_factory=list)
+    ros2_control_sensors: list[Ros2ControlSensor] = field(default_factory=list)
 
     def roots(self) -> list[str]:
         children = {j.child for j in self.joints.values()}
@@ -157,17 +168,6 @@ class RobotModel:
 
     def visual_links(self) -> list[str]:
         return [name for name, link in self.links.items() if link.visuals]
-
-
-def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """URDF fixed-axis rpy: R = Rz(yaw) @ Ry(pitch) @ Rx(roll)."""
-    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch),
-                              math.cos(yaw), math.sin(yaw))
-    return np.array([
-        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-        [-sp, cp * sr, cp * cr],
-    ])
 
 
 def _where(element: etree._Element) -> str:
@@ -404,5 +404,9 @@ def parse_urdf(xml: str | bytes) -> RobotModel:
         joints[joint.name] = joint
     if not links:
         raise UrdfError(f"robot '{name}' has no links", root.sourceline)
+    try:
+        sensors, control_sensors = parse_gazebo_sensors(root), parse_ros2_control_sensors(root)
+    except SensorDeclarationError as exc:
+        raise UrdfError(str(exc), exc.line) from None
     return RobotModel(name, links, joints, _parse_ros2_control(root), duplicate_links, duplicate_joints,
-                      materials, root.sourceline, duplicate_lines)
+                      materials, root.sourceline, duplicate_lines, sensors, control_sensors)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nodes.urdf.model import RobotModel
+from nodes.urdf.sensors import sensor_problems
 
 
 @dataclass(frozen=True)
@@ -137,4 +138,5 @@ def _warnings(model: RobotModel) -> list[str]:
 def validate(model: RobotModel) -> list[Issue]:
     """All problems found, errors first."""
     errors = _tree_errors(model) + _joint_errors(model) + _inertia_errors(model)
+    errors += sensor_problems(model.sensors, model.ros2_control_sensors, model.links, model.joints)
     return [Issue("error", m) for m in errors] + [Issue("warning", m) for m in _warnings(model)]

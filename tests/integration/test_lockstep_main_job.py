@@ -1,7 +1,8 @@
 """The main job in lockstep, watched by a client that imports only zenoh and msgpack:
 
 - two runs started paused (``paused:=true``) and unpaused once every controller is active give
-  bit-identical joint trajectories, the joint commander's knee bends included;
+  bit-identical joint trajectories, the joint commander's knee bends included, and bit-identical IMU and
+  foot force/torque readings (the shipped IMU's noise on);
 - every hot-path message (hardware frames, joint_states, tf, controller state, clock, model_states,
   humanoid_state), built by the generated packers, is a complete map of its schema: a third-party
   ``msgpack.unpackb`` sees exactly the fields of the ``.msg`` file, and the schema decoder accepts it;
@@ -38,7 +39,13 @@ HOT_KEYS = {
     "humanoid/humanoid_state": "humanoid_msgs/msg/HumanoidState",
     "sim/clock": "rosgraph_msgs/msg/Clock",
     "sim/model_states": "gazebo_msgs/msg/ModelStates",
+    "humanoid/imu_sensor_broadcaster/imu": "sensor_msgs/msg/Imu",
+    "humanoid/left_foot_ft_broadcaster/wrench": "geometry_msgs/msg/WrenchStamped",
+    "humanoid/right_foot_ft_broadcaster/wrench": "geometry_msgs/msg/WrenchStamped",
 }
+SENSOR_KEYS = ("humanoid/imu_sensor_broadcaster/imu", "humanoid/left_foot_ft_broadcaster/wrench")
+ACTIVE = ("joint_trajectory_controller", "joint_state_broadcaster", "imu_sensor_broadcaster",
+          "left_foot_ft_broadcaster", "right_foot_ft_broadcaster")
 
 
 def client_session(port: int) -> zenoh.Session:
@@ -89,8 +96,9 @@ def thread_cpus(launcher_pid: int) -> list[tuple[str, int, int, set[int]]]:
 
 
 def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[float]], list[str], dict[str, bytes],
-                                                    str, list[tuple[str, int, int, set[int]]]]:
-    """Launch paused, unpause when the controllers are active, record joint_states until RECORD_UNTIL."""
+                                                    str, list[tuple[str, int, int, set[int]]], dict[str, dict]]:
+    """Launch paused, unpause when the controllers are active, record joint_states until RECORD_UNTIL (and the
+    IMU's and a foot sensor's messages by stamp)."""
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     env.pop("ZENOH_CONNECT", None)
     env.pop("ZENOH_CONFIG", None)
@@ -110,14 +118,23 @@ def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[f
         joint_states = session.declare_subscriber("humanoid/joint_states", zenoh.handlers.FifoChannel(100_000))
         samples: dict[str, bytes] = {}
         hot = [session.declare_subscriber(key, lambda s, k=key: samples.setdefault(k, s.payload.to_bytes()))
-               for key in HOT_KEYS if key != "humanoid/joint_states"]
+               for key in HOT_KEYS if key != "humanoid/joint_states" and key not in SENSOR_KEYS]
+        sensors: dict[str, dict] = {key: {} for key in SENSOR_KEYS}
+
+        def on_sensor(sample: zenoh.Sample, key: str) -> None:
+            raw = sample.payload.to_bytes()
+            samples.setdefault(key, raw)
+            msg = msgpack.unpackb(raw)
+            stamp = msg["header"]["stamp"]
+            sensors[key][(stamp["sec"], stamp["nanosec"])] = msg
+
+        hot += [session.declare_subscriber(key, lambda s, k=key: on_sensor(s, k)) for key in SENSOR_KEYS]
         # every controller active and the commander up before the first step
         while True:
             assert launcher.poll() is None and time.monotonic() < deadline, out_path.read_text()
             listed = call(session, "humanoid/controller_manager/list_controllers", {}, timeout=1.0)
             states = {c["name"]: c["state"] for c in (listed or {}).get("controller", [])}
-            if (states.get("joint_trajectory_controller") == "active"
-                    and states.get("joint_state_broadcaster") == "active"
+            if (all(states.get(name) == "active" for name in ACTIVE)
                     and "Joint Commander initialized" in out_path.read_text(errors="replace")):
                 break
             time.sleep(0.2)
@@ -140,7 +157,7 @@ def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[f
         for sub in hot:
             sub.undeclare()
         joint_states.undeclare()
-        return trajectory, names, samples, out_path.read_text(errors="replace"), threads
+        return trajectory, names, samples, out_path.read_text(errors="replace"), threads, sensors
     finally:
         if session is not None:
             session.close()
@@ -159,7 +176,7 @@ def test_lockstep_main_job_is_bit_identical_and_hot_paths_follow_the_schema(tmp_
 
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
-    first, names, samples, log, threads = run_main_job(free_port(), tmp_path / "a")
+    first, names, samples, log, threads, first_sensors = run_main_job(free_port(), tmp_path / "a")
 
     # exclusive_cpu: the stepping thread (the simulator's main thread) alone on the kept CPU
     if len(os.sched_getaffinity(0)) >= 2:
@@ -191,10 +208,18 @@ def test_lockstep_main_job_is_bit_identical_and_hot_paths_follow_the_schema(tmp_
     assert late and max(late) > 0.3, f"the knees did not bend: {late[-3:]}"
     assert len(stamps) > 5000, f"only {len(stamps)} joint_states in {RECORD_UNTIL} sim s"
 
-    second, _, _, second_log, _ = run_main_job(free_port(), tmp_path / "b")
+    second, _, _, second_log, _, second_sensors = run_main_job(free_port(), tmp_path / "b")
     common = sorted(set(first) & set(second))
     assert len(common) > 0.99 * len(first), "the two runs published different stamps"
     differing = [s for s in common if first[s] != second[s]]
     holds = [line for line in (log + second_log).splitlines() if "no hardware/command" in line]
     assert not differing, (f"{len(differing)} of {len(common)} joint states differ, first at {differing[0]}; "
                            f"simulator holds: {holds[:3]}")
+    # the sensors too, noise and all: the same readings at the same stamps
+    for key in SENSOR_KEYS:
+        stamps = sorted(set(first_sensors[key]) & set(second_sensors[key]))
+        assert len(stamps) > 0.99 * len(first_sensors[key]) > 5000, (key, len(stamps), len(first_sensors[key]))
+        differing = [s for s in stamps if first_sensors[key][s] != second_sensors[key][s]]
+        assert not differing, f"{key}: {len(differing)} of {len(stamps)} readings differ, first at {differing[0]}"
+    imu = first_sensors["humanoid/imu_sensor_broadcaster/imu"]
+    assert len({m["angular_velocity"]["x"] for m in imu.values()}) > 1000   # noisy, not a constant

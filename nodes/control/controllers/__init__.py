@@ -17,12 +17,14 @@ from importlib import metadata
 
 from nodes.control.config import TYPE_NAME
 from nodes.control.controller import Controller
+from nodes.control.controllers.force_torque_sensor_broadcaster import ForceTorqueSensorBroadcaster
 from nodes.control.controllers.forward_command_controller import (
     ForwardCommandController,
     JointGroupEffortController,
     JointGroupPositionController,
     JointGroupVelocityController,
 )
+from nodes.control.controllers.imu_sensor_broadcaster import IMUSensorBroadcaster
 from nodes.control.controllers.joint_state_broadcaster import JointStateBroadcaster
 from nodes.control.controllers.joint_trajectory_controller import JointTrajectoryController
 from nodes.control.controllers.pid_controller import PidController
@@ -34,7 +36,7 @@ CONTROLLER_TYPES: dict[str, type[Controller]] = {
     cls.type_name: cls
     for cls in (JointStateBroadcaster, JointTrajectoryController, ForwardCommandController,
                 JointGroupPositionController, JointGroupVelocityController, JointGroupEffortController,
-                PidController)
+                PidController, IMUSensorBroadcaster, ForceTorqueSensorBroadcaster)
 }
 
 
