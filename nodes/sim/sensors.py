@@ -140,6 +140,7 @@ class ForceTorqueSensor(_Sensor):
             raise ValueError(f"sensor '{spec.name}': joint '{spec.joint}' was not loaded by DART")
         self.parent = self.joint.getParentBodyNode()
         self.sign = -1.0 if spec.measure_direction == "parent_to_child" else 1.0
+        self._sum, self._count = [0.0] * 6, 0   # readings since the last world_wrench
 
     def measure(self, t: float, gravity: np.ndarray) -> list[float]:
         wrench = np.asarray(self.joint.getWrenchToChildBodyNode())   # [torque, force]: child on parent, child frame
@@ -155,9 +156,19 @@ class ForceTorqueSensor(_Sensor):
         return [s * float(force[0]), s * float(force[1]), s * float(force[2]),
                 s * float(torque[0]), s * float(torque[1]), s * float(torque[2])]
 
+    def sample(self, t: float, gravity: np.ndarray) -> None:
+        super().sample(t, gravity)
+        self._sum = [a + b for a, b in zip(self._sum, self.values, strict=True)]
+        self._count += 1
+
+    def reset(self) -> None:
+        super().reset()
+        self._sum, self._count = [0.0] * 6, 0
+
     def world_wrench(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The last reading (noise included) as the child's wrench on the parent in world coordinates:
-        (joint origin, force, torque about it)."""
+        """The mean of the readings since the last call (noise included; the last reading when there was none)
+        as the child's wrench on the parent in world coordinates: (joint origin, force, torque about it).
+        A mean, as the ZMP's CoM acceleration: one step's reading swings with a contact impulse."""
         transform = self.body.getWorldTransform()
         if self.spec.frame == "parent" and self.parent is not None:
             rotation = self.parent.getWorldTransform().rotation()
@@ -165,7 +176,9 @@ class ForceTorqueSensor(_Sensor):
             rotation = transform.rotation() @ self.spec.pose[:3, :3]
         else:
             rotation = transform.rotation()
-        values = np.asarray(self.values) * self.sign
+        mean = [v / self._count for v in self._sum] if self._count else self.values
+        self._sum, self._count = [0.0] * 6, 0
+        values = np.asarray(mean) * self.sign
         return np.asarray(transform.translation()), rotation @ values[:3], rotation @ values[3:]
 
 
@@ -254,4 +267,5 @@ class SensorSuite:
 
     def force_torque(self, links: set[str]) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """World wrenches (``ForceTorqueSensor.world_wrench``) of the force/torque sensors on ``links``."""
-        return [s.world_wrench() for s in self.sensors if isinstance(s, ForceTorqueSensor) and s.spec.link in links]
+        wrenches = [(s.spec.link, s.world_wrench()) for s in self.sensors if isinstance(s, ForceTorqueSensor)]
+        return [wrench for link, wrench in wrenches if link in links]   # every mean restarts, loaded or not
