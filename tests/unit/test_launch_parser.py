@@ -263,7 +263,7 @@ def test_param_file_still_works_with_a_warning_naming_params_file(tmp_path: Path
 SHIPPED = {
     "humanoid.yaml": ("humanoid", {"simulator", "robot_state_publisher", "controller_manager",
                                    "spawner_joint_state_broadcaster", "spawner_joint_trajectory_controller",
-                                   "spawner_sensor_broadcasters", "joint_commander"}),
+                                   "joint_commander"}),
     "controller_lab.yaml": ("simple_robot", {"simulator", "robot_state_publisher", "controller_manager",
                                              "spawner_active", "spawner_inactive", "trajectory_sender"}),
     "lab_2_3.yaml": ("lab_robot", {"simulator", "robot_state_publisher", "controller_manager", "spawner",
