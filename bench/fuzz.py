@@ -6,7 +6,9 @@ Starts ``python -m launch humanoid.yaml gui:=false commander:=none`` (realtime) 
 input of the job on its graph (our ``@graph`` tokens: subscriptions, services, actions; rmw_zenoh's
 ``@ros2_lv`` tokens: the ROS 2 wire's subscriptions and services) and sends, seeded and bounded in time:
 
-- first the regressions found by hand (issue #13): gravity 1e308, a time step of 5e-324, a 10,000-link URDF,
+- first the regressions found by hand (issue #13, and issue #25's worlds: SDF models with entities, 400,000
+  models, absurd masses and sizes, zero inertia, meshes out of their folder; entity states, wrenches and
+  efforts beyond bounds or on what is not there): gravity 1e308, a time step of 5e-324, a 10,000-link URDF,
   ``../../etc/passwd`` meshes, strictness 99, a million controller names, a 10 MB name, ``this:Nope`` as a
   controller type, a forged hardware/state frame with stamp 0, a second source on hardware/command,
   trajectories of ±100 rad, 10⁴ rad/s, 68 years, negative stamps, 110,000 points;
@@ -353,6 +355,30 @@ def mesh_urdf(path: str) -> str:
             '</inertial></link></robot>')
 
 
+def bad_sdf_models() -> list[tuple[str, str]]:
+    """SDF spawn requests the simulator must refuse (issue #25), by category."""
+    def model(body: str) -> str:
+        return f"<?xml version='1.0'?><sdf version='1.7'><model name='m'>{body}</model></sdf>"
+
+    box = ("<link name='l'><inertial><mass>{mass}</mass><inertia><ixx>{i}</ixx><iyy>{i}</iyy><izz>{i}</izz>"
+           "</inertia></inertial><collision name='c'><geometry><box><size>{size}</size></box></geometry>"
+           "</collision></link>")
+    return [
+        ("SDF billion laughs", "<?xml version='1.0'?><!DOCTYPE sdf [<!ENTITY a 'aaaa'><!ENTITY b '&a;&a;&a;'>]>"
+                               "<sdf version='1.7'><model name='&b;'/></sdf>"),
+        ("SDF external entity", "<?xml version='1.0'?><!DOCTYPE sdf SYSTEM 'file:///etc/passwd'><sdf version='1.7'/>"),
+        ("SDF unknown model://", model("<link name='l'/><include><uri>model://no_such_model</uri></include>")),
+        # 400,000 (3.2 MB) stays under the 4 MiB decode limit, so the simulator's own count refuses it
+        ("SDF 400,000 models", "<sdf version='1.7'>" + "<model/>" * 400_000 + "</sdf>"),
+        ("SDF absurd values", model(box.format(mass="1e30", i="1", size="1 1 1"))),
+        ("SDF absurd values", model(box.format(mass="1", i="1", size="1e9 1 1"))),
+        ("SDF absurd values", model("<pose>nan 0 0 0 0 0</pose>" + box.format(mass="1", i="1", size="1 1 1"))),
+        ("SDF zero inertia", model(box.format(mass="1", i="0", size="1 1 1"))),
+        ("SDF mesh escape", model("<static>true</static><link name='l'><visual name='v'><geometry><mesh>"
+                                  "<uri>file:///etc/passwd</uri></mesh></geometry></visual></link>")),
+    ]
+
+
 # What the job must say on rosout about the regressions (each names the field or the sender).
 REGRESSION_LOG_LINES = {
     "gravity 1e308": r"gravity\.z = 1e\+308 m/s\^2 is outside",
@@ -367,6 +393,13 @@ REGRESSION_LOG_LINES = {
     "110,000 points": r"JointTrajectory.*: points: too long \(110000 exceeds max_array_len",
     "±100 rad": r"100 rad is outside|outside its (upper|lower) limit",
     "68 years": r"time_from_start .* longer than",
+    "SDF billion laughs": r"XML declares entities",
+    "SDF 400,000 models": r"400000 <model>/<include> elements, more than the limit",
+    "SDF zero inertia": r"inertia is not positive definite",
+    "SDF mesh escape": r"mesh 'file:///etc/passwd'",
+    "set_entity_state 1e9 m": r"set_entity_state 'humanoid' refused: state.pose.position: \[1000000000.0",
+    "apply_link_wrench 1e12 N": r"apply_link_wrench 'humanoid::torso' refused: wrench.force",
+    "apply_joint_effort 1e12": r"apply_joint_effort 'humanoid::left_knee' refused: effort",
 }
 
 
@@ -392,6 +425,26 @@ def regressions(targets: dict[str, Target]) -> list[Case]:
     add(spawn, "billion laughs", {"name": "lol", "xml": '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaa">'
                                   '<!ENTITY b "&a;&a;&a;&a;">]><robot name="r"><link name="&b;"/></robot>'})
     add(spawn, "bad name", {"name": "../../x", "xml": mesh_urdf("m.stl")})
+    for category, xml in bad_sdf_models():
+        add(spawn, category, {"name": "fuzz_sdf", "xml": xml})
+    entity_state = "sim/set_entity_state"
+    add(entity_state, "entity: unknown", {"state": {"name": "no_such_model"}})
+    add(entity_state, "entity: absurd pose", {"state": {"name": NS, "pose": {"position": {"x": 1e9}}}})
+    add(entity_state, "entity: absurd twist", {"state": {"name": NS, "twist": {"linear": {"z": 1e9}}}})
+    add(entity_state, "entity: the ground", {"state": {"name": "ground_plane"}})
+    add("sim/get_entity_state", "entity: unknown", {"name": "humanoid::no_such_link"})
+    wrench = "sim/apply_link_wrench"
+    add(wrench, "wrench: absurd force", {"link_name": f"{NS}::torso", "wrench": {"force": {"x": 1e12}},
+                                         "duration": {"sec": 1, "nanosec": 0}})
+    add(wrench, "wrench: unknown link", {"link_name": "nope::x", "wrench": {"force": {"x": 1.0}},
+                                         "duration": {"sec": 1, "nanosec": 0}})
+    add(wrench, "wrench: zero duration", {"link_name": f"{NS}::torso", "wrench": {"force": {"x": 1.0}}})
+    add(wrench, "wrench: static model", {"link_name": "table", "wrench": {"force": {"x": 1.0}},
+                                         "duration": {"sec": 1, "nanosec": 0}})
+    effort = "sim/apply_joint_effort"
+    add(effort, "effort: unknown joint", {"joint_name": "nope", "effort": 1.0, "duration": {"sec": 1, "nanosec": 0}})
+    add(effort, "effort: absurd", {"joint_name": f"{NS}::left_knee", "effort": 1e12,
+                                   "duration": {"sec": 1, "nanosec": 0}})
     cm = f"{NS}/controller_manager"
     add(f"{cm}/switch_controller", "strictness", {"deactivate_controllers": ["joint_trajectory_controller"],
                                                    "strictness": 99})

@@ -12,7 +12,12 @@ Each run:
 ``inprocess_steps_per_s`` and ``ratio`` (medians over the runs); each run also records what the launcher
 did with ``exclusive_cpu`` ("CPU 1", "not reserved: why" when another lockstep launch holds the CPU, "off").
 
-    python bench/lockstep.py [--runs 3] [--seconds 8] [--physics-rate 1000]
+``--world NAME`` (repeatable) runs the full stack in each world in turn within every run (same ceiling, same
+machine state), e.g. ``--world empty.world --world simple_lab.world``: the table and the JSON then add each
+world's ratio, its load time (the simulator's ``loaded in`` line) and ``world_cost``, the last world's
+full-stack rate against the first's.
+
+    python bench/lockstep.py [--runs 3] [--seconds 8] [--physics-rate 1000] [--world NAME ...]
 """
 
 from __future__ import annotations
@@ -62,7 +67,7 @@ with session as s:
     def on_models(sample):
         m = msgpack.unpackb(sample.payload.to_bytes())
         for name, pose in zip(m["name"], m["pose"]):
-            if name != "ground_plane":   # every robot: humanoid here, humanoid_0.. in bench/scale.py
+            if name.startswith("humanoid"):   # every robot: humanoid here, humanoid_0.. in bench/scale.py
                 pelvis.append(pose["position"]["z"])
     def on_start(sample):
         started.set()
@@ -215,8 +220,18 @@ def fullstack(seconds: float, physics_rate: float, launch_file: str = "humanoid.
             launch.wait()
     result["steps_per_s"] = result["sim_seconds"] * physics_rate / result["wall_seconds"]
     result["cpu_percent"] = cpu_percent_between(cpu_before, cpu_after, wall)
-    result["exclusive_cpu"] = exclusive_cpu_of((log_dir / "launch.out").read_text(errors="replace"))
+    launch_output = (log_dir / "launch.out").read_text(errors="replace")
+    result["exclusive_cpu"] = exclusive_cpu_of(launch_output)
+    result["world_load_ms"] = world_load_ms(launch_output)
     return result
+
+
+def world_load_ms(launch_output: str) -> float | None:
+    """The simulator's ``... loaded in N ms`` (parse and build of the world file), None without a world."""
+    for line in launch_output.splitlines():
+        if "[simulator]" in line and "; loaded in " in line:
+            return float(line.rsplit("; loaded in ", 1)[1].split(" ms", 1)[0])
+    return None
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -226,9 +241,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--inprocess-steps", type=int, default=4000)
     parser.add_argument("--physics-rate", type=float, default=1000.0, help="must match config/sim.yaml")
     parser.add_argument("--launch", default="humanoid.yaml", help="launch file of the full stack (experiments)")
+    parser.add_argument("--world", action="append", default=[],
+                        help="world:= of the full stack; repeat to compare worlds in the same run")
     parser.add_argument("launch_args", nargs="*", metavar="NAME:=VALUE",
                         help="extra launch arguments, e.g. commander:=none (experiments)")
     args = parser.parse_args(argv)
+    if args.world:
+        return compare_worlds(args)
 
     load_before = os.getloadavg()[0]
     rows = []
@@ -269,6 +288,46 @@ def main(argv: list[str] | None = None) -> int:
                                                    for k, v in r.items()} for r in rows],
         "pelvis_min": round(pelvis_min, 4), "cpu_percent": cpu, "load_average": round(load_before, 2),
     }))
+    return 0
+
+
+def compare_worlds(args: argparse.Namespace) -> int:
+    """The full stack in each ``--world`` in turn, every run, against the same in-process ceiling."""
+    load_before = os.getloadavg()[0]
+    rows: dict[str, list[dict]] = {world: [] for world in args.world}
+    for run in range(args.runs):
+        ceiling, _ = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
+        fulls = {world: fullstack(args.seconds, args.physics_rate, args.launch,
+                                  (*args.launch_args, f"world:={world}")) for world in args.world}
+        ceiling = statistics.mean([ceiling, inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)[0]])
+        for world, full in fulls.items():
+            rows[world].append({"inprocess": ceiling, "fullstack": full["steps_per_s"],
+                                "ratio": full["steps_per_s"] / ceiling, "pelvis_min": full["pelvis_min"],
+                                "load_ms": full["world_load_ms"], "exclusive_cpu": full["exclusive_cpu"]})
+            print(f"run {run + 1} {world}: full stack {full['steps_per_s']:,.0f} steps/s, ratio "
+                  f"{full['steps_per_s'] / ceiling:.3f}, world loaded in {full['world_load_ms']} ms", file=sys.stderr)
+    summary = {}
+    for world, runs in rows.items():
+        loads = [r["load_ms"] for r in runs if r["load_ms"] is not None]
+        summary[world] = {"fullstack_steps_per_s": round(statistics.median(r["fullstack"] for r in runs), 1),
+                          "ratio": round(statistics.median(r["ratio"] for r in runs), 4),
+                          "pelvis_min": round(min(r["pelvis_min"] for r in runs), 4),
+                          "load_ms": round(statistics.median(loads), 1) if loads else None}
+    first, last = args.world[0], args.world[-1]
+    # per run, then the median: both worlds of a run met the same machine state
+    cost = statistics.median(b["fullstack"] / a["fullstack"] for a, b in zip(rows[first], rows[last]))
+    table = [(f"{world}: ratio (b)/(a)", f"{v['ratio']:.3f}",
+              f"{v['fullstack_steps_per_s']:,.0f} steps/s, loaded in {v['load_ms']} ms, pelvis min "
+              f"{v['pelvis_min']:.3f} m") for world, v in summary.items()]
+    table.append((f"world_cost: {last} / {first}", f"{cost:.3f}", "full-stack rate, same runs (goal >= 0.95)"))
+    table.append(("load average (1 min) before / after", f"{load_before:.1f} / {os.getloadavg()[0]:.1f}",
+                  f"{os.cpu_count()} cores"))
+    width = max(len(r[0]) for r in table)
+    print(f"{'measurement':<{width}}  {'result':>8}  note")
+    for name, value, note in table:
+        print(f"{name:<{width}}  {value:>8}  {note}")
+    print(json.dumps({"worlds": summary, "world_cost": round(cost, 4), "runs": args.runs,
+                      "load_average": round(load_before, 2)}))
     return 0
 
 

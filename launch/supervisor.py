@@ -33,6 +33,7 @@ POLL_S = 0.02
 # loops, not the number of unrelated faults over a long run.
 RESPAWN_RESET_AFTER_S = 30.0
 STATE_DIR_ENV = "ZENROID_STATE_DIR"  # where nodes keep what they restore after a respawn
+CONFIGURATION_ERROR = 2  # a node's exit status for a configuration it refused (nodes.core.run_node)
 RESPAWN_ENV = "ZENROID_RESPAWN"  # how many times this node has been respawned (0: first start)
 _COLOURS = (32, 36, 33, 35, 34, 91, 92, 93, 94, 95, 96)
 
@@ -239,14 +240,18 @@ class Supervisor:
                     self.request_stop(f"on_exit of '{spec.name}' asked for shutdown")
         if spec.respawn and time.monotonic() - managed.started_at >= RESPAWN_RESET_AFTER_S:
             managed.restarts = 0
-        if spec.respawn and managed.restarts < spec.respawn_max and self._stop_reason is None:
+        if spec.respawn and code == CONFIGURATION_ERROR:
+            # run_node's status for a configuration the node refused (a bad world file, a bad parameter):
+            # the same configuration would be refused again, so the launch ends now instead of after retries
+            self.say(f"'{spec.name}' refused its configuration (status {code}): not respawned", "ERROR")
+        elif spec.respawn and managed.restarts < spec.respawn_max and self._stop_reason is None:
             managed.restarts += 1
             managed.state = "respawn_pending"
             managed.next_start = time.monotonic() + spec.respawn_delay
             self.say(f"respawning '{spec.name}' in {spec.respawn_delay:g} s "
                      f"({managed.restarts}/{spec.respawn_max})", "WARN")
             return
-        if spec.respawn:
+        elif spec.respawn:
             self.say(f"'{spec.name}' reached its restart limit ({spec.respawn_max})", "ERROR")
         if spec.required:
             if code != 0:

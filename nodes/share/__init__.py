@@ -1,7 +1,7 @@
-"""The one place that finds the project's shared files: robot models (``robots/``) and configuration
-(``config/``), the ``share/<package>`` directory of a ROS package.
+"""The one place that finds the project's shared files: robot models (``robots/``), configuration
+(``config/``) and SDF worlds (``worlds/``), the ``share/<package>`` directory of a ROS package.
 
-``robots`` and ``config`` here are links to the top-level folders of the checkout, so the same lookup works
+``robots``, ``config`` and ``worlds`` here are links to the top-level folders of the checkout, so the same lookup works
 from a checkout, an editable install and a wheel (the build copies the linked files in as package data).
 """
 
@@ -12,6 +12,7 @@ from pathlib import Path
 _HERE = Path(__file__).parent
 ROBOTS_DIR = (_HERE / "robots").resolve()
 CONFIG_DIR = (_HERE / "config").resolve()
+WORLDS_DIR = (_HERE / "worlds").resolve()
 ROBOT_SUFFIXES = ("", ".urdf", ".urdf.xacro")
 
 
@@ -34,6 +35,11 @@ def robot_file(name: str) -> Path:
 def config_file(name: str) -> Path:
     """``$(config NAME)``: a path as given, else ``config/NAME`` or ``config/NAME.yaml``."""
     return _find(name, CONFIG_DIR, ("", ".yaml"), "config file")
+
+
+def world_file(name: str) -> Path:
+    """``world:=NAME``: a path as given, else ``worlds/NAME``, ``worlds/NAME.world`` or ``worlds/NAME.sdf``."""
+    return _find(name, WORLDS_DIR, ("", ".world", ".sdf"), "world")
 
 
 def robot_names() -> list[str]:

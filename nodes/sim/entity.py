@@ -7,62 +7,12 @@ import re
 from dataclasses import dataclass, field
 
 import dartpy as dart
-import numpy as np
 
-from nodes.sim.geometry import pose_from_xyz_rpy, quaternion_from_rotation
+from nodes.sim.model import Model
+from nodes.sim.pose import Pose, SpawnError
 from nodes.sim.urdf_info import RobotInfo, parse_urdf
 
 _NAME = re.compile(r"^[A-Za-z0-9_.\-]+$")   # entity names and namespace parts: safe in key expressions
-
-
-class SpawnError(ValueError):
-    """A spawn request that cannot be honoured (the message says which field and why)."""
-
-
-@dataclass
-class Pose:
-    """Position + unit quaternion (x, y, z, w), the geometry_msgs/Pose layout."""
-
-    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    orientation: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
-
-    @classmethod
-    def from_xyz_rpy(cls, x: float, y: float, z: float, roll: float = 0.0, pitch: float = 0.0,
-                     yaw: float = 0.0) -> Pose:
-        position, orientation = pose_from_xyz_rpy(x, y, z, roll, pitch, yaw)
-        return cls(position, orientation)
-
-    def validated(self) -> Pose:
-        """The same pose with a normalised quaternion; raises SpawnError on NaN/inf or a zero quaternion."""
-        values = [*self.position, *self.orientation]
-        if len(self.position) != 3 or len(self.orientation) != 4:
-            raise SpawnError("initial_pose must have a 3-D position and a 4-D orientation")
-        if not all(math.isfinite(v) for v in values):
-            raise SpawnError(f"initial_pose contains NaN or infinity: {values}")
-        norm = math.sqrt(sum(q * q for q in self.orientation))
-        if norm < 1e-9:
-            # ROS messages default to an all-zero quaternion: read it as "no rotation"
-            return Pose(tuple(self.position), (0.0, 0.0, 0.0, 1.0))
-        return Pose(tuple(self.position), tuple(q / norm for q in self.orientation))
-
-    def to_isometry(self) -> dart.math.Isometry3:
-        x, y, z, w = self.orientation
-        rotation = np.array([
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ])
-        iso = dart.math.Isometry3()
-        iso.set_rotation(rotation)
-        iso.set_translation(np.asarray(self.position, dtype=float))
-        return iso
-
-    @classmethod
-    def from_matrix(cls, matrix: np.ndarray) -> Pose:
-        return cls(tuple(float(v) for v in matrix[:3, 3]), quaternion_from_rotation(matrix[:3, :3]))
-
-    def compose(self, child: Pose) -> Pose:
-        return Pose.from_matrix(self.to_isometry().matrix() @ child.to_isometry().matrix())
 
 
 @dataclass
@@ -78,7 +28,7 @@ class EntitySpec:
     base_uri: str = ""            # where relative mesh paths resolve (the URDF file's path)
 
 
-class Entity:
+class Entity(Model):
     """A spawned model: its skeleton, URDF info and spawn state (for reset_world)."""
 
     def __init__(self, spec: EntitySpec) -> None:
@@ -105,7 +55,7 @@ class Entity:
             self.dof_index[joint.name] = int(dart_joint.getIndexInSkeleton(0))
         self._place(self.pose)
         self._apply_initial_positions(spec.initial_positions)
-        self.spawn_positions = np.array(self.skeleton.getPositions(), dtype=float)
+        self.remember_spawn()
 
     @staticmethod
     def _load_skeleton(spec: EntitySpec) -> dart.dynamics.Skeleton:
@@ -138,20 +88,3 @@ class Entity:
                 raise SpawnError(f"initial position {value} of joint {joint_name!r} is outside "
                                  f"[{joint.min_position}, {joint.max_position}]")
             self.skeleton.setPosition(self.dof_index[joint_name], float(value))
-
-    def reset(self) -> None:
-        """Back to the spawn pose and joint positions, at rest."""
-        self.skeleton.setPositions(self.spawn_positions)
-        self.skeleton.resetVelocities()
-        self.skeleton.resetAccelerations()
-        self.skeleton.resetCommands()
-        self.skeleton.clearExternalForces()
-
-    # -- model_states -----------------------------------------------------------------------------------
-    def world_pose(self) -> Pose:
-        return Pose.from_matrix(self.skeleton.getRootBodyNode().getWorldTransform().matrix())
-
-    def world_twist(self) -> tuple[np.ndarray, np.ndarray]:
-        """(linear, angular) velocity of the root link in the world frame."""
-        body = self.skeleton.getRootBodyNode()
-        return np.asarray(body.getLinearVelocity()), np.asarray(body.getAngularVelocity())

@@ -20,10 +20,13 @@ from nodes.core.endpoints import ServiceError
 from nodes.core.params import ParameterError, load_params_file
 from nodes.sim.config import DEFAULT_CONFIG, StartupEntity, parse_entities, parse_gains
 from nodes.sim.entity import EntitySpec, Pose, SpawnError
+from nodes.sim.entity_services import EntityServices
 from nodes.sim.interfaces import MODES
 from nodes.sim.outputs import SimOutputs
-from nodes.sim.robot_files import ConfigError, fetch_robot_description, read_robot_xml, resolve_robot_file
+from nodes.sim.robot_files import ConfigError, fetch_robot_description, read_model_xml, resolve_robot_file
 from nodes.sim.robot_link import RobotLink
+from nodes.sim.sdf import WorldError, WorldSpec, is_sdf, load_world, parse_model
+from nodes.sim.sdf_model import WorldModel
 from nodes.sim.services import TIME_STEP_RANGE, SimServices, gravity_problem
 from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import Pacer
@@ -85,6 +88,8 @@ class SimulatorNode(Node):
                             description="seed of the sensors' noise (the same seed, the same noise)"))
         sensors = p("sensors", True, description="simulate the URDF's IMU, force/torque and contact sensors "
                     "(false: left out, with their state interfaces)")
+        world_file = p("world", "", description="SDF world file (a path or a name in worlds/); its physics, "
+                       "gravity and ground replace physics_rate, gravity, real_time_factor and ground_enabled")
         try:
             gains_for = parse_gains(gains_table)
             self._startup: list[StartupEntity] = parse_entities(entities)
@@ -96,20 +101,44 @@ class SimulatorNode(Node):
             self.world.add_ground(ground_size, ground_friction)
         self.sim = Simulation(self.world, gains_for, self.logger.warn, mode, sensor_seed=sensor_seed,
                               sensors_enabled=sensors)
+        self.world_spec: WorldSpec | None = None
+        if world_file:
+            self._load_world(world_file, ground_size, ground_friction)
         self.robots: dict[str, RobotLink] = {}
         self.outputs = SimOutputs(self, self.sim, self.robots, clock_rate=clock_rate, state_rate=state_rate)
         self._startup_deadline = time.monotonic() + 30.0
         self._next_startup_try = 0.0
         self._next_drain = 0.0
         SimServices(self).serve()
+        EntityServices(self).serve()
         self._spawn_startup_entities()
-        self.logger.info(f"simulator ready: mode {mode}, {physics_rate:g} Hz physics, gravity {list(gravity)}, "
-                         f"ground {'on' if ground else 'off'}, detector {detector}"
+        self.logger.info(f"simulator ready: mode {mode}, {self.world.physics_rate:g} Hz physics, gravity "
+                         f"{list(self.world.gravity)}, ground {'on' if self.world.has_ground else 'off'}, "
+                         f"detector {detector}" + (f", world {self.world_spec.name!r}" if self.world_spec else "")
                          + (", paused" if self.paused else ""))
+
+    def _load_world(self, name: str, ground_size: float, ground_friction: float) -> None:
+        """The world file's physics, gravity, ground and models; a file that cannot be used is logged with the
+        reason and ends the start-up (ValueError: exit status 2, which the launcher does not respawn)."""
+        started = time.perf_counter()
+        try:
+            spec = load_world(name)
+            self.sim.load_world(spec, ground_size, ground_friction)
+        except (WorldError, SpawnError) as exc:
+            self.logger.error(f"world {name!r} refused: {exc}")
+            raise ValueError(f"world {name!r} refused: {exc}") from None
+        self.world_spec = spec
+        self.pacer.real_time_factor = spec.physics.real_time_factor
+        self.logger.info(f"{spec.summary()}; loaded in {(time.perf_counter() - started) * 1e3:.1f} ms")
+        if spec.not_simulated_line():
+            self.logger.info(spec.not_simulated_line())
 
     # ------------------------------------------------------------------------------------- entities
     def spawn_entity(self, spec: EntitySpec, reference_frame: str = "") -> str:
-        """Spawn and wire up a robot; returns a status line, raises SpawnError/UrdfError on failure."""
+        """Spawn and wire up a robot (URDF) or add a model (SDF); returns a status line, raises
+        SpawnError/UrdfError/WorldError on failure."""
+        if is_sdf(spec.xml):
+            return self._spawn_sdf(spec, reference_frame)
         entity = self.sim.spawn(spec, reference_frame)
         try:
             self.robots[entity.namespace] = RobotLink(self, self.sim, self.sim.hardware[entity.namespace],
@@ -122,6 +151,26 @@ class SimulatorNode(Node):
         pos = entity.pose.position
         return (f"spawned {entity.name!r} ({joints} joints, {base} base) at "
                 f"({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}) in namespace {entity.namespace!r}")
+
+    def _spawn_sdf(self, spec: EntitySpec, reference_frame: str) -> str:
+        """An SDF model: its own pose composed after the spawn pose (no hardware interface: no ros2_control)."""
+        model_spec = parse_model(spec.xml, f"spawn_entity {spec.name!r}")
+        model_spec.name = spec.name or model_spec.name
+        model_spec.static = model_spec.static or spec.fixed
+        pose = spec.pose.validated()
+        frame = reference_frame.strip()
+        if frame not in ("", "world", "map"):
+            parent = self.sim.entities.get(frame.split("::")[0])
+            if parent is None:
+                raise SpawnError(f"reference_frame {frame!r} is neither 'world' nor an existing entity")
+            pose = parent.world_pose().compose(pose)
+        model_spec.pose = pose.to_isometry().matrix() @ model_spec.pose
+        if self.sim.entities.get(model_spec.name) is not None:
+            raise SpawnError(f"an entity named {model_spec.name!r} already exists")
+        model = self.sim.add_model(WorldModel(model_spec))
+        x, y, z = model.world_pose().position
+        return (f"spawned SDF model {model.name!r} ({len(model_spec.links)} links, {len(model_spec.joints)} joints, "
+                f"{'static' if model.static else 'dynamic'}) at ({x:.3f}, {y:.3f}, {z:.3f})")
 
     def _spawn_startup_entities(self) -> None:
         """Entities from the ``entities`` parameter; ones from a topic are retried until it answers."""
@@ -140,7 +189,7 @@ class SimulatorNode(Node):
                               base_uri=base_uri)
             try:
                 self.logger.info(self.spawn_entity(spec))
-            except (SpawnError, UrdfError) as exc:
+            except (SpawnError, UrdfError, WorldError) as exc:
                 self.logger.error(f"cannot spawn {item.name!r}: {exc}")
         self._startup = pending
         self._next_startup_try = time.monotonic() + STARTUP_SPAWN_RETRY_S
@@ -148,7 +197,7 @@ class SimulatorNode(Node):
     def _startup_xml(self, item: StartupEntity) -> tuple[str, str]:
         if item.file:
             path = resolve_robot_file(item.file)
-            return read_robot_xml(path), path.as_uri()
+            return read_model_xml(path), path.as_uri()
         return fetch_robot_description(self, item.topic, timeout=0.5), ""
 
     def delete_entity(self, name: str) -> bool:

@@ -1,5 +1,6 @@
-"""What the simulator publishes besides the hardware frames: ``sim/clock``, ``sim/model_states`` (with each
-robot's ``humanoid_state``) on a sim-time schedule, and ``sim/diagnostics`` once a wall second.
+"""What the simulator publishes besides the hardware frames: ``sim/clock``, ``sim/model_states`` and
+``sim/link_states`` (with each robot's ``humanoid_state``) on a sim-time schedule, and ``sim/diagnostics``
+once a wall second.
 
 Every stream drops rather than blocks on a stalled subscriber: the physics loop must never wait for one."""
 
@@ -13,12 +14,13 @@ from collections.abc import Mapping
 
 import msgs
 from nodes.core import Node
-from nodes.sim.interfaces import Clock, ModelStates, String
+from nodes.sim.interfaces import Clock, LinkStates, ModelStates, String
 from nodes.sim.robot_link import RobotLink
 from nodes.sim.simulation import Simulation
 
 _pack_clock = msgs.packer("rosgraph_msgs/msg/Clock")
 _pack_model_states = msgs.packer("gazebo_msgs/msg/ModelStates")
+_pack_link_states = msgs.packer("gazebo_msgs/msg/LinkStates")
 _pose = msgs.builder("geometry_msgs/msg/Pose")
 _point = msgs.builder("geometry_msgs/msg/Point")
 _quaternion = msgs.builder("geometry_msgs/msg/Quaternion")
@@ -37,6 +39,7 @@ class SimOutputs:
         self.state_period = 1.0 / state_rate
         self.clock_pub = node.create_publisher(Clock, "/sim/clock", express=True, reliable=False)
         self.model_states_pub = node.create_publisher(ModelStates, "/sim/model_states", reliable=False)
+        self.link_states_pub = node.create_publisher(LinkStates, "/sim/link_states", reliable=False)
         self.diagnostics_pub = node.create_publisher(String, "/sim/diagnostics")
         self._next_clock = 0.0
         self._next_state = 0.0
@@ -53,7 +56,9 @@ class SimOutputs:
             self.clock_pub.publish_raw(_pack_clock(clock=msgs.time_map(t)))
             self._next_clock = next_due(self._next_clock, t, self.clock_period)
         if force or t + eps >= self._next_state:
-            self._publish_model_states()
+            self._publish_states(self.sim.model_states(), self.model_states_pub, _pack_model_states)
+            if self.link_states_pub.has_subscribers:   # every link of every model: only when read
+                self._publish_states(self.sim.link_states(), self.link_states_pub, _pack_link_states)
             for link in self.robots.values():
                 if link.humanoid_pub.has_subscribers:   # CoM, contacts and ZMP cost ~0.15 ms: only when read
                     link.publish_humanoid_state(t)
@@ -63,9 +68,11 @@ class SimOutputs:
         """After a reset: the next clock and states are due at the current sim time."""
         self._next_clock = self._next_state = self.sim.world.time
 
-    def _publish_model_states(self) -> None:
+    @staticmethod
+    def _publish_states(rows, publisher, pack) -> None:
+        """ModelStates / LinkStates (the same layout) of (name, pose, linear, angular) rows."""
         names, poses, twists = [], [], []
-        for name, pose, linear, angular in self.sim.model_states():
+        for name, pose, linear, angular in rows:
             names.append(name)
             px, py, pz = pose.position
             qx, qy, qz, qw = pose.orientation
@@ -73,7 +80,7 @@ class SimOutputs:
             lx, ly, lz = linear.tolist()
             ax, ay, az = angular.tolist()
             twists.append(_twist(linear=_vector3(x=lx, y=ly, z=lz), angular=_vector3(x=ax, y=ay, z=az)))
-        self.model_states_pub.publish_raw(_pack_model_states(name=names, pose=poses, twist=twists))
+        publisher.publish_raw(pack(name=names, pose=poses, twist=twists))
 
     def publish_diagnostics(self, paused: bool) -> None:
         """Once a wall second: mode, real-time factor, steps per second, lateness, who commands each robot."""

@@ -38,6 +38,19 @@ def read_robot_xml(path: Path) -> str:
         raise ConfigError(f"{path}: {exc}") from None
 
 
+def read_model_xml(path: Path) -> str:
+    """A robot (URDF or xacro, as ``read_robot_xml``) or an SDF model file (``.sdf``): the SDF text is passed
+    on as it is, the simulator checks it (nodes/sim/sdf.py)."""
+    if path.suffix == ".sdf":
+        from nodes.sim.sdf import MAX_FILE_BYTES, WorldError, read_limited
+
+        try:
+            return read_limited(path, MAX_FILE_BYTES, "model file").decode("utf-8", errors="replace")
+        except WorldError as exc:
+            raise ConfigError(str(exc)) from None
+    return read_robot_xml(path)
+
+
 def fetch_robot_description(node: Node, key: str, timeout: float = 2.0) -> str:
     """The URDF from a latched ``robot_description`` (a queryable answering std_msgs/String)."""
     resolved = node.resolve(key)

@@ -19,6 +19,7 @@ from nodes.sim.interfaces import (
     SpawnEntity,
     StepSimulation,
 )
+from nodes.sim.sdf import WorldError
 from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import Pacer
 from nodes.sim.urdf_info import UrdfError
@@ -77,7 +78,7 @@ class SimServices:
             return fail(f"initial_joint_names has {len(request.initial_joint_names)} entries but "
                         f"initial_joint_positions has {len(request.initial_joint_positions)}")
         if not request.xml.strip():
-            return fail("xml is empty: pass the URDF text (spawn from a file or robot_description)")
+            return fail("xml is empty: pass the URDF or SDF text (spawn from a file or robot_description)")
         pose = request.initial_pose
         spec = EntitySpec(
             name=request.name, xml=request.xml, namespace=request.robot_namespace, fixed=request.fixed,
@@ -87,7 +88,7 @@ class SimServices:
         )
         try:
             message = self.simulator.spawn_entity(spec, request.reference_frame)
-        except (SpawnError, UrdfError) as exc:
+        except (SpawnError, UrdfError, WorldError) as exc:
             return fail(str(exc))
         self.logger.info(message)
         return SpawnEntity.Response(success=True, status_message=message)

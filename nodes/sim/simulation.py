@@ -14,6 +14,10 @@ from nodes.sim.entity import Entity, EntitySpec, Pose, SpawnError
 from nodes.sim.hardware import HardwareInterface
 from nodes.sim.humanoid_state import BalanceState, FootWrench, balance_state, robot_contacts
 from nodes.sim.interfaces import MODES
+from nodes.sim.model import Model
+from nodes.sim.pushes import Pushes
+from nodes.sim.sdf import WorldSpec
+from nodes.sim.sdf_model import WorldModel
 from nodes.sim.sensors import SensorSuite
 from nodes.sim.world import GROUND_NAME, PhysicsWorld
 
@@ -32,12 +36,13 @@ class Simulation:
         self.gains_for = gains_for
         self.warn = warn or (lambda message: None)
         self.mode = mode
-        self.entities: dict[str, Entity] = {}
+        self.entities: dict[str, Model] = {}             # robots (Entity) and world models (WorldModel)
         self.hardware: dict[str, HardwareInterface] = {}   # by robot namespace
         self.sensors: dict[str, SensorSuite] = {}           # by robot namespace
         self.sensor_seed = sensor_seed
         self.sensors_enabled = sensors_enabled
         self.step_count = 0                                  # physics steps since start / reset_simulation
+        self.pushes = Pushes()                               # apply_link_wrench / apply_joint_effort
         self._com_velocity: dict[str, tuple[float, np.ndarray]] = {}  # namespace -> (time, CoM velocity)
         self._recent_contacts: dict[str, list[tuple[float, list]]] = {}  # namespace -> [(time, contacts)]
 
@@ -77,12 +82,35 @@ class Simulation:
         self.sensors[entity.namespace] = sensors
         return entity
 
+    def add_model(self, model: WorldModel) -> WorldModel:
+        """Add a world file's (or an SDF spawn request's) model; raises SpawnError on a name already taken."""
+        if model.name in self.entities or model.name == GROUND_NAME:
+            raise SpawnError(f"an entity named {model.name!r} already exists")
+        self.world.world.addSkeleton(model.skeleton)
+        if model.static:
+            self.world.mark_static(model.skeleton)
+        self.entities[model.name] = model
+        return model
+
+    def load_world(self, spec: WorldSpec, ground_size: float, ground_friction: float) -> None:
+        """A world file's physics, gravity, ground and models (models in file order: the same file builds the
+        same world, so lockstep runs in it stay bit-identical)."""
+        self.world.set_time_step(spec.physics.max_step_size)
+        self.world.set_gravity(spec.gravity)
+        self.world.remove_ground()
+        if spec.ground is not None:
+            self.world.add_ground(ground_size, ground_friction, spec.ground)
+        built = [WorldModel(model) for model in spec.models]   # every model builds before any is added
+        for model in built:
+            self.add_model(model)
+
     def delete(self, name: str) -> bool:
         if name == GROUND_NAME:
             return self.world.remove_ground()
         entity = self.entities.pop(name, None)
         if entity is None:
             return False
+        self.pushes.drop_model(name)
         self.hardware.pop(entity.namespace, None)
         self.sensors.pop(entity.namespace, None)
         self._com_velocity.pop(entity.namespace, None)
@@ -109,6 +137,8 @@ class Simulation:
             else:
                 for hw in hardware:
                     hw.before_step()
+                if self.pushes:
+                    self.pushes.apply(self.world.time)
                 self.world.step()
                 for hw in hardware:
                     hw.after_step()
@@ -130,6 +160,7 @@ class Simulation:
         """Robots back to their spawn poses and joint positions, at rest, holding position (time kept)."""
         self._com_velocity.clear()
         self._recent_contacts.clear()
+        self.pushes.clear()
         for entity in self.entities.values():
             entity.reset()
         for suite in self.sensors.values():
@@ -152,6 +183,19 @@ class Simulation:
         for name, entity in self.entities.items():
             linear, angular = entity.world_twist()
             rows.append((name, entity.world_pose(), linear, angular))
+        return rows
+
+    def link_states(self) -> list[tuple[str, Pose, np.ndarray, np.ndarray]]:
+        """("model::link", pose, linear, angular) of every link of every model, in the world frame."""
+        rows = []
+        if self.world.has_ground:
+            rows.append((f"{GROUND_NAME}::link", Pose(), np.zeros(3), np.zeros(3)))
+        for name, model in self.entities.items():
+            skeleton = model.skeleton
+            for i in range(skeleton.getNumBodyNodes()):
+                body = skeleton.getBodyNode(i)
+                rows.append((f"{name}::{body.getName()}", Pose.from_matrix(body.getWorldTransform().matrix()),
+                             np.asarray(body.getLinearVelocity()), np.asarray(body.getAngularVelocity())))
         return rows
 
     def balance(self, namespace: str) -> BalanceState:

@@ -1,7 +1,9 @@
-"""``zenroid spawn``: put a robot into the running simulator, like gazebo_ros' ``spawn_entity.py``.
+"""``zenroid spawn``: put a robot (URDF) or a model (SDF) into the running simulator, like gazebo_ros'
+``spawn_entity.py``.
 
     zenroid spawn -entity humanoid -file robots/humanoid.urdf -z 1.0
     zenroid spawn -entity humanoid -topic robot_description -x 0 -y 0 -z 1.0 -Y 1.57
+    zenroid spawn -entity crate -file crate.sdf -x 2 -z 0.5
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ from nodes.tools.common import add_common, cli_node
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-entity", required=True, help="name of the entity in the simulator")
     source = parser.add_mutually_exclusive_group(required=True)
-    source.add_argument("-file", help="URDF (or .xacro) file, or a robot name from robots/")
+    source.add_argument("-file", help="URDF (or .xacro) file, a robot name from robots/, or an SDF model (.sdf)")
     source.add_argument("-topic", help="latched robot_description key (e.g. humanoid/robot_description)")
     for axis in ("x", "y", "z"):
         parser.add_argument(f"-{axis}", type=float, default=0.0, help=f"initial {axis} position (m)")
@@ -50,7 +52,7 @@ def _initial_joints(pairs: list[list[str]]) -> tuple[list[str], list[float]]:
 
 def run(args: argparse.Namespace) -> int:
     from nodes.sim.interfaces import Empty, SpawnEntity
-    from nodes.sim.robot_files import ConfigError, fetch_robot_description, read_robot_xml, resolve_robot_file
+    from nodes.sim.robot_files import ConfigError, fetch_robot_description, read_model_xml, resolve_robot_file
 
     pose_values = [args.x, args.y, args.z, args.R, args.P, args.Y]
     if not all(math.isfinite(v) for v in pose_values):
@@ -61,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     xml = ""
     if args.file:
         try:
-            xml = read_robot_xml(resolve_robot_file(args.file))
+            xml = read_model_xml(resolve_robot_file(args.file))
         except ConfigError as exc:
             raise UsageError(str(exc)) from None
 

@@ -2,7 +2,8 @@
 
 - two runs started paused (``paused:=true``) and unpaused once every controller is active give
   bit-identical joint trajectories, the joint commander's knee bends included, and bit-identical IMU and
-  foot force/torque readings (the shipped IMU's noise on);
+  foot force/torque readings (the shipped IMU's noise on), in the main job's world (``simple_lab.world``:
+  static and dynamic models around the robot);
 - every hot-path message (hardware frames, joint_states, tf, controller state, clock, model_states,
   humanoid_state), built by the generated packers, is a complete map of its schema: a third-party
   ``msgpack.unpackb`` sees exactly the fields of the ``.msg`` file, and the schema decoder accepts it;
@@ -106,7 +107,7 @@ def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[f
     with open(out_path, "wb") as out:
         launcher = subprocess.Popen(
             [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", "mode:=lockstep", "paused:=true",
-             f"zenoh_port:={port}", "--log-dir", str(log_dir / "logs")],
+             "world:=simple_lab.world", f"zenoh_port:={port}", "--log-dir", str(log_dir / "logs")],
             cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
     session = None
     try:

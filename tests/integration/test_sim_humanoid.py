@@ -39,7 +39,7 @@ def node(router):
 
 
 def test_humanoid_stands_10s_then_bends_knees_and_keeps_standing(processes, node):
-    proc = start_sim(processes, HUMANOID_ENTITY)
+    proc = start_sim(processes, HUMANOID_ENTITY, "world:=simple_lab.world")   # the main job's world
     wait_ready(node, processes, proc)
     info = call(node, GetHardwareInfo, "/humanoid/hardware/info")
     joints = [j.name for j in info.joints]

@@ -1,5 +1,5 @@
 """The distribution works as a wheel (non-editable, outside the checkout): ``pip install .`` into a fresh
-venv runs ``python -m launch humanoid.yaml``, robots/ and config/ included, and ``zenroid launch`` still
+venv runs ``python -m launch humanoid.yaml``, robots/, config/ and worlds/ included, and ``zenroid launch`` still
 works when a sourced ROS 2 environment shadows the ``launch`` package."""
 
 from __future__ import annotations
@@ -121,7 +121,8 @@ def _joint_states_flow(argv: list[str], cwd: Path, env: dict[str, str], port: in
 def test_wheel_runs_the_main_job_outside_the_checkout(venv: Path, tmp_path: Path, zenoh_port: int) -> None:
     python = venv / "bin" / "python"
     where = _run([str(python), "-c", "import launch, msgs, nodes.share as s; "
-                  "print(launch.__file__, msgs.__file__, s.robot_file('humanoid'), s.config_file('controllers'))"],
+                  "print(launch.__file__, msgs.__file__, s.robot_file('humanoid'), s.config_file('controllers'), "
+                  "s.world_file('simple_lab'))"],
                  cwd=tmp_path, env=_outside_env(), timeout=60).stdout.split()
     assert all(Path(p).resolve().is_relative_to(venv.resolve()) for p in where), (where, venv)
     _joint_states_flow([str(python), "-m", "launch", "humanoid.yaml", "gui:=false", f"zenoh_port:={zenoh_port}",

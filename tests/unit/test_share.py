@@ -20,6 +20,8 @@ from tests.conftest import ROOT
 def test_shared_folders_are_the_top_level_ones_in_a_checkout() -> None:
     assert share.ROBOTS_DIR == (ROOT / "robots").resolve()
     assert share.CONFIG_DIR == (ROOT / "config").resolve()
+    assert share.WORLDS_DIR == (ROOT / "worlds").resolve()
+    assert share.world_file("simple_lab") == share.world_file("simple_lab.world") == share.WORLDS_DIR / "simple_lab.world"
     assert "humanoid.urdf" in share.robot_names()
 
 
