@@ -15,9 +15,9 @@ from nodes.tools.common import (
     endpoints_at,
     key_of,
     print_endpoints,
-    to_yaml,
     typed_request,
     write_line,
+    write_message,
 )
 
 
@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
 
     def on_feedback(feedback: Any) -> None:  # on a Zenoh thread: a closed pipe is handed to the main thread
         try:
-            write_line("Feedback:\n" + to_yaml(msgs.to_dict(feedback)))
+            write_message("Feedback:", feedback)
         except BrokenPipeError as exc:
             outcome.setdefault("error", exc)
             finished.set()
@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
         if "result" not in outcome:
             raise outcome["error"]
         status, result = outcome["result"]
-    write_line("Result:\n" + to_yaml(msgs.to_dict(result)))
+    write_message("Result:", result)
     write_line(f"Goal finished with status: {STATUS_NAMES.get(status, status)}")
     return 0 if status == 4 else 1
 

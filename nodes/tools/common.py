@@ -256,6 +256,11 @@ def to_yaml(data: Any) -> str:
     return text
 
 
+def write_message(title: str, msg: Any) -> None:
+    """``title`` on its own line, then the message as block YAML (``service call``, ``action send_goal``)."""
+    write_line(f"{title}\n{to_yaml(msgs.to_dict(msg))}")
+
+
 def write_line(text: str) -> None:
     """Print from any thread; a closed pipe (``| head``) raises BrokenPipeError for the caller to end on."""
     sys.stdout.write(text + "\n")

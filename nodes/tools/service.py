@@ -13,9 +13,9 @@ from nodes.tools.common import (
     endpoints_at,
     key_of,
     print_endpoints,
-    to_yaml,
     typed_request,
     write_line,
+    write_message,
 )
 
 
@@ -36,8 +36,7 @@ def run(args: argparse.Namespace) -> int:
     with calling(args, "service", "srv", f"no service '{key}' is offered") as node:
         print(f"requester: making request: {request}", flush=True)
         response = Client(node, srv, key).call(request, timeout=args.timeout)
-    write_line("response:")
-    write_line(to_yaml(msgs.to_dict(response)))
+    write_message("response:", response)
     return 0
 
 
