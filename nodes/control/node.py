@@ -29,7 +29,13 @@ from msgs.controller_manager_msgs import (
 )
 from msgs.controller_manager_msgs import HardwareInterface as HardwareInterfaceMsg
 from msgs.std_srvs import Trigger
-from msgs.zenroid_msgs import GetHardwareInfo, HardwareCommand, HardwareState, SetParameters
+from msgs.zenroid_msgs import (
+    GetHardwareInfo,
+    HardwareCommand,
+    HardwareHeartbeat,
+    HardwareState,
+    SetParameters,
+)
 from nodes.control import restore
 from nodes.control.config import (
     ConfigError,
@@ -201,6 +207,8 @@ class ControllerManagerNode(Node):
         self._last_time: float | None = None
         self._last_state_wall = 0.0
         self._lost = False
+        self._paused_heartbeat = -1e9   # monotonic time of the last "paused" heartbeat
+        self._paused = False            # reported: the simulator is paused (frames stopped, heartbeats come)
         self._catch_up: tuple[float, float] | None = None  # (wall, sim time) of the first frame after an outage
         self._cycles = 0
         self._cycle_us: collections.deque[float] = collections.deque(maxlen=20_000)
@@ -277,6 +285,8 @@ class ControllerManagerNode(Node):
         self._cmd_pub = self.create_publisher(HardwareCommand, "hardware/command", express=True)
         # frames from one simulator only: a second publisher on the key (a forged or replayed frame) is ignored
         self._state_sender = SingleSender(takeover_after=self.hardware_timeout)
+        # the simulator says it is paused (no frames, but there): not a lost link
+        self.create_subscription(HardwareHeartbeat, "hardware/heartbeat", self._on_heartbeat, inline=True)
         self.create_subscription(HardwareState, "hardware/state", self._on_state, inline=True, raw=True,
                                  with_source=True)
         self.create_service(ListControllers, "~/list_controllers", self._srv_list)
@@ -355,6 +365,9 @@ class ControllerManagerNode(Node):
         with manager.lock:
             self.hardware.read_state(names, positions, velocities, efforts, sensor_values)
             wall = time.monotonic()
+            if self._paused:
+                self._paused = False
+                self.logger.info("hardware resumed (the simulator unpaused)")
             if self._lost:
                 self._lost = False
                 self.logger.info("hardware is back")
@@ -420,11 +433,31 @@ class ControllerManagerNode(Node):
             self.logger.fatal(f"a control cycle has not ended for {time.monotonic() - since:.1f} s (a controller "
                               "stuck in update?): exiting to be respawned")
             os._exit(1)
-        silent = time.monotonic() - self._last_state_wall
-        if not self._lost and silent > self.hardware_timeout:
+        now = time.monotonic()
+        silent = now - self._last_state_wall
+        if silent <= self.hardware_timeout:
+            return
+        if now - self._paused_heartbeat <= self.hardware_timeout:
+            if not self._paused:
+                self._paused = True
+                self._lost = False
+                self.logger.info("hardware paused: the simulator is paused (its heartbeat comes, no frames); "
+                                 "controllers hold and resume with it")
+        elif not self._lost:
             self._lost = True
-            self.logger.error(f"lost the hardware: no hardware/state for {silent:.1f} s (simulator paused or "
-                              "gone?); controllers keep their state and resume when it returns")
+            self._paused = False
+            self.logger.error(f"lost the hardware: no hardware/state and no heartbeat for {silent:.1f} s (the "
+                              "simulator is gone or the link is cut); controllers keep their state and resume "
+                              "when it returns")
+
+    def _on_heartbeat(self, msg: Any) -> None:
+        if msg.paused:
+            self._paused_heartbeat = time.monotonic()
+
+    @property
+    def hardware_status(self) -> str:
+        """"ok", "paused" (the simulator says so) or "lost" (neither frames nor heartbeats)."""
+        return "lost" if self._lost else "paused" if self._paused else "ok"
 
     # --- services (executor thread) ---------------------------------------------------------------------
     def _srv_list(self, _request: Any) -> Any:
@@ -512,6 +545,7 @@ class ControllerManagerNode(Node):
             return samples[min(len(samples) - 1, int(q * len(samples)))] if samples else 0.0
 
         return Trigger.Response(success=True, message=json.dumps({
+            "hardware": self.hardware_status,
             "cycles": self._cycles, "bad_frames": self._bad_frames, "cycle_p50_us": pct(0.5),
             "cycle_p99_us": pct(0.99), "cycle_max_us": samples[-1] if samples else 0.0,
             "active": [r["name"] for r in self.manager.list_controllers() if r["state"] == ACTIVE],

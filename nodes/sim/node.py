@@ -34,6 +34,9 @@ from nodes.sim.urdf_info import UrdfError
 from nodes.sim.world import COLLISION_DETECTORS, PhysicsWorld
 
 STARTUP_SPAWN_RETRY_S = 0.5
+# Paused, each robot's hardware/heartbeat goes out this often (wall s): well within a controller manager's
+# hardware_timeout (1 s by default), so it reports "paused", not "lost"
+HEARTBEAT_S = 0.25
 
 
 class SimulatorNode(Node):
@@ -330,6 +333,7 @@ class SimulatorNode(Node):
         gc.set_threshold(50_000, 20, 100)
         exclusive = self._claim_exclusive_cpu()
         next_sweep = time.monotonic() + 1.0
+        next_heartbeat = 0.0
         try:
             while self.ok:
                 if exclusive is not None and time.monotonic() >= next_sweep:
@@ -341,6 +345,10 @@ class SimulatorNode(Node):
                 if self.paused:
                     self.spin_once(0.02)
                     self.outputs.publish_diagnostics(self.paused)
+                    if time.monotonic() >= next_heartbeat:
+                        for link in self.robots.values():
+                            link.publish_heartbeat(self.sim.step_count, self.world.time)
+                        next_heartbeat = time.monotonic() + HEARTBEAT_S
                     continue
                 self._control_period()
                 self.outputs.publish_diagnostics(self.paused)

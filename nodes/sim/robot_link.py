@@ -15,7 +15,13 @@ from msgs.zenroid_msgs import HardwareJoint, HardwareSensor
 from nodes.core import Node
 from nodes.core.endpoints import SingleSender, source_label
 from nodes.sim.hardware import CommandError, HardwareInterface
-from nodes.sim.interfaces import GetHardwareInfo, HardwareCommand, HardwareState, HumanoidState
+from nodes.sim.interfaces import (
+    GetHardwareInfo,
+    HardwareCommand,
+    HardwareHeartbeat,
+    HardwareState,
+    HumanoidState,
+)
 from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import CommandInbox
 
@@ -24,6 +30,7 @@ from nodes.sim.stepping import CommandInbox
 _COMMAND_LIMITS = msgs.Limits(allow_nonfinite=True)
 _pack_state = msgs.packer("zenroid_msgs/msg/HardwareState")
 _pack_humanoid_state = msgs.packer("humanoid_msgs/msg/HumanoidState")
+_pack_heartbeat = msgs.packer("zenroid_msgs/msg/HardwareHeartbeat")
 _header = msgs.builder("std_msgs/msg/Header")
 _point = msgs.builder("geometry_msgs/msg/Point")
 
@@ -63,6 +70,8 @@ class RobotLink:
         # lockstep_timeout), and the simulator waits for the controller manager anyway.
         self.state_pub = node.create_publisher(HardwareState, f"{ns}/hardware/state", express=True)
         self.humanoid_pub = node.create_publisher(HumanoidState, f"{ns}/humanoid_state", reliable=False)
+        # while paused: "still here, only stopped", so a controller manager can tell a pause from a lost link
+        self.heartbeat_pub = node.create_publisher(HardwareHeartbeat, f"{ns}/hardware/heartbeat", reliable=False)
         # one controller manager commands a robot (as one ros2_control hardware has one manager): commands from
         # a second source are ignored and reported while the first keeps commanding
         self._commander = SingleSender(takeover_after=command_timeout)
@@ -72,7 +81,7 @@ class RobotLink:
                                                     raw=True, with_source=True, pulled=True,
                                                     backlog=COMMAND_BACKLOG)
         self.info_srv = node.create_service(GetHardwareInfo, f"{ns}/hardware/info", self._on_info)
-        self._endpoints = [self.state_pub, self.humanoid_pub, self.command_sub, self.info_srv]
+        self._endpoints = [self.state_pub, self.humanoid_pub, self.heartbeat_pub, self.command_sub, self.info_srv]
 
     def destroy(self) -> None:
         for endpoint in self._endpoints:
@@ -129,6 +138,10 @@ class RobotLink:
             velocity=hw.velocities().tolist(), effort=hw.efforts().tolist(),
             sensor_values=self.sensors.state_values()), droppable=self.sim.mode == "realtime")
         self._last_state_step = step
+
+    def publish_heartbeat(self, step: int, sim_time: float) -> None:
+        self.heartbeat_pub.publish_raw(_pack_heartbeat(stamp=msgs.time_map(sim_time), step=step, paused=True),
+                                       droppable=True)
 
     def apply(self, command) -> None:
         try:
