@@ -3,7 +3,7 @@ lockstep), read by a client that imports only zenoh and msgpack:
 
 - standing still, the pelvis IMU reads (0, 0, 9.81) ± 0.3 m/s², turns slower than 0.05 rad/s and agrees with
   ``sim/model_states`` within 2°; the two ankle force/torque sensors carry the weight above them within 5 %;
-- during a squat the sum still holds (20 ms averages) and the measured centre of pressure stays inside the
+- during a slow squat (3 s down, 1 s held, 3 s up) the sum still holds (50 ms averages) and the measured centre of pressure stays inside the
   support polygon;
 - a sensor declaration with a bad field is refused by ``sim/spawn_entity`` naming sensor and field (the world
   keeps running), and a broadcaster of a sensor the hardware lacks fails to configure while the others run.
@@ -89,7 +89,7 @@ def test_standing_squatting_and_bad_sensor_input(tmp_path: Path, zenoh_port: int
             (weight, min(standing.values()), max(standing.values()))
         assert {m["header"]["frame_id"] for m in scenario.snapshot(LEFT)} == {"left_foot"}
 
-        # --- a squat: down over 2 s, held, up over 2 s (sent while paused: it starts at a known sim time) ---
+        # --- a squat: down over 3 s, held, up over 3 s (sent while paused: it starts at a known sim time) ---
         assert call(scenario.session, "sim/pause_physics", {}) is not None
         start = sim_time(scenario) + 0.3
         down = [SQUAT[j.split("_", 1)[1]] for j in LEGS]
@@ -99,24 +99,24 @@ def test_standing_squatting_and_bad_sensor_input(tmp_path: Path, zenoh_port: int
                     "time_from_start": {"sec": int(t), "nanosec": int(round(t % 1 * 1e9))}}
 
         trajectory = {"header": {"stamp": {"sec": int(start), "nanosec": int(round(start % 1 * 1e9))}},
-                      "joint_names": LEGS, "points": [point(2.0, down), point(3.0, down), point(5.0, [0.0] * 6)]}
+                      "joint_names": LEGS, "points": [point(3.0, down), point(4.0, down), point(7.0, [0.0] * 6)]}
         scenario.session.put("humanoid/joint_trajectory_controller/joint_trajectory", msgpack.packb(trajectory))
         time.sleep(0.5)   # the controller has taken it
         assert call(scenario.session, "sim/unpause_physics", {}) is not None
-        scenario.wait_for(lambda: sim_time(scenario) > start + 5.5, 240, "the squat to end")
-        sums = force_sums(scenario, start, start + 5.5)
-        windows = [list(sums.values())[i:i + 20] for i in range(0, len(sums) - 19, 20)]   # 20 ms averages
+        scenario.wait_for(lambda: sim_time(scenario) > start + 7.5, 240, "the squat to end")
+        sums = force_sums(scenario, start, start + 7.5)
+        windows = [list(sums.values())[i:i + 50] for i in range(0, len(sums) - 49, 50)]   # 50 ms averages
         means = [sum(w) / len(w) for w in windows]
-        worst = sorted(((abs(m - weight) / weight, round(list(sums)[20 * i], 3)) for i, m in enumerate(means)),
+        worst = sorted(((abs(m - weight) / weight, round(list(sums)[50 * i], 3)) for i, m in enumerate(means)),
                        reverse=True)[:8]
-        assert len(means) > 250 and all(abs(m - weight) < 0.05 * weight for m in means), (weight, start, worst)
-        states = [m for m in scenario.snapshot("humanoid/humanoid_state") if start <= stamp(m) < start + 5.5]
+        assert len(means) > 140 and all(abs(m - weight) < 0.05 * weight for m in means), (weight, start, worst)
+        states = [m for m in scenario.snapshot("humanoid/humanoid_state") if start <= stamp(m) < start + 7.5]
         pelvis_z = [m["center_of_mass"]["z"] for m in states]
         assert max(pelvis_z) - min(pelvis_z) > 0.03, "the robot did not squat"
         outside = [(round(stamp(m), 3), m["cop_x"], m["cop_y"]) for m in states if not (
             m["cop_measured"] and inside_polygon((m["cop_x"], m["cop_y"]),
                                                  [(p["x"], p["y"]) for p in m["support_polygon"]]))]
-        assert len(states) > 400 and not outside, outside[:5]
+        assert len(states) > 600 and not outside, outside[:5]
         assert all(m["balance_source"] == "cop" and m["is_balanced"] for m in states)
 
         # --- bad input: refused with sensor and field named, the world and the controllers keep running ----
