@@ -24,7 +24,6 @@ import argparse
 import json
 import math
 import os
-import socket
 import subprocess
 import sys
 import threading
@@ -38,6 +37,7 @@ import msgpack  # noqa: E402
 import numpy as np  # noqa: E402
 
 import msgs  # noqa: E402
+from bench.common import child_env, free_port, spawn, stop_all  # noqa: E402
 from nodes.control.config import load_config_file  # noqa: E402
 from nodes.control.interfaces import HardwareInterfaces, JointInfo  # noqa: E402
 from nodes.control.manager import STRICT, ControllerManager  # noqa: E402
@@ -46,12 +46,6 @@ from nodes.core import Node  # noqa: E402
 from nodes.core.session import loopback_endpoint, open_peer, open_router  # noqa: E402
 
 JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def pct(values: list[float], q: float) -> float:
@@ -122,16 +116,14 @@ LATE_US = 800.0   # state -> command beyond this: the trajectory was taken a cyc
 
 
 def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
-    env = dict(os.environ, ZENOH_CONNECT=endpoint, PYTHONPATH=str(ROOT))
-    env.pop("ZENOH_CONFIG", None)
+    env = child_env({"ZENOH_CONNECT": endpoint})
     procs = [
-        subprocess.Popen([sys.executable, "-m", "nodes.sim", "--params-file", "config/sim.yaml", "--param",
-                          "mode:=realtime", "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}]"],
-                         cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
-        subprocess.Popen([sys.executable, "-m", "nodes.control", "--ns", "humanoid", "--params-file",
-                          "config/controllers.yaml", "--param",
-                          "activate:=[joint_state_broadcaster, joint_trajectory_controller]"],
-                         cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL),
+        spawn([sys.executable, "-m", "nodes.sim", "--params-file", "config/sim.yaml", "--param",
+               "mode:=realtime", "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}]"],
+              env=env, stderr=subprocess.DEVNULL),
+        spawn([sys.executable, "-m", "nodes.control", "--ns", "humanoid", "--params-file",
+               "config/controllers.yaml", "--param", "activate:=[joint_state_broadcaster, joint_trajectory_controller]"],
+              env=env, stderr=subprocess.DEVNULL),
     ]
     node = Node("bench_control_client", connect=[endpoint], log_level="warn")
     lock = threading.Lock()
@@ -190,13 +182,7 @@ def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
         hop = raw_hop(endpoint, samples)
     finally:
         node.destroy()
-        for proc in procs:
-            proc.send_signal(2)
-        for proc in procs:
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
+        stop_all(procs, timeout=10)
     return {"p50": pct(latencies, 50), "p99": pct(latencies, 99), "n": len(latencies), "sent": samples,
             "wait_p50": pct(waits, 50), "wait_p99": pct(waits, 99),
             # more than ~a period after that state: the trajectory missed that cycle and was taken by the next

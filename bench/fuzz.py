@@ -32,9 +32,6 @@ import math
 import os
 import random
 import re
-import signal
-import socket
-import subprocess
 import sys
 import tempfile
 import threading
@@ -54,6 +51,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 import msgs  # noqa: E402 - after the path is set (bench scripts run from anywhere)
+from bench.common import Launch  # noqa: E402
 from msgs import cdr  # noqa: E402
 from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES  # noqa: E402
 from msgs.registry import get_spec  # noqa: E402
@@ -61,6 +59,7 @@ from nodes.core import graph  # noqa: E402
 from nodes.core.ros2 import names as ros2_names  # noqa: E402
 from nodes.core.session import DEFAULT_MAX_PAYLOAD, max_transport_message_bytes  # noqa: E402
 from nodes.sim import interfaces as _sim_interfaces  # noqa: E402,F401 - registers the simulator's service types
+from tests.support.samples import chain_urdf  # noqa: E402
 
 NS = "humanoid"
 JTC = f"{NS}/joint_trajectory_controller"
@@ -72,38 +71,12 @@ KNEE_JOINTS = ["left_hip_pitch", "left_knee", "left_ankle_pitch", "right_hip_pit
 KNEE_BEND = [-0.2, 0.4, -0.2, -0.2, 0.4, -0.2]
 
 
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def peer(port: int) -> zenoh.Session:
-    config = zenoh.Config()
-    config.insert_json5("mode", json.dumps("peer"))
-    config.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
-    config.insert_json5("listen/endpoints", json.dumps(["tcp/127.0.0.1:0"]))
-    config.insert_json5("scouting/multicast/enabled", "false")
-    return zenoh.open(config)
-
-
 # ---------------------------------------------------------------------------------------------- the job
-class Job:
+class Job(Launch):
     """The launched main job and a plain Zenoh peer watching joint_states, model_states and rosout."""
 
     def __init__(self, log_dir: Path, mode: str = "realtime", commander: str = "none") -> None:
-        self.port = free_port()
-        self.log_dir = log_dir
-        self.out_path = log_dir / "launch.out"
-        env = dict(os.environ)
-        env.pop("ZENOH_CONNECT", None)
-        env.pop("ZENOH_CONFIG", None)
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
-        with open(self.out_path, "wb") as out:
-            self.proc = subprocess.Popen(
-                [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", f"commander:={commander}", f"mode:={mode}",
-                 f"zenoh_port:={self.port}", "--log-dir", str(log_dir / "logs")],
-                cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+        super().__init__("humanoid.yaml", f"commander:={commander}", f"mode:={mode}", log_dir=log_dir)
         self.lock = threading.Lock()
         self.joint_states: list[tuple[float, dict[str, float]]] = []
         self.last_positions: dict[str, float] = {}
@@ -112,33 +85,19 @@ class Job:
         self.entities: set[str] = set()
         self.rosout: list[tuple[float, int, str, str]] = []   # (time, level, node, text)
         self.session: zenoh.Session | None = None
-        self._subs: list[Any] = []
+        self.ros2_tokens: list[Any] = []
         self._watch_silence = False
         self._last_js = 0.0
 
-    def output(self) -> str:
-        return self.out_path.read_text(errors="replace")
-
     def start(self, timeout: float = 60.0) -> None:
         deadline = time.monotonic() + timeout
-        while "zenoh: embedded router" not in self.output():
-            self._check(deadline, "the embedded router")
-            time.sleep(0.05)
-        self.session = peer(self.port)
-        s = self.session
-        self._subs += [s.declare_subscriber(f"{NS}/joint_states", self._on_joint_states),
-                       s.declare_subscriber("sim/model_states", self._on_model_states),
-                       s.declare_subscriber("rosout", self._on_rosout)]
-        while not self.last_positions:
-            self._check(deadline, "joint_states")
-            time.sleep(0.05)
-        while "controller manager ready" not in self.output() or not self._both_controllers_active():
-            self._check(deadline, "both controllers active")
-            time.sleep(0.2)
-
-    def _check(self, deadline: float, what: str) -> None:
-        if self.proc.poll() is not None or time.monotonic() > deadline:
-            raise RuntimeError(f"the main job did not bring up {what}:\n{self.output()[-4000:]}")
+        s = self.session = self.peer(timeout)
+        s.declare_subscriber(f"{NS}/joint_states", self._on_joint_states)
+        s.declare_subscriber("sim/model_states", self._on_model_states)
+        s.declare_subscriber("rosout", self._on_rosout)
+        self.wait(lambda: self.last_positions, deadline - time.monotonic(), "joint_states")
+        self.wait(lambda: "controller manager ready" in self.output() and self._both_controllers_active(),
+                  deadline - time.monotonic(), "both controllers active", interval=0.2)
 
     def _both_controllers_active(self) -> bool:
         try:
@@ -214,22 +173,6 @@ class Job:
 
     def started(self) -> Counter:
         return Counter(re.findall(r"started '([^']+)' \[pid \d+\]", self.output()))
-
-    def close(self) -> None:
-        for sub in self._subs:
-            try:
-                sub.undeclare()
-            except Exception:  # noqa: BLE001
-                pass
-        if self.session is not None:
-            self.session.close()
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(20)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.proc.pid, signal.SIGKILL)
-                self.proc.wait()
 
 
 def observed(sample: zenoh.Sample, fields: tuple[str, ...]) -> dict | None:
@@ -336,16 +279,6 @@ def dur(seconds: float) -> dict:
 def trajectory(joints: list[str], points: list[tuple[float, list[float]]], **extra: Any) -> dict:
     return {"joint_names": joints, "points": [{"positions": p, "time_from_start": dur(t)} for t, p in points],
             **extra}
-
-
-def chain_urdf(n: int) -> str:
-    inertial = ('<inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>'
-                '</inertial>')
-    links = "".join(f'<link name="l{i}">{inertial}</link>' for i in range(n + 1))
-    joints = "".join(f'<joint name="j{i}" type="revolute"><parent link="l{i}"/><child link="l{i + 1}"/>'
-                     '<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="10" velocity="1"/></joint>'
-                     for i in range(n))
-    return f'<robot name="chain">{links}{joints}</robot>'
 
 
 def mesh_urdf(path: str) -> str:
@@ -734,7 +667,7 @@ def run(payloads: int, seconds: float, seed: int, big: int, log_dir: Path, mode:
         job.start()
         time.sleep(3.0)    # settle: the baseline is the job at rest
         targets = discover(job.session)
-        job._subs += announce_ros2_publishers(job.session, targets)
+        job.ros2_tokens = announce_ros2_publishers(job.session, targets)  # held: dropped, they would end
         time.sleep(1.0)  # the job's subscription mirrors see the tokens and declare their subscribers
         by_key = {t.key: t for t in targets}
         report["targets"] = len(targets)

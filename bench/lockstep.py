@@ -26,8 +26,6 @@ import argparse
 import json
 import math
 import os
-import signal
-import socket
 import statistics
 import subprocess
 import sys
@@ -36,6 +34,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from bench.common import Launch, free_port, loopback, print_table, spawn  # noqa: E402 - after the path is set
 
 LEG_PITCH = {"hip_pitch": -0.5, "knee": 1.0, "ankle_pitch": -0.5}   # squat direction per unit depth
 
@@ -87,10 +87,24 @@ with session as s:
 """
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+def start_probe(port: int, seconds: float, start_key: str) -> subprocess.Popen:
+    """The outside probe on the router at ``port``; it measures from a second after ``start_key``."""
+    return spawn([sys.executable, "-c", PROBE, loopback(port), str(seconds), start_key], stdout=subprocess.PIPE,
+                 stderr=None, text=True, env=dict(os.environ, PYTHONPATH=""))
+
+
+def wait_measuring(probe: subprocess.Popen) -> None:
+    if not probe.stdout.readline():
+        raise RuntimeError("probe ended before measuring")
+
+
+def finish_probe(probe: subprocess.Popen, timeout: float) -> dict:
+    """The probe's measurement (RuntimeError with its complaint if it has none)."""
+    out, _ = probe.communicate(timeout=timeout)
+    result = json.loads(out.strip().splitlines()[-1])
+    if "error" in result:
+        raise RuntimeError(result["error"])
+    return result
 
 
 def squat_targets(names: list[str], k: int, physics_rate: float) -> list[float]:
@@ -186,41 +200,21 @@ def exclusive_cpu_of(launch_output: str) -> str:
 def fullstack(seconds: float, physics_rate: float, launch_file: str = "humanoid.yaml",
               launch_args: tuple[str, ...] = ()) -> dict:
     port = free_port()
-    endpoint = f"tcp/127.0.0.1:{port}"
-    env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
-    env.pop("ZENOH_CONFIG", None)
-    env.pop("ZENOH_CONNECT", None)
     log_dir = Path(os.environ.get("TMPDIR", "/tmp")) / f"bench-lockstep-{port}"
-    log_dir.mkdir(parents=True, exist_ok=True)
-    with open(log_dir / "launch.out", "wb") as out:   # the launcher says whether it kept a CPU for the physics
-        launch = subprocess.Popen(
-            [sys.executable, "-m", "launch", launch_file, "mode:=lockstep", "gui:=false", f"zenoh_port:={port}",
-             *launch_args, "--log-dir", str(log_dir)],
-            cwd=ROOT, env=env, stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
+    # the launcher says in its output whether it kept a CPU for the physics
+    launch = Launch(launch_file, "mode:=lockstep", *launch_args, log_dir=log_dir, port=port)
     try:
         time.sleep(0.5)
-        probe = subprocess.Popen(
-            [sys.executable, "-c", PROBE, endpoint, str(seconds), "humanoid/joint_trajectory_controller/joint_trajectory"],
-            stdout=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONPATH=""))
-        first = probe.stdout.readline()
-        if not first:
-            raise RuntimeError("probe ended before measuring")
-        cpu_before, wall_before = process_tree_cpu(launch.pid), time.perf_counter()
-        out, _ = probe.communicate(timeout=seconds + 60)
-        cpu_after, wall = process_tree_cpu(launch.pid), time.perf_counter() - wall_before
-        result = json.loads(out.strip().splitlines()[-1])
-        if "error" in result:
-            raise RuntimeError(result["error"])
+        probe = start_probe(launch.port, seconds, "humanoid/joint_trajectory_controller/joint_trajectory")
+        wait_measuring(probe)
+        cpu_before, wall_before = process_tree_cpu(launch.proc.pid), time.perf_counter()
+        result = finish_probe(probe, seconds + 60)
+        cpu_after, wall = process_tree_cpu(launch.proc.pid), time.perf_counter() - wall_before
     finally:
-        try:
-            os.killpg(launch.pid, signal.SIGINT)
-            launch.wait(20)
-        except (subprocess.TimeoutExpired, ProcessLookupError):
-            os.killpg(launch.pid, signal.SIGKILL)
-            launch.wait()
+        launch.close()
     result["steps_per_s"] = result["sim_seconds"] * physics_rate / result["wall_seconds"]
     result["cpu_percent"] = cpu_percent_between(cpu_before, cpu_after, wall)
-    launch_output = (log_dir / "launch.out").read_text(errors="replace")
+    launch_output = launch.output()
     result["exclusive_cpu"] = exclusive_cpu_of(launch_output)
     result["world_load_ms"] = world_load_ms(launch_output)
     return result
@@ -276,12 +270,7 @@ def main(argv: list[str] | None = None) -> int:
          "a CPU of its own for the physics thread"),
     ]
     table += [(f"  CPU of {k}", f"{v:.0f} %", "of one core, median") for k, v in cpu.items()]
-    table.append(("load average (1 min) before / after", f"{load_before:.1f} / {os.getloadavg()[0]:.1f}",
-                  f"{os.cpu_count()} cores"))
-    width = max(len(r[0]) for r in table)
-    print(f"{'measurement':<{width}}  {'result':>16}  note")
-    for name, value, note in table:
-        print(f"{name:<{width}}  {value:>16}  {note}")
+    print_table(table, load_before)
     print(json.dumps({
         "fullstack_steps_per_s": round(med["fullstack"], 1), "inprocess_steps_per_s": round(med["inprocess"], 1),
         "ratio": round(med["ratio"], 4), "runs": [{k: (round(v, 3) if isinstance(v, float) else v)

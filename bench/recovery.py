@@ -22,9 +22,7 @@ import json
 import os
 import re
 import signal
-import socket
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
@@ -37,58 +35,31 @@ import psutil
 import zenoh
 
 ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from bench.common import Launch  # noqa: E402 - after the path is set (bench scripts run from anywhere)
+
 NODES = ["controller_manager", "robot_state_publisher", "joint_commander", "simulator", "launcher"]
 GAP_S = 0.1  # joint_states arrive every 10 ms (JSB at 100 Hz): a silence longer than this is an outage
 OUTAGE_START_S = 0.2  # an outage caused by the kill starts within this long after it
 
 
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class MainJob:
+class MainJob(Launch):
     """The launched main job plus a plain Zenoh peer that timestamps joint_states, model_states, tokens."""
 
     def __init__(self, mode: str, log_dir: Path) -> None:
-        self.port = free_port()
-        self.out_path = log_dir / "launch.out"
-        env = dict(os.environ)
-        env.pop("ZENOH_CONNECT", None)
-        env.pop("ZENOH_CONFIG", None)
-        env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
-        with open(self.out_path, "wb") as out:
-            self.proc = subprocess.Popen(
-                [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", f"mode:={mode}",
-                 f"zenoh_port:={self.port}", "--log-dir", str(log_dir / "logs")],
-                cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+        super().__init__("humanoid.yaml", f"mode:={mode}", log_dir=log_dir)
         self.lock = threading.Lock()
         self.joint_states: list[float] = []
         self.pelvis: list[tuple[float, float]] = []
         self.tokens: dict[str, list[tuple[float, bool]]] = {}
-        self.session: zenoh.Session | None = None
-        self._subs: list = []
-
-    def output(self) -> str:
-        return self.out_path.read_text(errors="replace")
 
     def connect(self, timeout: float = 30.0) -> None:
-        deadline = time.monotonic() + timeout
-        while "zenoh: embedded router" not in self.output():
-            if self.proc.poll() is not None or time.monotonic() > deadline:
-                raise RuntimeError(f"the launch did not come up:\n{self.output()[-3000:]}")
-            time.sleep(0.05)
-        config = zenoh.Config()
-        config.insert_json5("mode", json.dumps("peer"))
-        config.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{self.port}"]))
-        config.insert_json5("listen/endpoints", json.dumps(["tcp/127.0.0.1:0"]))
-        config.insert_json5("scouting/multicast/enabled", "false")
-        self.session = zenoh.open(config)
-        self._subs.append(self.session.declare_subscriber("humanoid/joint_states", self._on_joint_states))
-        self._subs.append(self.session.declare_subscriber("sim/model_states", self._on_model_states))
-        self._subs.append(self.session.liveliness().declare_subscriber("@graph/node/**", self._on_token,
-                                                                       history=True))
+        session = self.peer(timeout)
+        session.declare_subscriber("humanoid/joint_states", self._on_joint_states)
+        session.declare_subscriber("sim/model_states", self._on_model_states)
+        session.liveliness().declare_subscriber("@graph/node/**", self._on_token, history=True)
 
     def _on_joint_states(self, _sample: zenoh.Sample) -> None:
         with self.lock:
@@ -112,31 +83,9 @@ class MainJob:
             raise RuntimeError(f"no pid for '{node}' in the launch output")
         return int(found[-1])
 
-    def wait(self, predicate, timeout: float, what: str) -> None:  # noqa: ANN001 - a plain callable
-        deadline = time.monotonic() + timeout
-        while not predicate():
-            if self.proc.poll() is not None:
-                raise RuntimeError(f"the launch ended while waiting for {what}:\n{self.output()[-3000:]}")
-            if time.monotonic() > deadline:
-                raise RuntimeError(f"timed out waiting for {what}:\n{self.output()[-3000:]}")
-            time.sleep(0.02)
-
     def flowing(self, since: float, count: int = 20) -> bool:
         with self.lock:
             return sum(1 for t in self.joint_states if t > since) >= count
-
-    def close(self) -> None:
-        for sub in self._subs:
-            sub.undeclare()
-        if self.session is not None:
-            self.session.close()
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.proc.pid, signal.SIGKILL)
-                self.proc.wait()
 
 
 def kill_and_measure(job: MainJob, node: str, window_s: float) -> dict[str, float | None]:

@@ -7,7 +7,6 @@ the lazy case) and on with one (CDR encoded and sent). Prints a table, then one 
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import statistics
@@ -18,6 +17,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from bench.common import interleaved_runs  # noqa: E402 - after the path is set (bench scripts run from anywhere)
+from bench.transport import paced, pacing_arguments, received_by  # noqa: E402
 
 JOINTS = [f"joint_{i}" for i in range(22)]
 JS = "sensor_msgs/msg/JointState"
@@ -102,58 +104,29 @@ def run_once(mode: str, endpoint: str, rate: float, seconds: float) -> dict:
         time.sleep(0.01)
     time.sleep(0.3)  # routes settle
     positions = [0.1 * i for i in range(len(JOINTS))]
-    period = 1.0 / rate
-    next_t = time.perf_counter()
     cost_ns = 0
-    for seq in range(count):
-        now_ns = time.perf_counter_ns()
-        sec, ns = divmod(now_ns, 1_000_000_000)
+    for seq, sec, ns in paced(count, rate):
         payload = msgpack.packb({"header": {"stamp": {"sec": sec, "nanosec": ns}, "frame_id": str(seq)},
                                  "name": JOINTS, "position": positions, "velocity": positions, "effort": positions})
         t0 = time.perf_counter_ns()
         pub.publish_raw(payload)
         cost_ns += time.perf_counter_ns() - t0
-        next_t += period
-        delay = next_t - time.perf_counter()
-        if delay > 0:
-            time.sleep(delay)
-    try:
-        out, _ = child.communicate(timeout=20)
-    except subprocess.TimeoutExpired:
-        child.kill()
-        out, _ = child.communicate()
+    lat, received = received_by(child, 20)
     time.sleep(0.2)
     node.destroy()
     if ros_side is not None:
         ros_side.close()
-    data = json.loads(out.strip().splitlines()[-1]) if out.strip() else {"latencies_ns": [], "received": 0}
-    lat = sorted(x / 1000 for x in data["latencies_ns"])
     return {"p50": lat[len(lat) // 2] if lat else float("nan"),
             "p99": lat[min(len(lat) - 1, int(0.99 * len(lat)))] if lat else float("nan"),
-            "publish_us": cost_ns / count / 1000, "lost": count - data["received"], "cdr": cdr_received[0]}
+            "publish_us": cost_ns / count / 1000, "lost": count - received, "cdr": cdr_received[0]}
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rate", type=float, default=1000.0)
-    parser.add_argument("--seconds", type=float, default=3.0)
-    parser.add_argument("--runs", type=int, default=3)
-    args = parser.parse_args()
-
-    from bench.transport import free_port
-    from nodes.core.session import loopback_endpoint, open_router
+    args = pacing_arguments(__doc__.splitlines()[0])
 
     codec_us = codec()
-    port = free_port()
-    router = open_router(port)
-    endpoint = loopback_endpoint(port)
-    results: dict[str, list[dict]] = {m: [] for m in MODES}
-    try:
-        for _ in range(args.runs):
-            for mode in MODES:  # interleaved so machine noise hits all alike
-                results[mode].append(run_once(mode, endpoint, args.rate, args.seconds))
-    finally:
-        router.close()
+    results = interleaved_runs(MODES, args.runs, lambda mode, endpoint: run_once(mode, endpoint, args.rate,
+                                                                                  args.seconds))
     med = {m: {k: statistics.median(r[k] for r in runs) for k in ("p50", "p99", "publish_us")}
            for m, runs in results.items()}
     lost = {m: sum(r["lost"] for r in runs) for m, runs in results.items()}

@@ -17,8 +17,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import signal
-import socket
 import subprocess
 import sys
 import time
@@ -27,44 +25,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.lockstep import PROBE, cpu_percent_between, process_tree_cpu  # noqa: E402 - after the path set-up
-
-ENV = {k: v for k, v in os.environ.items() if k not in ("ZENOH_CONNECT", "ZENOH_CONFIG")}
-ENV.update(PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def start_probe(port: int, seconds: float, start_key: str) -> subprocess.Popen:
-    probe = subprocess.Popen([sys.executable, "-c", PROBE, f"tcp/127.0.0.1:{port}", str(seconds), start_key],
-                             stdout=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONPATH=""))
-    return probe
-
-
-def finish_probe(probe: subprocess.Popen, seconds: float) -> dict:
-    out, _ = probe.communicate(timeout=seconds + 180)
-    result = json.loads(out.strip().splitlines()[-1])
-    if "error" in result:
-        raise RuntimeError(result["error"])
-    return result
-
-
-def stop(procs: list[subprocess.Popen]) -> None:
-    for proc in procs:
-        try:
-            os.killpg(proc.pid, signal.SIGINT)
-        except ProcessLookupError:
-            pass
-    for proc in procs:
-        try:
-            proc.wait(20)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+from bench.common import Launch, child_env, free_port, loopback, spawn, stop_all  # noqa: E402 - after the path set-up
+from bench.lockstep import (  # noqa: E402
+    cpu_percent_between,
+    finish_probe,
+    process_tree_cpu,
+    start_probe,
+    wait_measuring,
+)
 
 
 def cpu_of(pids: list[int]) -> dict[int, tuple[str, float]]:
@@ -83,27 +51,25 @@ def one_world(k: int, seconds: float) -> dict:
 
     port = free_port()
     router = open_router(port)
-    env = dict(ENV, ZENOH_CONNECT=f"tcp/127.0.0.1:{port}")
+    env = child_env({"ZENOH_CONNECT": loopback(port)})
     entities = ", ".join(f"{{name: humanoid_{i}, file: humanoid, namespace: humanoid_{i}, y: {2.0 * i}, z: 0.93}}"
                          for i in range(k))
-    procs = [subprocess.Popen(
-        [sys.executable, "-m", "nodes.sim", "--param", "mode:=lockstep", "--param", f"entities:=[{entities}]"],
-        cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)]
+    procs = [spawn([sys.executable, "-m", "nodes.sim", "--param", "mode:=lockstep", "--param",
+                    f"entities:=[{entities}]"], env=env, stderr=subprocess.DEVNULL)]
     for i in range(k):
-        procs.append(subprocess.Popen(
-            [sys.executable, "-m", "nodes.control", "--ns", f"humanoid_{i}", "--params-file",
-             str(ROOT / "config" / "controllers.yaml"),
-             "--param", "activate:=[joint_state_broadcaster, joint_trajectory_controller]"],
-            cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True))
+        procs.append(spawn([sys.executable, "-m", "nodes.control", "--ns", f"humanoid_{i}", "--params-file",
+                            str(ROOT / "config" / "controllers.yaml"),
+                            "--param", "activate:=[joint_state_broadcaster, joint_trajectory_controller]"],
+                           env=env, stderr=subprocess.DEVNULL))
     try:
         # every JTC publishes its state once it runs: start measuring when the last one does
         probe = start_probe(port, seconds, f"humanoid_{k - 1}/joint_trajectory_controller/controller_state")
-        probe.stdout.readline()
+        wait_measuring(probe)
         cpu0, wall0 = cpu_of([p.pid for p in procs]), time.perf_counter()
-        result = finish_probe(probe, seconds)
+        result = finish_probe(probe, seconds + 180)
         cpu = cores_used(cpu0, cpu_of([p.pid for p in procs]), time.perf_counter() - wall0)
     finally:
-        stop(procs)
+        stop_all(procs)
         router.close()
     steps = result["sim_seconds"] * 1000.0 / result["wall_seconds"]
     return {"k": k, "steps_per_s": steps, "robot_steps_per_s": steps * k, "cpu_cores": cpu,
@@ -113,23 +79,20 @@ def one_world(k: int, seconds: float) -> dict:
 def side_by_side(k: int, seconds: float) -> dict:
     """k independent launches of the main job in lockstep."""
     ports = [free_port() for _ in range(k)]
-    procs = [subprocess.Popen(
-        # exclusive_cpu:=false: each world's physics thread would want the same kept CPU
-        [sys.executable, "-m", "launch", "humanoid.yaml", "mode:=lockstep", "gui:=false", f"zenoh_port:={port}",
-         "exclusive_cpu:=false", "--log-dir", f"/tmp/bench-scale-{port}"],
-        cwd=ROOT, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-        for port in ports]
+    # exclusive_cpu:=false: each world's physics thread would want the same kept CPU
+    procs = [Launch("humanoid.yaml", "mode:=lockstep", "exclusive_cpu:=false", port=port,
+                    log_dir=Path(f"/tmp/bench-scale-{port}")).proc for port in ports]
     try:
         time.sleep(0.5)
         probes = [start_probe(port, seconds, "humanoid/joint_trajectory_controller/joint_trajectory")
                   for port in ports]
         for probe in probes:
-            probe.stdout.readline()
+            wait_measuring(probe)
         cpu0, wall0 = cpu_of([p.pid for p in procs]), time.perf_counter()
-        results = [finish_probe(probe, seconds) for probe in probes]
+        results = [finish_probe(probe, seconds + 180) for probe in probes]
         cpu = cores_used(cpu0, cpu_of([p.pid for p in procs]), time.perf_counter() - wall0)
     finally:
-        stop(procs)
+        stop_all(procs)
     per_world = [r["sim_seconds"] * 1000.0 / r["wall_seconds"] for r in results]
     return {"k": k, "steps_per_s": sum(per_world) / k, "robot_steps_per_s": sum(per_world), "cpu_cores": cpu,
             "cpu_per_robot": cpu / k, "pelvis_min": min(r["pelvis_min"] for r in results)}

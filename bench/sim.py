@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import socket
+import signal
 import statistics
 import subprocess
 import sys
@@ -25,13 +25,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.common import child_env, free_port, loopback, print_table, spawn, stop  # noqa: E402 - after the path set-up
+
 HUMANOID_ENTITY = "entities:=[{name: humanoid, file: humanoid, z: 0.915}]"
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def inprocess_steps_per_s(steps: int = 5000) -> tuple[float, float]:
@@ -67,15 +63,13 @@ class SimRun:
 
         self.port = free_port()
         self.router = open_router(self.port)
-        env = dict(os.environ, ZENOH_CONNECT=f"tcp/127.0.0.1:{self.port}", PYTHONPATH=str(ROOT))
-        env.pop("ZENOH_CONFIG", None)
+        env = child_env({"ZENOH_CONNECT": loopback(self.port)})
         argv = [sys.executable, "-m", "nodes.sim", "--params-file", str(ROOT / "config" / "sim.yaml")]
         for param in (HUMANOID_ENTITY, *params):
             argv += ["--param", param]
-        self.sim = subprocess.Popen(argv, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
-        self.client = subprocess.Popen([sys.executable, "-m", "nodes.sim.hardware_client"], cwd=ROOT, env=env,
-                                       stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
-        self.node = Node("bench_sim", connect=[f"tcp/127.0.0.1:{self.port}"], log_level="error")
+        self.sim = spawn(argv, env=env)
+        self.client = spawn([sys.executable, "-m", "tests.support.hardware_client"], env=env)
+        self.node = Node("bench_sim", connect=[loopback(self.port)], log_level="error")
         self.diagnostics: list[dict] = []
         self._lock = threading.Lock()
         from nodes.sim.interfaces import String
@@ -130,12 +124,7 @@ class SimRun:
     def close(self) -> None:
         self.node.destroy()
         for proc in (self.client, self.sim):
-            proc.terminate()
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+            stop(proc, 10, signal.SIGTERM)
         self.router.close()
 
 
@@ -180,12 +169,7 @@ def main(argv: list[str] | None = None) -> int:
         ("(c) realtime: p99 period lateness (worst 1-s window)", f"{p99:.3f} ms",
          f"median window {p99_median:.3f} ms, max single {worst:.2f} ms (goal p99 < 1 ms)"),
     ]
-    rows.append(("load average (1 min) before / after", f"{load_before:.1f} / {os.getloadavg()[0]:.1f}",
-                 f"{os.cpu_count()} cores shared with other jobs"))
-    width = max(len(r[0]) for r in rows)
-    print(f"{'measurement':<{width}}  {'result':>16}  note")
-    for name, value, note in rows:
-        print(f"{name:<{width}}  {value:>16}  {note}")
+    print_table(rows, load_before)
     print(json.dumps({
         "inprocess_steps_per_s": round(inprocess, 1), "lockstep_steps_per_s": round(lockstep, 1),
         "lockstep_ratio": round(lockstep / inprocess, 4), "realtime_factor": round(rtf, 5),

@@ -18,7 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
+import signal
 import struct
 import subprocess
 import sys
@@ -32,7 +32,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from bench.fuzz import Job, rss_mb  # noqa: E402 - after the path is set
+from bench.common import spawn, stop  # noqa: E402 - after the path is set
+from bench.fuzz import Job, rss_mb  # noqa: E402
 
 SUBSCRIBED = ["humanoid/joint_states", "sim/clock", "humanoid/joint_trajectory_controller/controller_state"]
 WARMUP_S = 30.0
@@ -99,10 +100,8 @@ def run(minutes: float, mode: str, sample_s: float, log_dir: Path, progress=prin
     try:
         job.start()
         duration = minutes * 60.0
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH", ""))
-                                                            if p))
-        sub_proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--subscriber", str(job.port),
-                                     str(duration)], stdout=subprocess.PIPE, text=True, env=env)
+        sub_proc = spawn([sys.executable, str(Path(__file__).resolve()), "--subscriber", str(job.port), str(duration)],
+                         stdout=subprocess.PIPE, stderr=None, text=True)
         time.sleep(3.0)   # the spawners have activated the controllers and exit: only long-running processes
         processes = {n: p for n, p in job.processes().items() if not n.startswith("spawner")}
         started = job.started()
@@ -140,8 +139,8 @@ def run(minutes: float, mode: str, sample_s: float, log_dir: Path, progress=prin
                           and received["knee_bends"] >= duration / 4 * 0.8)
         return report
     finally:
-        if sub_proc is not None and sub_proc.poll() is None:
-            sub_proc.kill()
+        if sub_proc is not None:
+            stop(sub_proc, 0, signal.SIGKILL)
         job.close()
 
 

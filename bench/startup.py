@@ -12,10 +12,8 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import signal
 import socket
 import statistics
-import subprocess
 import sys
 import tempfile
 import threading
@@ -23,15 +21,12 @@ import time
 from pathlib import Path
 
 import psutil
-import zenoh
 
 ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
 
-
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+from bench.common import Launch, plain_peer  # noqa: E402 - after the path is set (bench scripts run from anywhere)
 
 
 def tree_rss(root: psutil.Process) -> int:
@@ -55,51 +50,31 @@ def listening(port: int) -> bool:
 
 
 def one_run(mode: str, settle_s: float, timeout_s: float) -> tuple[float, float]:
-    port = free_port()
-    env = dict(os.environ)
-    env.pop("ZENOH_CONNECT", None)
-    env.pop("ZENOH_CONFIG", None)
     first = threading.Event()
-    session = None
     with tempfile.TemporaryDirectory() as logs:
         start = time.monotonic()
-        launcher = subprocess.Popen(
-            [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", f"mode:={mode}",
-             f"zenoh_port:={port}", "--log-dir", logs],
-            cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, start_new_session=True)
-        root = psutil.Process(launcher.pid)
+        launch = Launch("humanoid.yaml", f"mode:={mode}", log_dir=Path(logs))
+        root = psutil.Process(launch.proc.pid)
         peak = 0
         first_at = None
+        session = None
         try:
             while time.monotonic() - start < timeout_s:
                 peak = max(peak, tree_rss(root))
-                if session is None and listening(port):
-                    config = zenoh.Config()
-                    config.insert_json5("mode", '"peer"')
-                    config.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
-                    config.insert_json5("listen/endpoints", '["tcp/127.0.0.1:0"]')
-                    config.insert_json5("scouting/multicast/enabled", "false")
-                    session = zenoh.open(config)
+                if session is None and listening(launch.port):
+                    session = plain_peer(launch.port)
+                    launch.sessions.append(session)
                     session.declare_subscriber("humanoid/joint_states", lambda _s: first.set())
                 if first_at is None and first.is_set():
                     first_at = time.monotonic() - start
                 if first_at is not None and time.monotonic() - start > first_at + settle_s:
                     break
-                if launcher.poll() is not None:
-                    raise RuntimeError(f"launcher exited with {launcher.returncode}")
+                launch.check()
                 time.sleep(0.02)
             if first_at is None:
                 raise RuntimeError(f"no humanoid/joint_states within {timeout_s:g} s")
         finally:
-            if session is not None:
-                session.close()
-            if launcher.poll() is None:
-                launcher.send_signal(signal.SIGINT)
-            try:
-                launcher.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                os.killpg(launcher.pid, signal.SIGKILL)
-                launcher.wait()
+            launch.close()
     return first_at, peak / 1e6
 
 

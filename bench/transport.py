@@ -10,23 +10,19 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import socket
 import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.common import interleaved_runs  # noqa: E402 - after the path is set (bench scripts run from anywhere)
+
 JOINTS = [f"joint_{i}" for i in range(30)]
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 # ------------------------------------------------------------------ subscriber side (child process)
@@ -87,6 +83,30 @@ def subscriber(mode: str, endpoint: str, count: int, ready_key: str) -> None:
 
 # ------------------------------------------------------------------ publisher side (this process)
 
+def paced(count: int, rate: float) -> Iterator[tuple[int, int, int]]:
+    """``(seq, sec, nanosec)`` ``count`` times at ``rate`` Hz, each stamped (perf_counter) as it is due."""
+    period = 1.0 / rate
+    next_t = time.perf_counter()
+    for seq in range(count):
+        sec, ns = divmod(time.perf_counter_ns(), 1_000_000_000)
+        yield seq, sec, ns
+        next_t += period
+        delay = next_t - time.perf_counter()
+        if delay > 0:
+            time.sleep(delay)
+
+
+def received_by(child: subprocess.Popen, timeout: float) -> tuple[list[float], int]:
+    """What the subscriber process reported: its one-way latencies (µs, sorted) and how many it received."""
+    try:
+        out, _ = child.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        out, _ = child.communicate()
+    data = json.loads(out.strip().splitlines()[-1]) if out.strip() else {"latencies_ns": [], "received": 0}
+    return sorted(x / 1000 for x in data["latencies_ns"]), data["received"]
+
+
 def run_once(mode: str, endpoint: str, rate: float, seconds: float) -> dict:
     import msgpack
 
@@ -107,12 +127,8 @@ def run_once(mode: str, endpoint: str, rate: float, seconds: float) -> dict:
     JointState = msgs.get_type("sensor_msgs/msg/JointState")
     pub = node.create_publisher(JointState, "/bench/joint_states")
     raw_pub = node.session.declare_publisher("bench/joint_states")
-    period = 1.0 / rate
-    next_t = time.perf_counter()
     positions = [0.1 * i for i in range(30)]
-    for seq in range(count):
-        now_ns = time.perf_counter_ns()
-        sec, ns = divmod(now_ns, 1_000_000_000)
+    for seq, sec, ns in paced(count, rate):
         if mode == "raw":
             raw_pub.put(msgpack.packb({
                 "header": {"stamp": {"sec": sec, "nanosec": ns}, "frame_id": str(seq)},
@@ -122,45 +138,30 @@ def run_once(mode: str, endpoint: str, rate: float, seconds: float) -> dict:
             msg = JointState(name=JOINTS, position=positions, velocity=positions, effort=positions)
             msg.header.stamp.sec, msg.header.stamp.nanosec, msg.header.frame_id = sec, ns, str(seq)
             pub.publish(msg)
-        next_t += period
-        delay = next_t - time.perf_counter()
-        if delay > 0:
-            time.sleep(delay)
-    try:
-        out, _ = child.communicate(timeout=10)
-    except subprocess.TimeoutExpired:
-        child.kill()
-        out, _ = child.communicate()
+    lat, received = received_by(child, 10)
     raw_pub.undeclare()
     node.destroy()
-    data = json.loads(out.strip().splitlines()[-1]) if out.strip() else {"latencies_ns": [], "received": 0}
-    lat = sorted(x / 1000 for x in data["latencies_ns"])
 
     def pct(p: float) -> float:
         return lat[min(len(lat) - 1, int(p * len(lat)))] if lat else float("nan")
 
-    return {"p50": pct(0.5), "p99": pct(0.99), "lost": count - data["received"], "sent": count}
+    return {"p50": pct(0.5), "p99": pct(0.99), "lost": count - received, "sent": count}
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def pacing_arguments(description: str) -> argparse.Namespace:
+    """``--rate`` (Hz), ``--seconds`` per run, ``--runs``: the options of the paced-publisher benches."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--rate", type=float, default=1000.0)
     parser.add_argument("--seconds", type=float, default=3.0)
     parser.add_argument("--runs", type=int, default=3)
-    args = parser.parse_args()
+    return parser.parse_args()
 
-    from nodes.core.session import loopback_endpoint, open_router
 
-    port = free_port()
-    router = open_router(port)
-    endpoint = loopback_endpoint(port)
-    results: dict[str, list[dict]] = {"runtime": [], "inline": [], "raw": []}
-    try:
-        for _ in range(args.runs):
-            for mode in ("raw", "runtime", "inline"):  # interleaved so machine noise hits all alike
-                results[mode].append(run_once(mode, endpoint, args.rate, args.seconds))
-    finally:
-        router.close()
+def main() -> None:
+    args = pacing_arguments(__doc__.splitlines()[0])
+
+    results = interleaved_runs(("raw", "runtime", "inline"), args.runs,
+                               lambda mode, endpoint: run_once(mode, endpoint, args.rate, args.seconds))
 
     med = {m: {k: statistics.median(r[k] for r in runs) for k in ("p50", "p99")} for m, runs in results.items()}
     lost = {m: sum(r["lost"] for r in runs) for m, runs in results.items()}

@@ -6,7 +6,7 @@
 
 ``browser`` (default): the main job (``launch/humanoid.yaml``, realtime, its viewer served as a web page) and a
 real headless Chromium (software rendering: Mesa llvmpipe, or SwiftShader) that opens the page ``--open-after``
-seconds into the run (a late viewer) and is read over the remote-debugging protocol (``nodes.viz.browser``):
+seconds into the run (a late viewer) and is read over the remote-debugging protocol (``tests.support.browser``):
 every second, the viewer's time cursor on ``sim_time`` (what its views show) against the simulator's
 ``sim/clock`` at that instant. A late viewer first takes in what the server kept (the layout and the newest
 rows), so the page's start is measured apart from its steady state: ``viewer_ready_s`` (page opened -> the
@@ -23,7 +23,7 @@ medians (``--trace``: also each run's lag every second since the page opened). G
 joint_states at 100 Hz, the joint commander) plus the visualiser saving an .rrd. Its stamps are sim time
 (which slips behind the wall clock on a loaded machine), so a probe node in this process records when each
 stamp arrives; the lag of a sample is its Rerun ``log_time`` minus that arrival (the visualiser's own
-delay; the Zenoh hop adds ~0.2 ms, FACTS). ``feeder``: ``nodes.viz.feeder`` stamps joint_states with the
+delay; the Zenoh hop adds ~0.2 ms, FACTS). ``feeder``: ``tests.support.viz_feeder`` stamps joint_states with the
 wall clock at 100 Hz, so the lag from stamp to logging is exact.
 
 Prints a table, then one JSON line: ``cpu_percent`` (of one core, over the window), ``lag_p50_ms``,
@@ -37,8 +37,6 @@ import argparse
 import json
 import math
 import os
-import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -51,38 +49,15 @@ import psutil
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from nodes.viz.readback import load  # noqa: E402
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def wait_for(path: Path, text: str, timeout: float) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if path.exists() and text in path.read_text(errors="replace"):
-            return
-        time.sleep(0.1)
-    raise SystemExit(f"timed out waiting for '{text}' in {path}")
-
-
-def stop(proc: subprocess.Popen, timeout: float = 20.0) -> None:
-    if proc.poll() is None:
-        os.killpg(proc.pid, signal.SIGINT)
-    try:
-        proc.wait(timeout)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
+from bench.common import Launch, child_env, free_port, spawn, stop_all, wait_until  # noqa: E402
+from tests.support.rrd import load  # noqa: E402
 
 
 def lags_ms(rows: list[dict], arrivals: dict[int, float] | None) -> np.ndarray:
-    """Stamp (feeder: wall clock) or probe arrival time -> Rerun log_time, in ms."""
+    """Stamp (feeder: wall clock, on the visualiser's wall_time timeline) or probe arrival time -> Rerun
+    log_time, in ms."""
     if arrivals is None:
-        return np.array([r["log_time"] - r["sim_time"] for r in rows]) * 1e3
+        return np.array([r["log_time"] - r["wall_time"] for r in rows]) * 1e3
     return np.array([r["log_time"] - arrivals[round(r["sim_time"] * 1e6)] for r in rows
                      if round(r["sim_time"] * 1e6) in arrivals]) * 1e3
 
@@ -105,46 +80,39 @@ def start_probe(port: int):
 
 def run_once(source: str, seconds: float, port: int) -> dict:
     work = Path(tempfile.mkdtemp(prefix="bench_viz_"))
-    env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
-    for name in ("ZENOH_CONFIG", "ZENOH_CONNECT"):  # else the launcher skips its embedded router
-        env.pop(name, None)
 
     def start(name: str, *argv: str) -> tuple[subprocess.Popen, Path]:
         log = work / f"{name}.log"
-        proc = subprocess.Popen([sys.executable, *argv], cwd=ROOT, env=env, stdout=open(log, "wb"),
-                                stderr=subprocess.STDOUT, start_new_session=True)
+        proc = spawn([sys.executable, *argv], log=log)
+        procs.append(proc)
         return proc, log
 
     procs: list[subprocess.Popen] = []
     probe, arrivals = None, None
     try:
         if source == "humanoid":
-            launch, launch_log = start("launch", "-m", "launch", "humanoid.yaml", "gui:=false", "mode:=realtime",
-                                       f"zenoh_port:={port}")
-            procs.append(launch)
-            wait_for(launch_log, "started 'joint_commander'", 90)
+            launch = Launch("humanoid.yaml", "mode:=realtime", log_dir=work, port=port)
+            procs.append(launch.proc)
+            launch.wait_output("started 'joint_commander'", 90)
             probe, arrivals = start_probe(port)
         else:
-            router, _ = start("router", "-c", "import time\nfrom nodes.core.session import open_router\n"
-                              f"s = open_router({port})\ntime.sleep(3600)")
-            procs.append(router)
+            start("router", "-c", "import time\nfrom nodes.core.session import open_router\n"
+                  f"s = open_router({port})\ntime.sleep(3600)")
             time.sleep(1.0)
-            sp, _ = start("state_publisher", "-m", "nodes.state_publisher", "--ns", "humanoid", "--zenoh-port",
-                          str(port), "--param", f"robot_description_file:={ROOT / 'robots' / 'humanoid.urdf'}")
-            feeder, _ = start("feeder", "-m", "nodes.viz.feeder", "--param", "stamp:=wall", "--zenoh-port", str(port))
-            procs += [sp, feeder]
+            start("state_publisher", "-m", "nodes.state_publisher", "--ns", "humanoid", "--zenoh-port",
+                  str(port), "--param", f"robot_description_file:={ROOT / 'robots' / 'humanoid.urdf'}")
+            start("feeder", "-m", "tests.support.viz_feeder", "--param", "stamp:=wall", "--zenoh-port", str(port))
         rrd = work / "bench.rrd"
         viz, viz_log = start("viz", "-m", "nodes.viz", "--save", str(rrd), "--robots", "humanoid",
                              "--zenoh-port", str(port))
-        procs.append(viz)
-        wait_for(viz_log, "23 visuals", 60)
+        wait_until(lambda: "23 visuals" in viz_log.read_text(errors="replace"), 60, "23 visuals in the visualiser")
         time.sleep(3.0)  # settle: discovery, first blueprint, caches
         process = psutil.Process(viz.pid)
         cpu_before, wall_before = process.cpu_times(), time.monotonic()
         time.sleep(seconds)
         cpu_after, wall_after = process.cpu_times(), time.monotonic()
         window = (time.time() - seconds, time.time())
-        stop(viz)
+        stop_all([viz])
         cpu = (cpu_after.user + cpu_after.system) - (cpu_before.user + cpu_before.system)
         rows = [r for r in load(rrd)["world/humanoid/robot"].rows if r.get("position:left_leg") is not None
                 and "log_time" in r and window[0] <= r["log_time"] <= window[1]]
@@ -154,8 +122,7 @@ def run_once(source: str, seconds: float, port: int) -> dict:
     finally:
         if probe is not None:
             probe.destroy()
-        for proc in reversed(procs):
-            stop(proc)
+        stop_all(procs[::-1])
     return {"cpu_percent": 100.0 * cpu / (wall_after - wall_before),
             "lag_p50_ms": float(np.percentile(lag, 50)), "lag_p99_ms": float(np.percentile(lag, 99)),
             "lag_max_ms": float(lag.max()), "joint_states_hz": len(rows) / seconds,
@@ -165,22 +132,15 @@ def run_once(source: str, seconds: float, port: int) -> dict:
 def run_browser(seconds: float, open_after: float, port: int, renderer: str, viewer_args: str = "",
                 catch_up: float = 180.0) -> dict:
     """The main job with its served viewer, and a headless Chromium reading the page (see the docstring)."""
-    import re
-
-    from nodes.viz.browser import HeadlessBrowser, ViewerProbe
+    from tests.support.browser import HeadlessBrowser, ViewerProbe
 
     work = Path(tempfile.mkdtemp(prefix="bench_viz_browser_"))
-    env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
-    for name in ("ZENOH_CONFIG", "ZENOH_CONNECT", "DISPLAY", "WAYLAND_DISPLAY"):
-        env.pop(name, None)
-    log = work / "launch.log"
-    launch = subprocess.Popen([sys.executable, "-m", "launch", "humanoid.yaml", "mode:=realtime", f"zenoh_port:={port}",
-                               "viewer_args:=--serve --web-port 0 --grpc-port 0 " + viewer_args], cwd=ROOT, env=env,
-                              stdout=open(log, "wb"), stderr=subprocess.STDOUT, start_new_session=True)
+    env = {k: v for k, v in child_env().items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    launch = Launch("humanoid.yaml", "mode:=realtime", "viewer_args:=--serve --web-port 0 --grpc-port 0 " + viewer_args,
+                    log_dir=work, port=port, gui=True, env=env)
     probe = None
     try:
-        wait_for(log, "Rerun web viewer: ", 90)
-        url = re.search(r"Rerun web viewer: (\S+)", log.read_text()).group(1)
+        url = launch.wait_match(r"Rerun web viewer: (\S+)", 90).group(1)
         import msgs
         from nodes.core import Node
 
@@ -189,7 +149,7 @@ def run_browser(seconds: float, open_after: float, port: int, renderer: str, vie
         probe.create_subscription(msgs.get_type("rosgraph_msgs/msg/Clock"), "/sim/clock",
                                   lambda m: sim.__setitem__("now", m.clock.sec + m.clock.nanosec * 1e-9),
                                   inline=True)
-        wait_for(log, "started 'joint_commander'", 90)
+        launch.wait_output("started 'joint_commander'", 90)
         time.sleep(open_after)
         with HeadlessBrowser(timeout=120, renderer=renderer) as browser:
             opened = time.monotonic()
@@ -241,7 +201,7 @@ def run_browser(seconds: float, open_after: float, port: int, renderer: str, vie
     finally:
         if probe is not None:
             probe.destroy()
-        stop(launch, 30)
+        launch.close(30)
     if not lags:
         raise SystemExit(f"the page never showed sim_time data; logs in {work}")
     array = np.array(lags)

@@ -2,9 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import signal
-import socket
 import subprocess
 import sys
 import time
@@ -16,11 +13,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from bench.common import child_env, free_port, spawn, stop_all  # noqa: E402 - the checkout is on the path now
 
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+__all__ = ["ROOT", "ProcessGroup", "free_port", "wait_until"]
 
 
 @pytest.fixture
@@ -62,23 +57,14 @@ class ProcessGroup:
         self.procs: list[subprocess.Popen] = []
 
     def env(self, extra: dict[str, str] | None = None) -> dict[str, str]:
-        env = dict(os.environ)
-        env["ZENOH_CONNECT"] = self.endpoint
-        env.pop("ZENOH_CONFIG", None)
-        env["PYTHONUNBUFFERED"] = "1"
-        env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
-        env.update(extra or {})
-        return env
+        return child_env({"ZENOH_CONNECT": self.endpoint, **(extra or {})})
 
     def start(self, *argv: str, name: str | None = None, env: dict[str, str] | None = None) -> subprocess.Popen:
         """Start ``python argv...`` (e.g. ``"-m", "nodes.sim"``); output goes to a log file."""
         label = name or argv[-1].replace("/", "_")
-        log = open(self.log_dir / f"{label}-{len(self.procs)}.log", "wb")
-        proc = subprocess.Popen(
-            [sys.executable, *argv], stdout=log, stderr=subprocess.STDOUT, env=self.env(env),
-            cwd=ROOT, start_new_session=True,
-        )
-        proc.log_path = log.name  # type: ignore[attr-defined]
+        log = self.log_dir / f"{label}-{len(self.procs)}.log"
+        proc = spawn([sys.executable, *argv], log=log, env=self.env(env))
+        proc.log_path = str(log)  # type: ignore[attr-defined]
         self.procs.append(proc)
         return proc
 
@@ -86,22 +72,7 @@ class ProcessGroup:
         return Path(proc.log_path).read_text(errors="replace")  # type: ignore[attr-defined]
 
     def stop_all(self) -> None:
-        for proc in self.procs:
-            if proc.poll() is None:
-                try:
-                    os.killpg(proc.pid, signal.SIGINT)
-                except ProcessLookupError:
-                    pass
-        deadline = time.monotonic() + 5
-        for proc in self.procs:
-            try:
-                proc.wait(max(0.1, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                try:
-                    os.killpg(proc.pid, signal.SIGKILL)
-                except ProcessLookupError:
-                    pass
-                proc.wait()
+        stop_all(self.procs, timeout=5.0)
 
 
 @pytest.fixture

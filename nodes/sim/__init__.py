@@ -12,7 +12,6 @@ One idea per module:
 - ``robot_link``   one robot's Zenoh endpoints (hardware frames, humanoid_state, hardware/info)
 - ``node``         the simulator node: parameters, sim/* services, outputs, the stepping loop
 - ``config`` / ``robot_files`` / ``geometry`` / ``interfaces``  settings, URDF sources, quaternions, types
-- ``hardware_client``  a minimal lockstep partner used by tests and the benchmark
 
 Only this package imports dartpy.
 """

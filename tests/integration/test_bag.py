@@ -22,6 +22,7 @@ from rosbags.typesys import Stores, get_typestore
 import msgs
 from nodes.bag.reader import read_bag
 from tests.conftest import ROOT, wait_until
+from tests.support.samples import still_imu_cdr
 
 JointState = msgs.get_type("sensor_msgs/msg/JointState")
 JAZZY = get_typestore(Stores.ROS2_JAZZY)
@@ -166,15 +167,7 @@ def _rosbags_bag(path: Path, storage: StoragePlugin) -> list[tuple[float, object
                    effort=np.array([1.5, 2.5]))
             writer.write(conn, t0 + int(off * 1e9), JAZZY.serialize_cdr(m, js.__msgtype__))
             sent.append((off, m))
-        raw_imu = JAZZY.serialize_cdr(JAZZY.types["sensor_msgs/msg/Imu"](
-            header=header(stamp=stamp(sec=0, nanosec=0), frame_id=""),
-            orientation=JAZZY.types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
-            orientation_covariance=np.zeros(9),
-            angular_velocity=JAZZY.types["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0),
-            angular_velocity_covariance=np.zeros(9),
-            linear_acceleration=JAZZY.types["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0),
-            linear_acceleration_covariance=np.zeros(9)), "sensor_msgs/msg/Imu")
-        writer.write(imu, t0 + 5_000_000, raw_imu)
+        writer.write(imu, t0 + 5_000_000, still_imu_cdr())
     return sent
 
 

@@ -26,8 +26,9 @@ from pathlib import Path
 import psutil
 import pytest
 
+from bench.common import alive
 from tests.conftest import ROOT
-from tests.integration.test_launch_scenarios import Scenario, _alive, positions
+from tests.integration.test_launch_scenarios import Scenario, positions
 from tests.integration.test_multihost import Hosts, _ip, hosts  # noqa: F401 - the fixture is used by name
 
 pytestmark = pytest.mark.slow
@@ -54,13 +55,13 @@ def our_processes(port: int) -> list[psutil.Process]:
 
 
 def describe(pids: set[int]) -> str:
-    alive = []
+    running = []
     for pid in pids:
         try:
-            alive.append(f"{pid}: {' '.join(psutil.Process(pid).cmdline())}")
+            running.append(f"{pid}: {' '.join(psutil.Process(pid).cmdline())}")
         except psutil.Error:
             pass
-    return "still running: " + "; ".join(alive)
+    return "still running: " + "; ".join(running)
 
 
 def started_pids(output: str, node: str) -> list[int]:
@@ -181,7 +182,7 @@ def test_sigint_at_any_moment_ends_the_whole_tree(tmp_path: Path, zenoh_port: in
         except subprocess.TimeoutExpired:
             pytest.fail(f"the launcher ignored SIGINT ({when}):\n{out_path.read_text()[-3000:]}")
         assert time.monotonic() - sent < 12, "Ctrl-C takes at most SIGKILL_AFTER_S plus reaping"
-        wait_for(lambda: not our_processes(zenoh_port) and not any(_alive(p) for p in seen), 5,
+        wait_for(lambda: not our_processes(zenoh_port) and not any(alive(p) for p in seen), 5,
                  "every process of the launch to end", lambda: f"{describe(seen)}\n{out_path.read_text()}")
     finally:
         if proc.poll() is None:
@@ -200,8 +201,9 @@ def test_kill_9_of_the_launcher_leaves_no_orphans(tmp_path: Path, zenoh_port: in
         assert len(our_processes(zenoh_port)) >= 4  # simulator, state publisher, manager, commander
         os.kill(scenario.proc.pid, signal.SIGKILL)
         scenario.proc.wait()
-        wait_for(lambda: not our_processes(zenoh_port) and not [p for p in scenario.pids if _alive(p)], 10,
-                 "the reaper to end every node (and itself)", lambda: f"{describe(scenario.pids)}\n{scenario.output()}")
+        wait_for(lambda: not our_processes(zenoh_port) and not any(alive(p) for p in scenario.seen_pids), 10,
+                 "the reaper to end every node (and itself)",
+                 lambda: f"{describe(scenario.seen_pids)}\n{scenario.output()}")
     finally:
         for leftover in our_processes(zenoh_port):
             leftover.kill()

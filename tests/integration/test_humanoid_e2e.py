@@ -3,21 +3,18 @@ observed by a subscriber written with zenoh-python and msgpack alone (no project
 
 from __future__ import annotations
 
-import json
 import os
 import signal
-import subprocess
-import sys
 import threading
 import time
 from pathlib import Path
 
 import msgpack
-import psutil
 import pytest
 import zenoh
 
-ROOT = Path(__file__).resolve().parents[2]
+from bench.common import Launch, alive
+
 HUMANOID_JOINTS = {
     "left_hip_yaw", "left_hip_roll", "left_hip_pitch", "left_knee", "left_ankle_pitch", "left_ankle_roll",
     "right_hip_yaw", "right_hip_roll", "right_hip_pitch", "right_knee", "right_ankle_pitch", "right_ankle_roll",
@@ -26,16 +23,6 @@ HUMANOID_JOINTS = {
 }
 STANDING_PELVIS_HEIGHT = 0.910  # robots/humanoid.urdf: soles flat on the ground at the zero pose
 TOLERANCE = 0.05
-
-
-def third_party_session(port: int) -> zenoh.Session:
-    """What any Zenoh program would write: a peer that connects to the launcher's router, no scouting."""
-    config = zenoh.Config()
-    config.insert_json5("mode", json.dumps("peer"))
-    config.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
-    config.insert_json5("listen/endpoints", json.dumps(["tcp/127.0.0.1:0"]))
-    config.insert_json5("scouting/multicast/enabled", "false")
-    return zenoh.open(config)
 
 
 class Observer:
@@ -89,59 +76,24 @@ def alternates(series: list[float]) -> bool:
     return "bend" in runs and len(runs) >= 3
 
 
-def process_tree(pid: int) -> list[int]:
-    try:
-        root = psutil.Process(pid)
-        return [pid] + [c.pid for c in root.children(recursive=True)]
-    except psutil.NoSuchProcess:
-        return []
-
-
-def gone(pid: int) -> bool:
-    try:
-        return psutil.Process(pid).status() == psutil.STATUS_ZOMBIE
-    except psutil.NoSuchProcess:
-        return True
-
-
 @pytest.mark.slow
 def test_humanoid_launch_end_to_end(zenoh_port: int, tmp_path: Path) -> None:
-    env = dict(os.environ)
-    env.pop("ZENOH_CONNECT", None)
-    env.pop("ZENOH_CONFIG", None)
-    out_path = tmp_path / "launch.out"
     started = time.monotonic()
-    with open(out_path, "wb") as out:
-        launcher = subprocess.Popen(
-            [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", "mode:=lockstep",
-             f"zenoh_port:={zenoh_port}", "--log-dir", str(tmp_path / "logs")],
-            cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
-    session = None
+    launch = Launch("humanoid.yaml", "mode:=lockstep", log_dir=tmp_path, port=zenoh_port)
     observer = None
-    seen_pids: set[int] = set()
-
-    def output() -> str:
-        return out_path.read_text(errors="replace")
-
     try:
-        # The router lives in the launcher: connect once it listens.
-        deadline = time.monotonic() + 30
-        while "zenoh: embedded router" not in output():
-            assert launcher.poll() is None, output()
-            assert time.monotonic() < deadline, output()
-            time.sleep(0.05)
-        session = third_party_session(zenoh_port)
-        observer = Observer(session)
+        # The router lives in the launcher; a peer as any Zenoh program would write it connects once it listens.
+        observer = Observer(launch.peer(30))
 
         deadline = started + 90  # generous: 5 other engineers share these 2 cores
         while time.monotonic() < deadline:
-            seen_pids.update(process_tree(launcher.pid))
+            launch.pids()
             with observer.lock:
                 done = (observer.first_joint_states is not None and observer.pelvis_z
                         and all(alternates(s) for s in observer.knees.values()))
             if done:
                 break
-            assert launcher.poll() is None, "launcher ended early:\n" + output()
+            launch.check()
             time.sleep(0.2)
         with observer.lock:
             first = observer.first_joint_states
@@ -149,7 +101,7 @@ def test_humanoid_launch_end_to_end(zenoh_port: int, tmp_path: Path) -> None:
             knees = {k: list(v) for k, v in observer.knees.items()}
             pelvis = list(observer.pelvis_z)
             bad = list(observer.bad)
-        log = output()
+        log = launch.output()
         assert first is not None, "no humanoid/joint_states at all:\n" + log
         assert first - started < 15.0, f"first joint_states after {first - started:.1f} s (limit 15 s)"
         assert names == HUMANOID_JOINTS, f"joints: missing {HUMANOID_JOINTS - names}, extra {names - HUMANOID_JOINTS}"
@@ -162,23 +114,17 @@ def test_humanoid_launch_end_to_end(zenoh_port: int, tmp_path: Path) -> None:
     finally:
         if observer is not None:
             observer.close()
-        if session is not None:
-            session.close()
-        seen_pids.update(process_tree(launcher.pid))
-        if launcher.poll() is None:
-            launcher.send_signal(signal.SIGINT)
+        launch.pids()
+        status = launch.close(timeout=10.0)
         stop_deadline = time.monotonic() + 10.0
-        while time.monotonic() < stop_deadline and not all(gone(p) for p in seen_pids):
+        while time.monotonic() < stop_deadline and any(alive(p) for p in launch.seen_pids):
             time.sleep(0.05)
-        survivors = [p for p in seen_pids if not gone(p)]
-        if launcher.poll() is None:
-            os.killpg(launcher.pid, signal.SIGKILL)
+        survivors = [p for p in launch.seen_pids if alive(p)]
         for pid in survivors:
             try:
                 os.kill(pid, signal.SIGKILL)
             except ProcessLookupError:
                 pass
-        launcher.wait(timeout=10)
-    assert len(seen_pids) >= 5, f"expected the launcher and its nodes, saw {sorted(seen_pids)}"
-    assert not survivors, f"processes still alive 10 s after SIGINT: {survivors}\n{output()}"
-    assert launcher.returncode == 0, output()
+    assert len(launch.seen_pids) >= 5, f"expected the launcher and its nodes, saw {sorted(launch.seen_pids)}"
+    assert not survivors, f"processes still alive 10 s after SIGINT: {survivors}\n{launch.output()}"
+    assert status == 0, launch.output()

@@ -2,12 +2,7 @@
 
 from __future__ import annotations
 
-import json
 import math
-import os
-import signal
-import subprocess
-import sys
 import threading
 import time
 from collections import defaultdict
@@ -15,49 +10,25 @@ from collections.abc import Callable
 from pathlib import Path
 
 import msgpack
-import psutil
 import pytest
 import zenoh
 
-ROOT = Path(__file__).resolve().parents[2]
+from bench.common import Launch, alive, wait_until
 
 
-class Scenario:
+class Scenario(Launch):
     """``python -m launch FILE gui:=false zenoh_port:=N`` plus a plain Zenoh subscriber on some keys."""
 
     def __init__(self, tmp_path: Path, port: int, launch_file: str, *args: str) -> None:
-        self.port = port
-        self.out_path = tmp_path / "launch.out"
-        env = dict(os.environ)
-        env.pop("ZENOH_CONNECT", None)
-        env.pop("ZENOH_CONFIG", None)
-        with open(self.out_path, "wb") as out:
-            self.proc = subprocess.Popen(
-                [sys.executable, "-m", "launch", launch_file, "gui:=false", f"zenoh_port:={port}", *args,
-                 "--log-dir", str(tmp_path / "logs")],
-                cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+        super().__init__(launch_file, *args, log_dir=tmp_path, port=port)
         self.lock = threading.Lock()
         self.samples: dict[str, list[dict]] = defaultdict(list)
         self.session: zenoh.Session | None = None
-        self.subs: list = []
-        self.pids: set[int] = set()
-
-    def output(self) -> str:
-        return self.out_path.read_text(errors="replace")
 
     def connect(self, *keys: str) -> None:
-        deadline = time.monotonic() + 30
-        while "zenoh: embedded router" not in self.output():
-            assert self.proc.poll() is None and time.monotonic() < deadline, self.output()
-            time.sleep(0.05)
-        config = zenoh.Config()
-        config.insert_json5("mode", json.dumps("peer"))
-        config.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{self.port}"]))
-        config.insert_json5("listen/endpoints", json.dumps(["tcp/127.0.0.1:0"]))
-        config.insert_json5("scouting/multicast/enabled", "false")
-        self.session = zenoh.open(config)
+        self.session = self.peer(30)
         for key in keys:
-            self.subs.append(self.session.declare_subscriber(key, self._collector(key)))
+            self.session.declare_subscriber(key, self._collector(key))
 
     def _collector(self, key: str) -> Callable[[zenoh.Sample], None]:
         def on_sample(sample: zenoh.Sample) -> None:
@@ -72,41 +43,12 @@ class Scenario:
             return list(self.samples[key])
 
     def wait_for(self, predicate: Callable[[], bool], timeout: float, what: str) -> None:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            try:
-                self.pids.update([self.proc.pid] + [c.pid for c in psutil.Process(self.proc.pid).children(True)])
-            except psutil.NoSuchProcess:
-                pass
-            if predicate():
-                return
-            assert self.proc.poll() is None, f"launch ended early while waiting for {what}:\n{self.output()}"
-            time.sleep(0.1)
-        pytest.fail(f"timed out after {timeout:.0f} s waiting for {what}\n{self.output()[-6000:]}")
+        self.wait(lambda: self.pids() and predicate(), timeout, what, interval=0.1)
 
-    def close(self) -> None:
-        for sub in self.subs:
-            sub.undeclare()
-        if self.session is not None:
-            self.session.close()
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-        try:
-            self.proc.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            os.killpg(self.proc.pid, signal.SIGKILL)
-            self.proc.wait()
-        deadline = time.monotonic() + 10
-        while time.monotonic() < deadline and any(_alive(p) for p in self.pids):
-            time.sleep(0.05)
-        assert not [p for p in self.pids if _alive(p)], "processes outlived the launch"
-
-
-def _alive(pid: int) -> bool:
-    try:
-        return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
-    except psutil.NoSuchProcess:
-        return False
+    def close(self) -> int:
+        status = super().close()
+        wait_until(lambda: not any(alive(p) for p in self.seen_pids), 10, "every process of the launch to end")
+        return status
 
 
 def positions(samples: list[dict], joint: str) -> list[float]:
@@ -115,8 +57,7 @@ def positions(samples: list[dict], joint: str) -> list[float]:
 
 @pytest.mark.slow
 def test_lab_2_3_four_limbs_oscillate(tmp_path: Path, zenoh_port: int) -> None:
-    scenario = Scenario(tmp_path, zenoh_port, "lab_2_3.yaml", "mode:=lockstep")
-    try:
+    with Scenario(tmp_path, zenoh_port, "lab_2_3.yaml", "mode:=lockstep") as scenario:
         scenario.connect("lab_robot/joint_states")
         limbs = {"left_arm_joint": 1.0, "right_arm_joint": 1.0, "left_leg_joint": 0.5, "right_leg_joint": 0.5}
 
@@ -145,14 +86,11 @@ def test_lab_2_3_four_limbs_oscillate(tmp_path: Path, zenoh_port: int) -> None:
         out = scenario.output()
         assert "[robot_controller]" in out and "Left arm:" in out
         assert "=== Joint States ===" in out and "left_leg_joint: pos=" in out
-    finally:
-        scenario.close()
 
 
 @pytest.mark.slow
 def test_controller_lab_joint1_reaches_1_57(tmp_path: Path, zenoh_port: int) -> None:
-    scenario = Scenario(tmp_path, zenoh_port, "controller_lab.yaml", "mode:=lockstep")
-    try:
+    with Scenario(tmp_path, zenoh_port, "controller_lab.yaml", "mode:=lockstep") as scenario:
         scenario.connect("simple_robot/joint_states")
 
         def goals_done() -> bool:
@@ -167,14 +105,11 @@ def test_controller_lab_joint1_reaches_1_57(tmp_path: Path, zenoh_port: int) -> 
         out = scenario.output()
         assert "Sine trajectory execution completed: SUCCEEDED" in out
         assert "Point trajectory execution completed: SUCCEEDED" in out
-    finally:
-        scenario.close()
 
 
 @pytest.mark.slow
 def test_joint_animation_atlas_follows_playback_without_gravity(tmp_path: Path, zenoh_port: int) -> None:
-    scenario = Scenario(tmp_path, zenoh_port, "joint_animation.yaml")
-    try:
+    with Scenario(tmp_path, zenoh_port, "joint_animation.yaml") as scenario:
         scenario.connect("atlas/joint_states", "sim/model_states", "sim/clock")
 
         def moved_through_the_wave() -> bool:
@@ -207,14 +142,11 @@ def test_joint_animation_atlas_follows_playback_without_gravity(tmp_path: Path, 
                     - clock[0]["clock"]["sec"] - clock[0]["clock"]["nanosec"] * 1e-9)
         wall_span = clock[-1]["_received"] - clock[0]["_received"]
         assert wall_span > 5 and sim_span / wall_span < 1.5, (sim_span, wall_span)
-    finally:
-        scenario.close()
 
 
 @pytest.mark.slow
 def test_arm_viz_publishes_moving_tf(tmp_path: Path, zenoh_port: int) -> None:
-    scenario = Scenario(tmp_path, zenoh_port, "arm_viz.yaml", "frequency:=1.0")
-    try:
+    with Scenario(tmp_path, zenoh_port, "arm_viz.yaml", "frequency:=1.0") as scenario:
         scenario.connect("humanoid_simplified/tf", "humanoid_simplified/joint_states")
 
         def elbow_moves() -> bool:
@@ -227,5 +159,3 @@ def test_arm_viz_publishes_moving_tf(tmp_path: Path, zenoh_port: int) -> None:
         frames = {t["child_frame_id"] for m in scenario.snapshot("humanoid_simplified/tf") for t in m["transforms"]}
         assert {"left_upper_arm", "left_forearm", "left_hand", "right_upper_arm", "right_forearm",
                 "right_hand"} <= frames
-    finally:
-        scenario.close()

@@ -15,9 +15,6 @@ from __future__ import annotations
 
 import json
 import os
-import signal
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -27,9 +24,9 @@ import pytest
 import zenoh
 
 import msgs
+from bench.common import Launch, free_port
 from msgs.registry import get_spec
 
-ROOT = Path(__file__).resolve().parents[2]
 RECORD_UNTIL = 5.5   # sim s: the commander stands at 2.2 s and bends the knees from 4.2 s
 HOT_KEYS = {
     "humanoid/hardware/state": "zenroid_msgs/msg/HardwareState",
@@ -100,21 +97,12 @@ def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[f
                                                     str, list[tuple[str, int, int, set[int]]], dict[str, dict]]:
     """Launch paused, unpause when the controllers are active, record joint_states until RECORD_UNTIL (and the
     IMU's and a foot sensor's messages by stamp)."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    env.pop("ZENOH_CONNECT", None)
-    env.pop("ZENOH_CONFIG", None)
-    out_path = log_dir / "launch.out"
-    with open(out_path, "wb") as out:
-        launcher = subprocess.Popen(
-            [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", "mode:=lockstep", "paused:=true",
-             "world:=simple_lab.world", f"zenoh_port:={port}", "--log-dir", str(log_dir / "logs")],
-            cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+    launch = Launch("humanoid.yaml", "mode:=lockstep", "paused:=true", "world:=simple_lab.world", log_dir=log_dir,
+                    port=port)
     session = None
     try:
+        launch.wait_output(Launch.ROUTER_UP, 60)
         deadline = time.monotonic() + 60
-        while "zenoh: embedded router" not in out_path.read_text(errors="replace"):
-            assert launcher.poll() is None and time.monotonic() < deadline, out_path.read_text()
-            time.sleep(0.05)
         session = client_session(port)
         joint_states = session.declare_subscriber("humanoid/joint_states", zenoh.handlers.FifoChannel(100_000))
         samples: dict[str, bytes] = {}
@@ -126,11 +114,12 @@ def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[f
                        for key in SENSOR_KEYS}
         # every controller active and the commander up before the first step
         while True:
-            assert launcher.poll() is None and time.monotonic() < deadline, out_path.read_text()
+            launch.check()
+            assert time.monotonic() < deadline, launch.output()
             listed = call(session, "humanoid/controller_manager/list_controllers", {}, timeout=1.0)
             states = {c["name"]: c["state"] for c in (listed or {}).get("controller", [])}
             if (all(states.get(name) == "active" for name in ACTIVE)
-                    and "Joint Commander initialized" in out_path.read_text(errors="replace")):
+                    and "Joint Commander initialized" in launch.output()):
                 break
             time.sleep(0.2)
         assert call(session, "sim/unpause_physics", {}) is not None
@@ -157,27 +146,19 @@ def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[f
                 sensors[key][(stamp["sec"], stamp["nanosec"])] = msg
             sub.undeclare()
         time.sleep(1.2)   # the simulator moves threads started after its claim off the CPU once a second
-        threads = thread_cpus(launcher.pid)
+        threads = thread_cpus(launch.proc.pid)
         for sub in hot:
             sub.undeclare()
         joint_states.undeclare()
-        return trajectory, names, samples, out_path.read_text(errors="replace"), threads, sensors
+        return trajectory, names, samples, launch.output(), threads, sensors
     finally:
         if session is not None:
             session.close()
-        if launcher.poll() is None:
-            launcher.send_signal(signal.SIGINT)
-        try:
-            launcher.wait(20)
-        except subprocess.TimeoutExpired:
-            os.killpg(launcher.pid, signal.SIGKILL)
-            launcher.wait()
+        launch.close()
 
 
 @pytest.mark.slow
 def test_lockstep_main_job_is_bit_identical_and_hot_paths_follow_the_schema(tmp_path: Path) -> None:
-    from tests.conftest import free_port
-
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
     first, names, samples, log, threads, first_sensors = run_main_job(free_port(), tmp_path / "a")

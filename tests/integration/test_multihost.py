@@ -4,9 +4,6 @@ alone and with the zenroid CLI. Skipped where network namespaces cannot be creat
 
 from __future__ import annotations
 
-import os
-import shutil
-import signal
 import subprocess
 import sys
 import time
@@ -17,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import ROOT
+from bench.common import child_env, spawn, stop_all
+from tests.support.compose import netns_available
 
 pytestmark = pytest.mark.slow
 
@@ -34,16 +32,6 @@ with zenoh.open(conf) as session:
 """
 
 
-def _netns_available() -> bool:
-    if os.geteuid() != 0 or shutil.which("ip") is None:
-        return False
-    probe = f"zr_probe_{uuid.uuid4().hex[:6]}"
-    ok = subprocess.run(["ip", "netns", "add", probe], capture_output=True).returncode == 0
-    if ok:
-        subprocess.run(["ip", "netns", "del", probe], capture_output=True)
-    return ok
-
-
 @dataclass
 class Hosts:
     a: str
@@ -53,12 +41,9 @@ class Hosts:
     procs: list[subprocess.Popen]
 
     def run_in(self, ns: str, *argv: str, name: str, env: dict[str, str] | None = None) -> subprocess.Popen:
-        full_env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1", **(env or {}))
-        full_env.pop("ZENOH_CONFIG", None)
-        log = open(self.log_dir / f"{name}.log", "wb")
-        proc = subprocess.Popen(["ip", "netns", "exec", ns, sys.executable, *argv], cwd=ROOT, env=full_env,
-                                stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
-        proc.log_path = log.name  # type: ignore[attr-defined]
+        log = self.log_dir / f"{name}.log"
+        proc = spawn(["ip", "netns", "exec", ns, sys.executable, *argv], log=log, env=child_env(env))
+        proc.log_path = str(log)  # type: ignore[attr-defined]
         self.procs.append(proc)
         return proc
 
@@ -72,7 +57,7 @@ def _ip(*argv: str) -> None:
 
 @pytest.fixture
 def hosts(tmp_path: Path) -> Iterator[Hosts]:
-    if not _netns_available():
+    if not netns_available():
         pytest.skip("network namespaces need root and iproute2 (ip netns)")
     tag = uuid.uuid4().hex[:6]
     a, b = f"zr_a_{tag}", f"zr_b_{tag}"
@@ -91,15 +76,7 @@ def hosts(tmp_path: Path) -> Iterator[Hosts]:
             _ip("-n", ns, "link", "set", "lo", "up")
         yield hosts
     finally:
-        for proc in hosts.procs:
-            if proc.poll() is None:
-                os.killpg(proc.pid, signal.SIGINT)
-        for proc in hosts.procs:
-            try:
-                proc.wait(15)
-            except subprocess.TimeoutExpired:
-                os.killpg(proc.pid, signal.SIGKILL)
-                proc.wait()
+        stop_all(hosts.procs, timeout=15)
         subprocess.run(["ip", "netns", "del", a], capture_output=True)
         subprocess.run(["ip", "netns", "del", b], capture_output=True)
 

@@ -7,8 +7,6 @@ rosbags (CDR) and by plain Zenoh sessions declaring rmw_zenoh tokens; never by o
 from __future__ import annotations
 
 import json
-import os
-import signal
 import subprocess
 import sys
 import threading
@@ -22,11 +20,12 @@ import zenoh.ext
 from rosbags.typesys import Stores, get_typestore
 
 import msgs
+from bench.common import Launch, child_env
 from msgs import cdr
 from msgs.type_hash import rihs01
 from nodes.core.node import Node
 from nodes.core.ros2 import attachment, names
-from tests.conftest import free_port, wait_until
+from tests.conftest import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 JAZZY = get_typestore(Stores.ROS2_JAZZY)
@@ -286,31 +285,20 @@ def _zenoh_ros2(port: int, *args: str) -> str:
     return done.stdout
 
 
-_CLEAN_ENV = {k: v for k, v in os.environ.items() if k not in ("ZENOH_CONNECT", "ZENOH_CONFIG", "ROS_DOMAIN_ID")}
+_CLEAN_ENV = {k: v for k, v in child_env().items() if k != "ROS_DOMAIN_ID"}
 
 
 @pytest.fixture(scope="module")
 def main_job(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[int, subprocess.Popen, Path]]:
     """The main job (lockstep, no viewer, no commander) on a free port, shared by the tests below;
     yields (port, launcher, its output file). It must end cleanly on SIGINT."""
-    zenoh_port, tmp_path = free_port(), tmp_path_factory.mktemp("main_job")
-    out_path = tmp_path / "launch.out"
-    with open(out_path, "wb") as out:
-        launcher = subprocess.Popen(
-            [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", "mode:=lockstep", "commander:=none",
-             f"zenoh_port:={zenoh_port}", "--log-dir", str(tmp_path / "logs")],
-            cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=_CLEAN_ENV, start_new_session=True)
+    launch = Launch("humanoid.yaml", "mode:=lockstep", "commander:=none", env=_CLEAN_ENV,
+                    log_dir=tmp_path_factory.mktemp("main_job"))
     try:
-        yield zenoh_port, launcher, out_path
+        yield launch.port, launch.proc, launch.out_path
     finally:
-        if launcher.poll() is None:
-            launcher.send_signal(signal.SIGINT)
-        try:
-            launcher.wait(timeout=20)
-        except subprocess.TimeoutExpired:
-            os.killpg(launcher.pid, signal.SIGKILL)
-            launcher.wait(timeout=10)
-    assert launcher.returncode == 0, out_path.read_text(errors="replace")
+        status = launch.close()
+    assert status == 0, launch.output()
 
 
 @pytest.mark.slow

@@ -14,8 +14,8 @@ import msgpack
 import pytest
 
 from nodes.core import Node
-from nodes.sim.hardware_client import HardwareClient
 from nodes.sim.interfaces import GetPhysicsProperties
+from tests.support.hardware_client import HardwareClient
 
 ROOT = Path(__file__).resolve().parents[2]
 HUMANOID_ENTITY = "entities:=[{name: humanoid, file: humanoid, z: 0.915}]"

@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from nodes.viz.readback import load
 from nodes.viz.scene import parse_model as parse_urdf
 from nodes.viz.scene import plot_groups
 from tests.conftest import wait_until
+from tests.support.rrd import load
 
 ROOT = Path(__file__).resolve().parents[2]
 HUMANOID = ROOT / "robots" / "humanoid.urdf"
@@ -38,7 +38,7 @@ def start_stack(processes, rrd: Path, robots: list[str], feeder_params: list[str
                         name=f"state_publisher_{ns}")
     viz = processes.start("-m", "nodes.viz", "--save", str(rrd), name="viz")
     wait_until(lambda: "saving the recording" in processes.output(viz), 30, message="the visualiser to start")
-    feeder = processes.start("-m", "nodes.viz.feeder", "--param", f"robots:=[{', '.join(robots)}]",
+    feeder = processes.start("-m", "tests.support.viz_feeder", "--param", f"robots:=[{', '.join(robots)}]",
                              *feeder_params, name="feeder")
     return viz, feeder
 

@@ -16,8 +16,8 @@ import pytest
 
 import msgs
 from nodes.core import Node
-from nodes.viz.readback import load
 from tests.conftest import wait_until
+from tests.support.rrd import load
 
 ROOT = Path(__file__).resolve().parents[2]
 HUMANOID = ROOT / "robots" / "humanoid.urdf"

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from nodes.viz.screenshot import find_browser
 from tests.conftest import wait_until
+from tests.support.screenshot import find_browser
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[2]
 @pytest.mark.skipif(find_browser() is None, reason="no Chromium installed (Debian: apt-get install chromium)")
 def test_served_web_viewer_renders_in_headless_chromium(tmp_path: Path) -> None:
     out = tmp_path / "viz.png"
-    result = subprocess.run([sys.executable, "-m", "nodes.viz.screenshot", "--out", str(out), "--settle", "3",
+    result = subprocess.run([sys.executable, "-m", "tests.support.screenshot", "--out", str(out), "--settle", "3",
                              "--render", "15"], cwd=ROOT, capture_output=True, text=True, timeout=240)
     assert result.returncode == 0, result.stdout + result.stderr
     image = pytest.importorskip("PIL.Image").open(out).convert("RGB")
@@ -62,41 +62,25 @@ def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int)
     How fast it gets there is the bench's business (``bench/viz.py``); the deadline here only bounds a page
     that never catches up, with room for a loaded machine."""
     import io
-    import json
     import math
-    import os
-    import re
     import threading
     import time
 
     import msgpack
-    import zenoh
 
-    from nodes.viz.browser import HeadlessBrowser, ViewerProbe
+    from bench.common import Launch, child_env
+    from tests.support.browser import HeadlessBrowser, ViewerProbe
 
     image_module = pytest.importorskip("PIL.Image")
-    env = {k: v for k, v in os.environ.items() if k not in ("ZENOH_CONNECT", "ZENOH_CONFIG", "DISPLAY",
-                                                             "WAYLAND_DISPLAY")}
-    out = tmp_path / "launch.out"
-    launch = subprocess.Popen([sys.executable, "-m", "launch", "humanoid.yaml", "mode:=realtime",
-                               f"zenoh_port:={zenoh_port}", "viewer_args:=--serve --web-port 0 --grpc-port 0",
-                               "--log-dir", str(tmp_path / "logs")], cwd=ROOT, env=env, stdout=open(out, "wb"),
-                              stderr=subprocess.STDOUT, start_new_session=True)
+    env = {k: v for k, v in child_env().items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    launch = Launch("humanoid.yaml", "mode:=realtime", "viewer_args:=--serve --web-port 0 --grpc-port 0",
+                    log_dir=tmp_path, port=zenoh_port, gui=True, env=env)
     knees: dict[int, float] = {}  # sim time (ms) -> left_knee, from joint_states
     clock = {"now": 0.0}
     lock = threading.Lock()
-    session = None
     try:
-        deadline = time.monotonic() + 90
-        while not re.search(r"Rerun web viewer: (\S+)", out.read_text(errors="replace")):
-            assert launch.poll() is None and time.monotonic() < deadline, out.read_text(errors="replace")
-            time.sleep(0.2)
-        url = re.search(r"Rerun web viewer: (\S+)", out.read_text(errors="replace")).group(1)
-        config = zenoh.Config()
-        config.insert_json5("mode", json.dumps("peer"))
-        config.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{zenoh_port}"]))
-        config.insert_json5("scouting/multicast/enabled", "false")
-        session = zenoh.open(config)
+        url = launch.wait_match(r"Rerun web viewer: (\S+)", 90).group(1)
+        session = launch.peer()
 
         def on_state(sample) -> None:
             msg = msgpack.unpackb(sample.payload.to_bytes())
@@ -109,8 +93,8 @@ def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int)
             stamp = msgpack.unpackb(sample.payload.to_bytes())["clock"]
             clock["now"] = stamp["sec"] + stamp["nanosec"] * 1e-9
 
-        subs = [session.declare_subscriber("humanoid/joint_states", on_state),
-                session.declare_subscriber("sim/clock", on_clock)]
+        session.declare_subscriber("humanoid/joint_states", on_state)
+        session.declare_subscriber("sim/clock", on_clock)
         time.sleep(20.0)  # the main job runs for a while before anyone looks
 
         def sim_time(recording) -> float | None:
@@ -168,15 +152,5 @@ def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int)
         for lag, bent, bent_on_screen in checked:
             assert bent == bent_on_screen, (f"knee {'bent' if bent else 'straight'} at the cursor ({lag:.2f} s "
                                             f"behind the simulation when paused), not on screen")
-        for sub in subs:
-            sub.undeclare()
     finally:
-        if session is not None:
-            session.close()
-        if launch.poll() is None:
-            os.killpg(launch.pid, 2)
-        try:
-            launch.wait(30)
-        except subprocess.TimeoutExpired:
-            os.killpg(launch.pid, 9)
-            launch.wait()
+        launch.close(30)

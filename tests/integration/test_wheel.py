@@ -6,16 +6,15 @@ from __future__ import annotations
 
 import os
 import shutil
-import signal
 import subprocess
 import sys
 import threading
-import time
 from pathlib import Path
 
 import msgpack
 import pytest
 
+from bench.common import Launch
 from tests.conftest import ROOT
 
 ACTIVE = "Configured and activated joint_trajectory_controller"
@@ -69,15 +68,10 @@ def _outside_env(**extra: str) -> dict[str, str]:
     return env
 
 
-def _joint_states_flow(argv: list[str], cwd: Path, env: dict[str, str], port: int) -> None:
-    """Run the main job with ``argv`` (``... humanoid.yaml gui:=false zenoh_port:=port``) until 50
-    ``humanoid/joint_states`` messages of 22 joints arrived and the trajectory controller is active (its
+def _joint_states_flow(command: list[str], cwd: Path, env: dict[str, str], port: int) -> None:
+    """Run the main job with ``command`` (``python -m launch`` of the venv, or its ``zenroid launch``) until
+    50 ``humanoid/joint_states`` messages of 22 joints arrived and the trajectory controller is active (its
     parameters come from config/controllers.yaml), then Ctrl-C it."""
-    from nodes.core.session import open_peer
-
-    out_path = cwd / "launch.out"
-    with open(out_path, "wb") as out:
-        proc = subprocess.Popen(argv, cwd=cwd, env=env, stdout=out, stderr=subprocess.STDOUT, start_new_session=True)
     received: list[dict] = []
     lock = threading.Lock()
 
@@ -85,36 +79,16 @@ def _joint_states_flow(argv: list[str], cwd: Path, env: dict[str, str], port: in
         with lock:
             received.append(msgpack.unpackb(sample.payload.to_bytes()))
 
-    session = None
+    launch = Launch("humanoid.yaml", log_dir=cwd, port=port, command=command, env=env, cwd=cwd)
     try:
-        deadline = time.monotonic() + 120
-        while "zenoh: embedded router" not in out_path.read_text(errors="replace"):
-            assert proc.poll() is None and time.monotonic() < deadline, out_path.read_text(errors="replace")
-            time.sleep(0.1)
-        session = open_peer([f"tcp/127.0.0.1:{port}"])
-        sub = session.declare_subscriber("humanoid/joint_states", on_sample)
-        while time.monotonic() < deadline:
-            with lock:
-                if len(received) >= 50 and ACTIVE in out_path.read_text(errors="replace"):
-                    break
-            assert proc.poll() is None, out_path.read_text(errors="replace")
-            time.sleep(0.2)
-        sub.undeclare()
+        launch.peer(120).declare_subscriber("humanoid/joint_states", on_sample)
+        launch.wait(lambda: len(received) >= 50 and ACTIVE in launch.output(), 120, "joint_states to flow",
+                    interval=0.2)
         with lock:
-            output = out_path.read_text(errors="replace")
-            assert len(received) >= 50 and ACTIVE in output, f"joint_states did not flow:\n{output[-4000:]}"
             last = received[-1]
         assert len(last["name"]) == 22 and len(last["position"]) == 22
     finally:
-        if session is not None:
-            session.close()
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
+        launch.close(30)
 
 
 @pytest.mark.slow
@@ -125,8 +99,7 @@ def test_wheel_runs_the_main_job_outside_the_checkout(venv: Path, tmp_path: Path
                   "s.world_file('simple_lab'))"],
                  cwd=tmp_path, env=_outside_env(), timeout=60).stdout.split()
     assert all(Path(p).resolve().is_relative_to(venv.resolve()) for p in where), (where, venv)
-    _joint_states_flow([str(python), "-m", "launch", "humanoid.yaml", "gui:=false", f"zenoh_port:={zenoh_port}",
-                       "--log-dir", str(tmp_path / "logs")], tmp_path, _outside_env(), zenoh_port)
+    _joint_states_flow([str(python), "-m", "launch"], tmp_path, _outside_env(), zenoh_port)
 
 
 @pytest.mark.slow
@@ -140,5 +113,4 @@ def test_zenroid_launch_works_when_ros2_shadows_launch(venv: Path, tmp_path: Pat
     shadowed = _run([str(venv / "bin" / "python"), "-c", "import launch; print(launch.__file__)"],
                     cwd=tmp_path, env=env, timeout=60).stdout.strip()
     assert Path(shadowed) == ros / "__init__.py"
-    _joint_states_flow([str(venv / "bin" / "zenroid"), "launch", "humanoid.yaml", "gui:=false",
-                        f"zenoh_port:={zenoh_port}", "--log-dir", str(tmp_path / "logs")], tmp_path, env, zenoh_port)
+    _joint_states_flow([str(venv / "bin" / "zenroid"), "launch"], tmp_path, env, zenoh_port)

@@ -15,7 +15,6 @@ from __future__ import annotations
 import os
 import shlex
 import shutil
-import signal
 import subprocess
 import sys
 import threading
@@ -26,6 +25,8 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+
+from bench.common import stop_all
 
 ROOT = Path(__file__).resolve().parents[2]
 ZENOH_IMAGE = "eclipse/zenoh"
@@ -285,24 +286,4 @@ class Replay:
         self._stop.set()
         if self._watcher.is_alive():
             self._watcher.join(5)
-        stop_all([run.proc for run in self.running.values() if run.proc is not None])
-
-
-def stop_all(procs: list[subprocess.Popen], grace: float = 15.0) -> None:
-    """Ctrl-C to each process group (every ``Network.popen`` has its own), SIGKILL after ``grace`` seconds."""
-    for proc in procs:
-        if proc.poll() is None:
-            try:
-                os.killpg(proc.pid, signal.SIGINT)
-            except ProcessLookupError:
-                pass
-    deadline = time.monotonic() + grace
-    for proc in procs:
-        try:
-            proc.wait(max(0.1, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            try:
-                os.killpg(proc.pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-            proc.wait()
+        stop_all([run.proc for run in self.running.values() if run.proc is not None], timeout=15)

@@ -1,4 +1,4 @@
-"""Deterministic, non-default instances of any message type (for cross-process round trips)."""
+"""Deterministic, non-default instances of any message type (for cross-process round trips), and URDFs."""
 
 from __future__ import annotations
 
@@ -32,3 +32,30 @@ def _scalar(base: str, i: int, depth: int) -> Any:
     if base in ("string", "wstring"):
         return f"value_{i}"
     return sample_message(base, depth + 1)
+
+
+def chain_urdf(n: int, star: bool = False) -> str:
+    """A robot of ``n`` revolute joints: a chain of ``n + 1`` links, or (``star``) every link on the first."""
+    inertial = ('<inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>'
+                '</inertial>')
+    links = "".join(f'<link name="l{i}">{inertial}</link>' for i in range(n + 1))
+    joints = "".join(f'<joint name="j{i}" type="revolute"><parent link="l{0 if star else i}"/><child link="l{i + 1}"/>'
+                     '<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="10" velocity="1"/></joint>'
+                     for i in range(n))
+    return f'<robot name="chain">{links}{joints}</robot>'
+
+
+def still_imu_cdr() -> bytes:
+    """A sensor_msgs/Imu at rest (identity orientation, zero stamp), CDR as rosbags' Jazzy types write it: a
+    topic of another type in the bags the tests write."""
+    import numpy as np
+    from rosbags.typesys import Stores, get_typestore
+
+    jazzy = get_typestore(Stores.ROS2_JAZZY)
+    types = jazzy.types
+    zero = types["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
+    return bytes(jazzy.serialize_cdr(types["sensor_msgs/msg/Imu"](
+        header=types["std_msgs/msg/Header"](stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id=""),
+        orientation=types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0), orientation_covariance=np.zeros(9),
+        angular_velocity=zero, angular_velocity_covariance=np.zeros(9),
+        linear_acceleration=zero, linear_acceleration_covariance=np.zeros(9)), "sensor_msgs/msg/Imu"))

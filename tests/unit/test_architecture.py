@@ -4,9 +4,18 @@ from __future__ import annotations
 
 import ast
 import os
+import re
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
+
+import yaml
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: pytest's own dependency
+    import tomli as tomllib
 
 from tests.conftest import ROOT
 
@@ -254,3 +263,94 @@ def test_endpoints_depend_on_the_runtime_interface_not_on_node() -> None:
     graph = import_graph(project_modules())
     for module in ("nodes.core.endpoints", "nodes.core.action", "nodes.core.latched", "nodes.core.factory"):
         assert "nodes.core.node" not in graph[module], f"{module} imports nodes.core.node"
+
+
+# ------------------------------------------------------------------------------------------ product vs tooling
+def _strings(value: object) -> Iterator[str]:
+    if isinstance(value, str):
+        yield value
+    elif isinstance(value, dict):
+        for item in value.values():
+            yield from _strings(item)
+    elif isinstance(value, list):
+        for item in value:
+            yield from _strings(item)
+
+
+def _named_modules(texts: Iterator[str] | set[str], modules: dict[str, Path]) -> set[str]:
+    """The modules these strings name; ``nodes.commanders.$(var commander)`` (a launch file's ``module:``)
+    names every module of that package, as the launch argument may pick any."""
+    found: set[str] = set()
+    for text in texts:
+        if "$(" in text:
+            pattern = re.compile(re.sub(r"\\\$\\\(.*?\\\)", "[A-Za-z0-9_]+", re.escape(text)))
+            found.update(name for name in modules if pattern.fullmatch(name))
+        elif text in modules:
+            found.add(text)
+    return found
+
+
+def entry_points(modules: dict[str, Path], root: Path = ROOT) -> set[str]:
+    """The modules something other than product code starts: a package with a ``__main__.py`` (``python -m
+    pkg``), the ``[project.scripts]`` and ``[project.entry-points]`` of pyproject.toml, and the ``module:`` of
+    the launch files."""
+    found = {name for name, path in modules.items() if path.name == "__init__.py"
+             and (path.parent / "__main__.py").is_file()}
+    project = tomllib.loads((root / "pyproject.toml").read_text())["project"]
+    targets = list(project.get("scripts", {}).values())
+    targets += [t for group in project.get("entry-points", {}).values() for t in group.values()]
+    found.update(t.partition(":")[0].strip() for t in targets)
+    for path in sorted((root / "launch").glob("*.yaml")):
+        found |= _named_modules(set(_strings(yaml.safe_load(path.read_text()))), modules)
+    return found
+
+
+def unreached_modules(modules: dict[str, Path], root: Path = ROOT) -> list[str]:
+    """Product modules that no entry point reaches through product code: code only tests or benches use
+    (it belongs in tests/support or bench), or nothing at all. Product code reaches a module by importing it
+    (importing ``a.b`` runs ``a`` first) or by naming it in a string (``"-m", "launch.reaper"``, a CLI verb's
+    module for ``importlib``)."""
+    mains = {f"{name}.__main__": path.parent / "__main__.py" for name, path in modules.items()
+             if path.name == "__init__.py" and (path.parent / "__main__.py").is_file()}
+    everything = {**modules, **mains}
+    graph = import_graph(everything)
+    for name, path in everything.items():
+        graph[name] |= _named_modules({node.value for node in ast.walk(ast.parse(path.read_text()))
+                                       if isinstance(node, ast.Constant) and isinstance(node.value, str)}, modules)
+    reached: set[str] = set()
+    todo = [*entry_points(modules, root), *mains]
+    while todo:
+        name = todo.pop()
+        if name in reached:
+            continue
+        reached.add(name)
+        parent = name.rpartition(".")[0]
+        todo += [*graph.get(name, ()), *([parent] if parent in modules else [])]
+    return sorted(set(modules) - reached)
+
+
+def test_every_product_module_is_used_by_the_product() -> None:
+    unreached = unreached_modules(project_modules())
+    assert not unreached, ("modules under nodes/, msgs/ or launch/ that no entry point (python -m, pyproject "
+                           "scripts and entry points, launch files) reaches through product imports; code "
+                           f"only tests or benches use belongs in tests/support or bench: {unreached}")
+
+
+def test_the_product_check_sees_a_module_only_tests_use(tmp_path: Path) -> None:
+    files = {"pkg/__init__.py": "", "pkg/__main__.py": "from pkg import app\n",
+             "pkg/app.py": "import subprocess\nsubprocess.run(['python', '-m', 'pkg.helper'])\n",
+             "pkg/helper.py": "from pkg.util import x\n", "pkg/util.py": "x = 1\n",
+             "pkg/plugins/__init__.py": "", "pkg/plugins/wave.py": "", "pkg/cli.py": "",
+             "pkg/probe.py": "import pkg.tooling\n", "pkg/tooling.py": "'pkg.feeder'\n", "pkg/feeder.py": "",
+             "launch/demo.yaml": "launch:\n  - node: {module: pkg.plugins.$(var name)}\n",
+             "pyproject.toml": '[project]\nname = "x"\n[project.scripts]\nx = "pkg.cli:main"\n'}
+    for name, text in files.items():
+        (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / name).write_text(text)
+    modules = {name: tmp_path / path for name, path in (
+        ("pkg", "pkg/__init__.py"), ("pkg.app", "pkg/app.py"), ("pkg.helper", "pkg/helper.py"),
+        ("pkg.util", "pkg/util.py"), ("pkg.plugins", "pkg/plugins/__init__.py"),
+        ("pkg.plugins.wave", "pkg/plugins/wave.py"), ("pkg.cli", "pkg/cli.py"), ("pkg.probe", "pkg/probe.py"),
+        ("pkg.tooling", "pkg/tooling.py"), ("pkg.feeder", "pkg/feeder.py"))}
+    # probe and tooling name each other and feeder, but nothing the product starts reaches them
+    assert unreached_modules(modules, tmp_path) == ["pkg.feeder", "pkg.probe", "pkg.tooling"]

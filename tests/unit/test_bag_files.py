@@ -32,7 +32,7 @@ from msgs.schema_text import full_definition
 from msgs.type_hash import rihs01
 from nodes.bag.reader import BagError, open_bag, read_bag
 from nodes.bag.writer import BagWriter
-from tests.support.samples import sample_message
+from tests.support.samples import sample_message, still_imu_cdr
 from tests.unit.test_msgs_properties import ALL, message_strategy
 
 JAZZY = get_typestore(Stores.ROS2_JAZZY)
@@ -273,14 +273,7 @@ def rosbags_bag(path: Path, storage: StoragePlugin, compression: CompressionMode
             t = 10**18 + i * 50_000_000
             writer.write(conn, t, JAZZY.serialize_cdr(m, js.__msgtype__))
             sent.append((conn.topic, t, m))
-        writer.write(imu, 10**18, JAZZY.serialize_cdr(JAZZY.types["sensor_msgs/msg/Imu"](
-            header=header(stamp=stamp(sec=0, nanosec=0), frame_id=""),
-            orientation=JAZZY.types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
-            orientation_covariance=np.zeros(9),
-            angular_velocity=JAZZY.types["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0),
-            angular_velocity_covariance=np.zeros(9),
-            linear_acceleration=JAZZY.types["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0),
-            linear_acceleration_covariance=np.zeros(9)), "sensor_msgs/msg/Imu"))
+        writer.write(imu, 10**18, still_imu_cdr())
     return sent
 
 

@@ -5,62 +5,23 @@ from __future__ import annotations
 import os
 import re
 import signal
-import subprocess
 import sys
 import textwrap
 from pathlib import Path
 
-import psutil
 import pytest
 
+from bench.common import Launch, alive, child_env, spawn, stop
 from tests.conftest import wait_until
 
-ROOT = Path(__file__).resolve().parents[2]
 
-
-class Launch:
-    """``python -m launch FILE`` in its own session, output captured to a file."""
+class YamlLaunch(Launch):
+    """``python -m launch FILE`` of a launch file written by the test, in its own session, output captured."""
 
     def __init__(self, tmp_path: Path, text: str, port: int, *args: str) -> None:
         self.file = tmp_path / "test.yaml"
         self.file.write_text(textwrap.dedent(text).lstrip(), encoding="utf-8")
-        self.log_dir = tmp_path / "logs"
-        self.out_path = tmp_path / "launch.out"
-        env = dict(os.environ)
-        env.pop("ZENOH_CONNECT", None)
-        env.pop("ZENOH_CONFIG", None)
-        with open(self.out_path, "wb") as out:
-            self.proc = subprocess.Popen(
-                [sys.executable, "-m", "launch", str(self.file), f"zenoh_port:={port}", "--log-dir",
-                 str(self.log_dir), *args],
-                cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
-
-    def output(self) -> str:
-        return self.out_path.read_text(errors="replace")
-
-    def pids(self, name: str) -> list[int]:
-        return [int(p) for p in re.findall(rf"started '{name}' \[pid (\d+)\]", self.output())]
-
-    def wait_output(self, fragment: str, timeout: float = 30.0) -> None:
-        wait_until(lambda: fragment in self.output(), timeout, 0.05, f"'{fragment}' in launcher output:\n"
-                   + self.output())
-
-    def stop(self) -> int:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-        try:
-            return self.proc.wait(timeout=20)
-        finally:
-            if self.proc.poll() is None:
-                os.killpg(self.proc.pid, signal.SIGKILL)
-                self.proc.wait()
-
-
-def gone(pid: int) -> bool:
-    try:
-        return psutil.Process(pid).status() == psutil.STATUS_ZOMBIE
-    except psutil.NoSuchProcess:
-        return True
+        super().__init__(str(self.file), *args, log_dir=tmp_path, port=port, gui=True)
 
 
 HEADER = """
@@ -70,7 +31,7 @@ launch:
 
 
 def test_respawn_after_kill_9_and_sigint_ends_everything(tmp_path: Path, zenoh_port: int) -> None:
-    launch = Launch(tmp_path, HEADER + """
+    launch = YamlLaunch(tmp_path, HEADER + """
   - node: {name: worker, module: tests.support.dummy_node, namespace: demo, respawn: true, respawn_delay: 0.3,
            params: {rate: 5.0}, args: [--child]}
   - node: {name: steady, module: tests.support.dummy_node, args: [--detached-child]}
@@ -78,33 +39,33 @@ def test_respawn_after_kill_9_and_sigint_ends_everything(tmp_path: Path, zenoh_p
     try:
         launch.wait_output("[worker] ready demo/worker")
         launch.wait_output("[steady] ready steady")
-        first = launch.pids("worker")[0]
+        first = launch.node_pids("worker")[0]
         os.kill(first, signal.SIGKILL)
         launch.wait_output("respawning 'worker' in 0.3 s (1/5)")
-        wait_until(lambda: len(launch.pids("worker")) == 2, 20, 0.05, "a second worker")
-        second = launch.pids("worker")[1]
-        assert second != first and not gone(second)
+        wait_until(lambda: len(launch.node_pids("worker")) == 2, 20, 0.05, "a second worker")
+        second = launch.node_pids("worker")[1]
+        assert second != first and alive(second)
         wait_until(lambda: launch.output().count("[worker] ready demo/worker") == 2, 30, 0.05, "respawned ready")
         # Parameters reach the node through the generated params file.
         assert "[worker] params {worker: {ros__parameters: {rate: 5.0}}}" in launch.output()
         children = [int(p) for p in re.findall(r"\[(?:worker|steady)\] (?:detached )?child pid (\d+)",
                                                launch.output())]
         assert len(children) == 3, launch.output()
-        everyone = [*launch.pids("worker"), *launch.pids("steady"), *children]
-        assert launch.stop() == 0
-        wait_until(lambda: all(gone(p) for p in everyone), 10, 0.05, "every node and child process to end")
+        everyone = [*launch.node_pids("worker"), *launch.node_pids("steady"), *children]
+        assert launch.close() == 0
+        wait_until(lambda: all(not alive(p) for p in everyone), 10, 0.05, "every node and child process to end")
         assert "[steady] bye steady" in launch.output()  # SIGINT reached it: it closed cleanly
         assert "ended processes the nodes left behind" in launch.output()  # the detached child
-        assert (launch.log_dir / "worker.log").read_text().count("ready demo/worker") == 2
+        assert (launch.node_logs / "worker.log").read_text().count("ready demo/worker") == 2
     finally:
-        launch.stop()
+        launch.close()
 
 
 def test_a_node_that_stops_answering_is_restarted_and_one_that_never_served_is_left_alone(
         tmp_path: Path, zenoh_port: int) -> None:
     """Health: a respawnable node that served its get_parameters probe and then stopped answering (hung
     loop, lost link) is killed and respawned; a plain program that never served is not touched."""
-    launch = Launch(tmp_path, HEADER + """
+    launch = YamlLaunch(tmp_path, HEADER + """
   - node: {name: hangs, module: tests.support.dummy_node, respawn: true, respawn_delay: 0.2, respawn_max: 1,
            health_timeout: 2.0, args: [--serve-for, "2.0"]}
   - node: {name: mute, module: tests.support.dummy_node, respawn: true, health_timeout: 1.0}
@@ -113,12 +74,12 @@ def test_a_node_that_stops_answering_is_restarted_and_one_that_never_served_is_l
         launch.wait_output("[hangs] ready hangs")
         launch.wait_output("'hangs' has not answered for", 40)
         launch.wait_output("started 'hangs' [pid", 10)
-        wait_until(lambda: len(launch.pids("hangs")) == 2, 20, 0.05, "hangs respawned")
+        wait_until(lambda: len(launch.node_pids("hangs")) == 2, 20, 0.05, "hangs respawned")
         out = launch.output()
         assert "killing it to respawn it" in out and "'hangs' [pid" in out and "exited with signal 9" in out
-        assert len(launch.pids("mute")) == 1 and "'mute' has not answered" not in out
+        assert len(launch.node_pids("mute")) == 1 and "'mute' has not answered" not in out
     finally:
-        assert launch.stop() == 0
+        assert launch.close() == 0
 
 
 def test_respawn_count_is_reset_after_a_long_run(monkeypatch) -> None:
@@ -149,7 +110,7 @@ def test_respawn_count_is_reset_after_a_long_run(monkeypatch) -> None:
 
 
 def test_required_node_failure_ends_launch_with_nonzero_status(tmp_path: Path, zenoh_port: int) -> None:
-    launch = Launch(tmp_path, HEADER + """
+    launch = YamlLaunch(tmp_path, HEADER + """
   - node: {name: brittle, module: tests.support.dummy_node, required: true, respawn: true, respawn_delay: 0.1,
            respawn_max: 1, args: [--exit-after, "1", --exit-code, "4"]}
   - node: {name: bystander, module: tests.support.dummy_node, output: log}
@@ -160,19 +121,19 @@ def test_required_node_failure_ends_launch_with_nonzero_status(tmp_path: Path, z
         assert launch.proc.wait(timeout=40) == 1
         out = launch.output()
         assert "'brittle'" in out and "exited with status 4" in out
-        assert len(launch.pids("brittle")) == 2  # respawned once, then the restart limit
+        assert len(launch.node_pids("brittle")) == 2  # respawned once, then the restart limit
         assert "reached its restart limit (1)" in out
         assert "required node 'brittle' exited (status 4)" in out
         assert "brittle has gone" in out and out.rstrip().endswith("launch over")
-        assert all(gone(p) for p in launch.pids("bystander"))
+        assert all(not alive(p) for p in launch.node_pids("bystander"))
         # output: log keeps a node off the screen but not out of its log file
-        assert "[bystander]" not in out and "ready bystander" in (launch.log_dir / "bystander.log").read_text()
+        assert "[bystander]" not in out and "ready bystander" in (launch.node_logs / "bystander.log").read_text()
     finally:
-        launch.stop()
+        launch.close()
 
 
 def test_wait_for_starts_nodes_in_readiness_order(tmp_path: Path, zenoh_port: int) -> None:
-    launch = Launch(tmp_path, HEADER + """
+    launch = YamlLaunch(tmp_path, HEADER + """
   - node: {name: slow_server, module: tests.support.dummy_node, namespace: ns, args: [--start-delay, "1.5"]}
   - node: {name: client, module: tests.support.dummy_node, wait_for: [slow_server]}
   - node: {name: one_shot, module: tests.support.dummy_node, args: [--exit-after, "0.5"]}
@@ -185,11 +146,11 @@ def test_wait_for_starts_nodes_in_readiness_order(tmp_path: Path, zenoh_port: in
         assert out.index("'one_shot'") < out.index("started 'after_one_shot'")
         assert out.index("[client] ready client") < out.index("started 'after_one_shot'")
     finally:
-        assert launch.stop() == 0
+        assert launch.close() == 0
 
 
 def test_launcher_killed_with_sigkill_leaves_no_orphans(tmp_path: Path, zenoh_port: int) -> None:
-    launch = Launch(tmp_path, HEADER + """
+    launch = YamlLaunch(tmp_path, HEADER + """
   - node: {name: a, module: tests.support.dummy_node, args: [--child]}
   - node: {name: b, module: tests.support.dummy_node}
 """, zenoh_port)
@@ -197,10 +158,10 @@ def test_launcher_killed_with_sigkill_leaves_no_orphans(tmp_path: Path, zenoh_po
         launch.wait_output("[a] ready a")
         launch.wait_output("[b] ready b")
         children = [int(p) for p in re.findall(r"\[a\] child pid (\d+)", launch.output())]
-        everyone = [*launch.pids("a"), *launch.pids("b"), *children]
+        everyone = [*launch.node_pids("a"), *launch.node_pids("b"), *children]
         os.kill(launch.proc.pid, signal.SIGKILL)  # no chance to clean up: the reaper must
         launch.proc.wait()
-        wait_until(lambda: all(gone(p) for p in everyone), 15, 0.05, "the reaper to end every node")
+        wait_until(lambda: all(not alive(p) for p in everyone), 15, 0.05, "the reaper to end every node")
     finally:
         for pid in locals().get("everyone", []):
             try:
@@ -211,29 +172,29 @@ def test_launcher_killed_with_sigkill_leaves_no_orphans(tmp_path: Path, zenoh_po
 
 @pytest.mark.slow
 def test_stubborn_node_gets_sigterm_then_sigkill(tmp_path: Path, zenoh_port: int) -> None:
-    launch = Launch(tmp_path, HEADER + """
+    launch = YamlLaunch(tmp_path, HEADER + """
   - node: {name: stubborn, module: tests.support.dummy_node, args: [--ignore-sigint]}
 """, zenoh_port)
     try:
         launch.wait_output("[stubborn] ready stubborn")
-        pid = launch.pids("stubborn")[0]
+        pid = launch.node_pids("stubborn")[0]
         launch.proc.send_signal(signal.SIGINT)
         assert launch.proc.wait(timeout=30) == 0
         out = launch.output()
         assert "sending SIGTERM" in out and "sending SIGKILL" in out
-        assert gone(pid)
+        assert not alive(pid)
     finally:
-        launch.stop()
+        launch.close()
 
 
 def test_port_in_use_is_a_clear_error(tmp_path: Path, zenoh_port: int, router: str) -> None:
-    launch = Launch(tmp_path, HEADER + "  - node: {name: a, module: tests.support.dummy_node}\n", zenoh_port)
+    launch = YamlLaunch(tmp_path, HEADER + "  - node: {name: a, module: tests.support.dummy_node}\n", zenoh_port)
     try:
         assert launch.proc.wait(timeout=30) == 1
         assert f"cannot host the Zenoh router on {router}" in launch.output()
         assert "started 'a'" not in launch.output()
     finally:
-        launch.stop()
+        launch.close()
 
 
 def test_external_router_from_environment(tmp_path: Path, zenoh_port: int, router: str, session) -> None:
@@ -242,18 +203,14 @@ def test_external_router_from_environment(tmp_path: Path, zenoh_port: int, route
 
     file = tmp_path / "test.yaml"
     file.write_text("launch:\n  - node: {name: guest, module: tests.support.dummy_node, namespace: ext}\n")
-    env = dict(os.environ, ZENOH_CONNECT=router)
-    env.pop("ZENOH_CONFIG", None)
     out_path = tmp_path / "launch.out"
-    with open(out_path, "wb") as out:
-        proc = subprocess.Popen([sys.executable, "-m", "launch", str(file), "--log-dir", str(tmp_path / "logs")],
-                                cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+    proc = spawn([sys.executable, "-m", "launch", str(file), "--log-dir", str(tmp_path / "logs")], log=out_path,
+                 env=child_env({"ZENOH_CONNECT": router}))
     try:
         wait_until(lambda: "/ext/guest" in graph.node_names(session, 0.5), 30, 0.1, "the node on our router")
         assert "zenoh: external router" in out_path.read_text()
     finally:
-        proc.send_signal(signal.SIGINT)
-        assert proc.wait(timeout=20) == 0
+        assert stop(proc) == 0
 
 
 def test_supervisor_prefixes_colours_and_logs_output(tmp_path: Path) -> None:

@@ -12,6 +12,7 @@ import pytest
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 import msgs
+from examples import ros2_client
 from msgs import cdr
 from msgs.registry import get_spec
 from msgs.schema_text import _body, full_definition
@@ -25,8 +26,6 @@ JAZZY = get_typestore(Stores.ROS2_JAZZY)
 # services and action parts composed as REP-2011 describes (request/response/event; ServiceEventInfo's
 # char[16] as uint8[16], which is what rosidl turns msg `char` into).
 UPSTREAM_JAZZY = {
-    "controller_manager_msgs/srv/ListControllers":
-        "RIHS01_4f8e36bb1fa5afdeba45c2d56ae6a2097b1493a253f961dd6290c085033bd189",
     "controller_manager_msgs/srv/SwitchController":
         "RIHS01_d4ad10aa5da7808bc522d55d4123d8ef79de73d049d165639d7663ac37cc9895",
     "controller_manager_msgs/srv/ListHardwareInterfaces":
@@ -41,12 +40,6 @@ UPSTREAM_JAZZY = {
         "RIHS01_9a8780ab9814b6032978a07c6c7033cf1a7894ac8d948a6fb72afea07b04cc83",
     "control_msgs/msg/JointTrajectoryControllerState":
         "RIHS01_51d8dd89cc624cbe9daaeeb4d80d6de9b86168ffdc3be41fefc0953e3c26e480",
-    "control_msgs/action/FollowJointTrajectory_SendGoal":
-        "RIHS01_b13789dddc325a7a962825c45e28c77d37237ec129dd0c34dc5994562938c57f",
-    "control_msgs/action/FollowJointTrajectory_GetResult":
-        "RIHS01_e3ceb38e3e1867c8dc0f46014df26e90eb93422f27e9e97f936e07f94be4bc8b",
-    "control_msgs/action/FollowJointTrajectory_FeedbackMessage":
-        "RIHS01_80398fcb9674a79081a9906e2ccf0c804dd7cb15e22e362e606ee87186beab71",
     "control_msgs/action/FollowJointTrajectory":
         "RIHS01_738ebcb7a2d7cfa42f9f1001cc99ce3a4383d1cfe508015d9be8485e4b1c66f6",
 }
@@ -67,6 +60,13 @@ def test_every_standard_message_hashes_like_rosbags_jazzy():
 @pytest.mark.parametrize("type_name", sorted(UPSTREAM_JAZZY))
 def test_control_interfaces_hash_like_upstream_jazzy(type_name):
     assert rihs01(type_name) == UPSTREAM_JAZZY[type_name]
+
+
+@pytest.mark.parametrize("type_name", sorted(ros2_client.HASHES))
+def test_the_outside_client_s_jazzy_hashes_are_ours(type_name):
+    """examples/ros2_client.py spells out Jazzy's hashes (list_controllers and the action's parts among them,
+    computed like UPSTREAM_JAZZY's) for the SDK; ours agree."""
+    assert rihs01(type_name) == ros2_client.HASHES[type_name]
 
 
 def _dependencies(type_name: str, found: dict[str, str]) -> dict[str, str]:
@@ -149,6 +149,7 @@ WIRE_TYPES = [
     "control_msgs/action/FollowJointTrajectory_SendGoal_Request",
     "control_msgs/action/FollowJointTrajectory_FeedbackMessage",
     "control_msgs/action/FollowJointTrajectory_GetResult_Response",
+    "visualization_msgs/msg/Marker", "visualization_msgs/msg/MarkerArray",
 ]
 
 

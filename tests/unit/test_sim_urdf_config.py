@@ -13,6 +13,7 @@ from nodes.sim.hardware import CommandError
 from nodes.sim.robot_files import ConfigError
 from nodes.sim.robot_link import parse_command
 from nodes.sim.urdf_info import UrdfError, parse_urdf
+from tests.support.samples import chain_urdf
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 ARM = (DATA / "sim_arm.urdf").read_text()
@@ -164,12 +165,5 @@ def test_hardware_command_parsing_names_the_field():
 def test_models_beyond_the_link_limit_are_refused_before_dart(star: bool) -> None:
     from nodes.sim.urdf_info import MAX_LINKS
 
-    n = 10_000
-    inertial = ('<inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>'
-                '</inertial>')
-    links = "".join(f'<link name="l{i}">{inertial}</link>' for i in range(n + 1))
-    joints = "".join(f'<joint name="j{i}" type="revolute"><parent link="l{0 if star else i}"/><child link="l{i + 1}"/>'
-                     '<axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="10" velocity="1"/></joint>'
-                     for i in range(n))
     with pytest.raises(UrdfError, match=f"10001 <link> elements, over the simulator.s limit of {MAX_LINKS}"):
-        parse_urdf(f'<robot name="chain">{links}{joints}</robot>')
+        parse_urdf(chain_urdf(10_000, star))

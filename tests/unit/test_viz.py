@@ -19,10 +19,10 @@ from nodes.urdf.model import UrdfError
 from nodes.urdf.model import rpy_matrix as rpy_to_matrix
 from nodes.viz.blueprint import build_blueprint
 from nodes.viz.ratelimit import RateLimiter
-from nodes.viz.readback import load
 from nodes.viz.scene import WORLD_FRAME, RobotScene, frame_name, plot_groups
 from nodes.viz.scene import parse_model as parse_urdf
 from nodes.viz.sink import OutputPlan
+from tests.support.rrd import load
 
 ROOT = Path(__file__).resolve().parents[2]
 HUMANOID = (ROOT / "robots" / "humanoid.urdf").read_text()

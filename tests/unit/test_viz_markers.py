@@ -10,7 +10,7 @@ import rerun as rr
 
 import msgs
 from nodes.viz.markers import MarkerError, MarkerLayer, archetypes, marker_entity, validate
-from nodes.viz.readback import load
+from tests.support.rrd import load
 
 Marker = msgs.get_type("visualization_msgs/msg/Marker")
 

@@ -2,7 +2,7 @@
 
 It stands in for the controller manager in tests and benchmarks. ``policy(state) -> {joint: position}``
 decides the position targets (default: hold the first state's positions). Run as a process with
-``python -m nodes.sim.hardware_client --ns humanoid`` (the bench's "minimal hardware client").
+``python -m tests.support.hardware_client --ns humanoid`` (the bench's "minimal hardware client").
 """
 
 from __future__ import annotations

@@ -2,10 +2,10 @@
 
 ``HeadlessBrowser`` starts ``chromium --headless`` with ``--remote-debugging-port=0`` on loopback (Chromium
 writes the port it picked to ``DevToolsActivePort`` in its profile directory), opens one page, and talks to
-it over a WebSocket: ``navigate``, ``evaluate`` (``Runtime.evaluate``) and ``screenshot``
-(``Page.captureScreenshot``). The WebSocket client is the few lines of RFC 6455 a loopback CDP session
-needs (masked text frames out; text, continuation, ping and close frames in), so nothing beyond the
-standard library is required.
+it over a WebSocket (``websocket-client``): ``navigate``, ``evaluate`` (``Runtime.evaluate``) and
+``screenshot`` (``Page.captureScreenshot``). Raw CDP rather than Playwright: Playwright enables the
+``Runtime`` domain, and with it every console message of the page is sent to the client (see
+``HeadlessBrowser.__init__``).
 
 ``ViewerProbe`` reads what the Rerun web viewer shows: the page keeps its ``WebHandle`` in
 ``window._handle``, whose ``viewer_state()`` returns the Viewer Control API's state (protobuf): the open
@@ -18,10 +18,8 @@ from __future__ import annotations
 import base64
 import itertools
 import json
-import os
 import shutil
 import signal
-import socket
 import struct
 import subprocess
 import tempfile
@@ -30,6 +28,10 @@ import urllib.request
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import websocket
+
+from bench.common import spawn, stop
 
 BROWSERS = ("chromium", "chromium-browser", "google-chrome")
 # Software rendering (no GPU here). Mesa's llvmpipe through ANGLE's EGL backend draws a Rerun frame in about
@@ -53,87 +55,6 @@ class CdpError(RuntimeError):
     pass
 
 
-class WebSocket:
-    """A blocking WebSocket client for ``ws://127.0.0.1:PORT/...`` (CDP only ever runs on loopback here)."""
-
-    def __init__(self, url: str, timeout: float = 30.0) -> None:
-        if not url.startswith("ws://"):
-            raise CdpError(f"not a ws:// URL: {url}")
-        host_port, _, path = url[len("ws://"):].partition("/")
-        host, _, port = host_port.partition(":")
-        self.sock = socket.create_connection((host, int(port or 80)), timeout=timeout)
-        key = base64.b64encode(os.urandom(16)).decode()
-        request = (f"GET /{path} HTTP/1.1\r\nHost: {host_port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-                   f"Sec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n")
-        self.sock.sendall(request.encode())
-        header = b""
-        while b"\r\n\r\n" not in header:
-            chunk = self.sock.recv(1)
-            if not chunk:
-                raise CdpError("the browser closed the connection during the WebSocket handshake")
-            header += chunk
-        if b" 101 " not in header.split(b"\r\n", 1)[0]:
-            raise CdpError(f"WebSocket handshake refused: {header.splitlines()[0]!r}")
-
-    def _read_exact(self, n: int) -> bytes:
-        data = bytearray()
-        while len(data) < n:
-            chunk = self.sock.recv(n - len(data))
-            if not chunk:
-                raise CdpError("the browser closed the DevTools connection")
-            data += chunk
-        return bytes(data)
-
-    def send_text(self, text: str) -> None:
-        payload = text.encode()
-        mask = os.urandom(4)
-        n = len(payload)
-        if n < 126:
-            head = struct.pack("!BB", 0x81, 0x80 | n)
-        elif n < 1 << 16:
-            head = struct.pack("!BBH", 0x81, 0x80 | 126, n)
-        else:
-            head = struct.pack("!BBQ", 0x81, 0x80 | 127, n)
-        masked = bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
-        self.sock.sendall(head + mask + masked)
-
-    def _send_control(self, opcode: int, payload: bytes = b"") -> None:
-        mask = os.urandom(4)
-        self.sock.sendall(struct.pack("!BB", 0x80 | opcode, 0x80 | len(payload)) + mask
-                          + bytes(b ^ mask[i % 4] for i, b in enumerate(payload)))
-
-    def receive_text(self) -> str:
-        message = bytearray()
-        while True:
-            first, second = self._read_exact(2)
-            opcode, n = first & 0x0F, second & 0x7F
-            if n == 126:
-                n = struct.unpack("!H", self._read_exact(2))[0]
-            elif n == 127:
-                n = struct.unpack("!Q", self._read_exact(8))[0]
-            if second & 0x80:  # servers do not mask, but tolerate it
-                mask = self._read_exact(4)
-                payload = bytes(b ^ mask[i % 4] for i, b in enumerate(self._read_exact(n)))
-            else:
-                payload = self._read_exact(n)
-            if opcode == 0x8:
-                raise CdpError("the browser closed the DevTools connection")
-            if opcode == 0x9:
-                self._send_control(0xA, payload)
-                continue
-            if opcode in (0x0, 0x1, 0x2):
-                message += payload
-                if first & 0x80:
-                    return message.decode()
-
-    def close(self) -> None:
-        try:
-            self._send_control(0x8)
-        except OSError:
-            pass
-        self.sock.close()
-
-
 class HeadlessBrowser:
     """One headless Chromium with one page; ``close()`` ends it (a context manager too)."""
 
@@ -147,17 +68,21 @@ class HeadlessBrowser:
         self.ids = itertools.count(1)
         if renderer not in RENDERERS:
             raise CdpError(f"renderer '{renderer}': expected one of {', '.join(RENDERERS)}")
-        self.proc = subprocess.Popen(
+        self.proc = spawn(
             [path, "--headless=new", "--no-sandbox", "--remote-debugging-address=127.0.0.1",
              "--remote-debugging-port=0", f"--user-data-dir={self.profile}", "--no-first-run",
              "--no-default-browser-check", "--disable-extensions", "--disable-background-networking",
              *RENDERERS[renderer], "--hide-scrollbars",
              "--disable-background-timer-throttling", "--disable-renderer-backgrounding",
              f"--window-size={width},{height}", *(a for a in extra_args or [] if a), "about:blank"],
-            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+            stderr=subprocess.DEVNULL)
         try:
             port = self._devtools_port()
-            self.ws = WebSocket(self._page_socket(port), timeout=timeout)
+            # No Origin header: Chromium refuses DevTools connections from origins it was not told to allow.
+            # Text frames are JSON from our own browser: the pure-Python UTF-8 check of every frame (a
+            # screenshot is ~1 MB of base64) is skipped.
+            self.ws = websocket.create_connection(self._page_socket(port), timeout=timeout, suppress_origin=True,
+                                                  skip_utf8_validation=True)
             self.call("Page.enable")
             # No "Runtime.enable": with it, every console message of the page is serialised to us. Rerun's
             # viewer writes ~12,800 console.debug lines while it translates its shaders, and that doubled a
@@ -185,8 +110,11 @@ class HeadlessBrowser:
     def _page_socket(self, port: int) -> str:
         deadline = time.monotonic() + self.timeout
         while time.monotonic() < deadline:
-            with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=5) as reply:  # noqa: S310 - loopback
-                pages = [t for t in json.load(reply) if t.get("type") == "page"]
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=5) as reply:  # noqa: S310 - loopback
+                    pages = [t for t in json.load(reply) if t.get("type") == "page"]
+            except OSError:  # a Chromium starting on a loaded machine may not answer within 5 s: ask again
+                pages = []
             if pages:
                 return pages[0]["webSocketDebuggerUrl"]
             time.sleep(0.05)
@@ -194,15 +122,19 @@ class HeadlessBrowser:
 
     def call(self, method: str, timeout: float | None = None, **params: Any) -> dict:
         """One CDP command; events that arrive meanwhile are skipped."""
-        self.ws.sock.settimeout(timeout or self.timeout)
+        self.ws.settimeout(timeout or self.timeout)
         request_id = next(self.ids)
-        self.ws.send_text(json.dumps({"id": request_id, "method": method, "params": params}))
-        while True:
-            message = json.loads(self.ws.receive_text())
-            if message.get("id") == request_id:
-                if "error" in message:
-                    raise CdpError(f"{method}: {message['error'].get('message', message['error'])}")
-                return message.get("result", {})
+        try:
+            self.ws.send(json.dumps({"id": request_id, "method": method, "params": params}))
+            while True:
+                message = json.loads(self.ws.recv())
+                if message.get("id") == request_id:
+                    break
+        except websocket.WebSocketException as exc:  # closed by the browser, or no answer in time
+            raise CdpError(f"{method}: {exc or type(exc).__name__}") from exc
+        if "error" in message:
+            raise CdpError(f"{method}: {message['error'].get('message', message['error'])}")
+        return message.get("result", {})
 
     def navigate(self, url: str) -> None:
         self.call("Page.navigate", url=url)
@@ -231,13 +163,7 @@ class HeadlessBrowser:
         ws = getattr(self, "ws", None)
         if ws is not None:
             ws.close()
-        if self.proc.poll() is None:
-            os.killpg(self.proc.pid, signal.SIGTERM)
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.proc.pid, signal.SIGKILL)
-                self.proc.wait()
+        stop(self.proc, 10, signal.SIGTERM)
         shutil.rmtree(self.profile, ignore_errors=True)
 
     def __enter__(self) -> HeadlessBrowser:

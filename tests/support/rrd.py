@@ -2,7 +2,7 @@
 
 Rerun 0.41 has no ``rerun.dataframe`` module: its recording API is ``RrdReader(path).stream().collect()``
 (a ``ChunkStore``; ``ChunkStore.reader()`` needs the optional ``datafusion`` package, so we read the
-chunks' Arrow record batches directly). ``python -m nodes.viz.readback FILE.rrd`` prints a summary.
+chunks' Arrow record batches directly). ``python -m tests.support.rrd FILE.rrd`` prints a summary.
 """
 
 from __future__ import annotations
@@ -64,7 +64,7 @@ def load(path: str | Path) -> dict[str, EntityData]:
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if len(argv) != 1:
-        print("usage: python -m nodes.viz.readback FILE.rrd", file=sys.stderr)
+        print("usage: python -m tests.support.rrd FILE.rrd", file=sys.stderr)
         return 2
     for name, data in sorted(load(argv[0]).items()):
         print(f"{name}: {len(data.rows)} rows, static {sorted(data.static)}")

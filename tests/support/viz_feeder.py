@@ -1,6 +1,6 @@
 """A stand-in for the simulator and controllers that feeds the visualiser's keys (tests, bench, demos).
 
-``python -m nodes.viz.feeder --param robots:=[humanoid] --param robot_file:=robots/humanoid.urdf``
+``python -m tests.support.viz_feeder --param robots:=[humanoid] --param robot_file:=robots/humanoid.urdf``
 publishes, per robot namespace: ``joint_states`` (a knee bend every ``period`` s, the joint commander's
 motion), ``joint_trajectory_controller/controller_state`` and ``.../joint_trajectory``,
 ``humanoid_state``; plus ``sim/clock`` and ``sim/model_states``. Pair it with the state publisher for

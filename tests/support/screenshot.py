@@ -1,6 +1,6 @@
 """Screenshot of the served web viewer in headless Chromium (regenerates ``docs/viz.png``).
 
-``python -m nodes.viz.screenshot [--out docs/viz.png] [--settle 6] [--render 15]`` runs a router, the state
+``python -m tests.support.screenshot [--out docs/viz.png] [--settle 6] [--render 15]`` runs a router, the state
 publisher, the viz feeder and ``python -m nodes.viz --serve`` on free loopback ports, lets the robot move,
 then loads the viewer page in headless Chromium and saves the picture. Chromium's ``--screenshot`` fires
 on the page's load event, before the WebAssembly viewer has drawn anything; so the page we load wraps the
@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import http.server
-import os
 import subprocess
 import sys
 import threading
@@ -20,10 +19,10 @@ import time
 from html import escape
 from pathlib import Path
 
+from bench.common import child_env, free_port, spawn, stop_all
 from nodes.core.session import loopback_endpoint, open_router
 from nodes.share import robot_file
-from nodes.viz.browser import RENDERERS, find_browser
-from nodes.viz.sink import free_port
+from tests.support.browser import RENDERERS, find_browser
 
 __all__ = ["find_browser", "take"]
 
@@ -60,13 +59,11 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800", source
         return 3
     zenoh_port, web_port, grpc_port = free_port(), free_port(), free_port()
     router = open_router(zenoh_port)
-    env = dict(os.environ, ZENOH_CONNECT=loopback_endpoint(zenoh_port))
-    env.pop("ZENOH_CONFIG", None)
+    env = child_env({"ZENOH_CONNECT": loopback_endpoint(zenoh_port)})
     procs: list[subprocess.Popen] = []
 
     def start(*argv: str) -> subprocess.Popen:
-        proc = subprocess.Popen([sys.executable, "-m", *argv], env=env, stdout=subprocess.PIPE,
-                                stderr=subprocess.STDOUT, text=True)
+        proc = spawn([sys.executable, "-m", *argv], env=env, stdout=subprocess.PIPE, text=True)
         procs.append(proc)
         return proc
 
@@ -93,7 +90,7 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800", source
             return 1
         threading.Thread(target=lambda: viz.stdout.read(), daemon=True).start()  # keep its pipe drained
         if source == "feeder":
-            feeder = start("nodes.viz.feeder", "--param", "robots:=[humanoid]")
+            feeder = start("tests.support.viz_feeder", "--param", "robots:=[humanoid]")
             time.sleep(settle)
             # Freeze the motion so the viewer (slow on a software rasteriser) can catch up to a still pose.
             feeder.send_signal(2)
@@ -112,15 +109,7 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800", source
         print(f"saved {out} ({out.stat().st_size} bytes)")
         return 0
     finally:
-        for proc in reversed(procs):
-            if proc.poll() is None:
-                proc.send_signal(2)  # SIGINT: nodes close their sessions, the visualiser its server
-        for proc in procs:
-            try:
-                proc.wait(15)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+        stop_all(procs[::-1], timeout=15)  # SIGINT: nodes close their sessions, the visualiser its server
         try:
             router.close()
         except Exception:  # noqa: BLE001 - already closed for the launcher's own router
@@ -128,7 +117,7 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800", source
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m nodes.viz.screenshot", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m tests.support.screenshot", description=__doc__.split("\n")[0])
     parser.add_argument("--out", type=Path, default=Path("docs/viz.png"), help="where the picture goes (default: docs/viz.png under the current directory)")
     parser.add_argument("--settle", type=float, default=5.0, help="s of motion before the screenshot")
     parser.add_argument("--render", type=float, default=30.0, help="s the viewer gets to load and draw")
