@@ -5,6 +5,8 @@ lockstep), read by a client that imports only zenoh and msgpack:
   ``sim/model_states`` within 2°; the two ankle force/torque sensors carry the weight above them within 5 %;
 - during a slow squat (3 s down, 1 s held, 3 s up) the sum still holds (50 ms averages) and the measured centre of pressure stays inside the
   support polygon;
+- a push (``sim/apply_link_wrench`` on the torso) shows in the IMU's pitch rate and forward acceleration
+  and in the ankle torques;
 - a sensor declaration with a bad field is refused by ``sim/spawn_entity`` naming sensor and field (the world
   keeps running), and a broadcaster of a sensor the hardware lacks fails to configure while the others run.
 """
@@ -118,6 +120,27 @@ def test_standing_squatting_and_bad_sensor_input(tmp_path: Path, zenoh_port: int
                                                  [(p["x"], p["y"]) for p in m["support_polygon"]]))]
         assert len(states) > 600 and not outside, outside[:5]
         assert all(m["balance_source"] == "cop" and m["is_balanced"] for m in states)
+
+        # --- a push (sim/apply_link_wrench: 120 N forward on the torso for 0.2 s) shows in the IMU and F/T ----
+        assert call(scenario.session, "sim/pause_physics", {}) is not None
+        push = sim_time(scenario) + 0.5
+        quiet = [m for m in scenario.snapshot(IMU) if push - 1.0 <= stamp(m) < push]
+        quiet_torque = max(abs(m["wrench"]["torque"]["y"]) for m in scenario.snapshot(LEFT)
+                           if push - 1.0 <= stamp(m) < push)
+        reply = call(scenario.session, "sim/apply_link_wrench", {
+            "link_name": "humanoid::torso", "wrench": {"force": {"x": 120.0, "y": 0.0, "z": 0.0}},
+            "start_time": {"sec": int(push), "nanosec": int(round(push % 1 * 1e9))},
+            "duration": {"sec": 0, "nanosec": 200_000_000}})
+        assert reply and reply["success"], reply
+        assert call(scenario.session, "sim/unpause_physics", {}) is not None
+        scenario.wait_for(lambda: sim_time(scenario) > push + 1.0, 120, "the push")
+        pushed = [m for m in scenario.snapshot(IMU) if push <= stamp(m) < push + 1.0]
+        pitch_rate = max(abs(m["angular_velocity"]["y"]) for m in pushed)
+        assert max(abs(m["angular_velocity"]["y"]) for m in quiet) < 0.05 < pitch_rate, pitch_rate
+        forward = max(abs(m["linear_acceleration"]["x"]) for m in pushed)
+        assert forward > 0.5, forward   # standing: the 0.1 m/s^2 bias and noise
+        torque = max(abs(m["wrench"]["torque"]["y"]) for m in scenario.snapshot(LEFT) if push <= stamp(m) < push + 1.0)
+        assert torque > 3 * quiet_torque + 5.0, (quiet_torque, torque)   # the load moves onto the toes
 
         # --- bad input: refused with sensor and field named, the world and the controllers keep running ----
         xml = (ROOT / "robots" / "humanoid.urdf").read_text()
