@@ -15,7 +15,7 @@
 
 Prints a small table, then one JSON line: update_p99_us, command_latency_p50_us, command_latency_p99_us,
 wait_for_state_p50_us, state_to_command_p50_us, taken_a_period_later, raw_hop_p50_us.
-    python bench/control.py [--cycles 5000] [--samples 200]
+    python bench/control.py [--cycles 5000] [--samples 200] [--sensors on|off|both]
 """
 
 from __future__ import annotations
@@ -39,11 +39,12 @@ import numpy as np  # noqa: E402
 import msgs  # noqa: E402
 from bench.common import child_env, free_port, spawn, stop_all  # noqa: E402
 from nodes.control.config import load_config_file  # noqa: E402
-from nodes.control.interfaces import HardwareInterfaces, JointInfo  # noqa: E402
+from nodes.control.interfaces import HardwareInterfaces, JointInfo, SensorInfo  # noqa: E402
 from nodes.control.manager import STRICT, ControllerManager  # noqa: E402
 from nodes.control.node import NodeControllerContext  # noqa: E402
 from nodes.core import Node  # noqa: E402
 from nodes.core.session import loopback_endpoint, open_peer, open_router  # noqa: E402
+from nodes.urdf.sensors import FORCE_TORQUE_INTERFACES, IMU_INTERFACES  # noqa: E402
 
 JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
 
@@ -67,17 +68,30 @@ class _ContextHost:
         return getattr(self.node, name)
 
 
-def bench_update(endpoint: str, cycles: int) -> dict[str, float]:
+SENSOR_BROADCASTERS = ["imu_sensor_broadcaster", "left_foot_ft_broadcaster", "right_foot_ft_broadcaster"]
+# the humanoid's sensors (robots/humanoid.urdf) and a standing robot's readings
+SENSORS = [SensorInfo("imu_sensor", "imu", "pelvis", list(IMU_INTERFACES)),
+           SensorInfo("left_foot_ft", "force_torque", "left_foot", list(FORCE_TORQUE_INTERFACES)),
+           SensorInfo("right_foot_ft", "force_torque", "right_foot", list(FORCE_TORQUE_INTERFACES))]
+SENSOR_VALUES = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 9.81] + [0.0, 0.0, 269.8, 0.0, 0.0, 0.0] * 2
+
+
+def controllers(sensors: bool) -> list[str]:
+    return ["joint_state_broadcaster", "joint_trajectory_controller", *(SENSOR_BROADCASTERS if sensors else [])]
+
+
+def bench_update(endpoint: str, cycles: int, sensors: bool = True) -> dict[str, float]:
     config = load_config_file(ROOT / "config" / "controllers.yaml")
     joints = config.controllers["joint_trajectory_controller"].params["joints"]
-    hw = HardwareInterfaces([JointInfo(j, ["position"]) for j in joints])
+    hw = HardwareInterfaces([JointInfo(j, ["position"]) for j in joints], SENSORS if sensors else [])
+    sensor_values = SENSOR_VALUES if sensors else []
     node = Node("bench_control_manager", namespace="bench", connect=[endpoint], log_level="warn")
     host = _ContextHost(node)
     manager = ControllerManager(hw, config, 1000, lambda name: NodeControllerContext(host, name), node.logger)
-    for name in ("joint_state_broadcaster", "joint_trajectory_controller"):
+    for name in controllers(sensors):
         manager.load(name)
         manager.configure(name)
-    ok, message = manager.switch(["joint_state_broadcaster", "joint_trajectory_controller"], [], STRICT)
+    ok, message = manager.switch(controllers(sensors), [], STRICT)
     assert ok, message
     jtc = manager.controllers["joint_trajectory_controller"].controller
     positions = [0.0] * len(joints)
@@ -91,7 +105,7 @@ def bench_update(endpoint: str, cycles: int) -> dict[str, float]:
                 jtc._on_trajectory_msg(msgs.from_dict(JointTrajectory, {"joint_names": joints, "points": [
                     {"positions": [0.1 * k * ((i // 2000) % 2 * 2 - 1)] * len(joints),
                      "time_from_start": {"sec": 0, "nanosec": 500_000_000 * k}} for k in range(1, 5)]}))
-            hw.read_state(joints, positions, zeros, zeros)
+            hw.read_state(joints, positions, zeros, zeros, sensor_values)
             host.control_time = t
             started = time.perf_counter()
             cpu_started = time.thread_time_ns()
@@ -115,14 +129,15 @@ def bench_update(endpoint: str, cycles: int) -> dict[str, float]:
 LATE_US = 800.0   # state -> command beyond this: the trajectory was taken a cycle later (periods are 1 ms)
 
 
-def bench_latency(endpoint: str, port: int, samples: int) -> dict[str, float]:
+def bench_latency(endpoint: str, port: int, samples: int, sensors: bool = True) -> dict[str, float]:
     env = child_env({"ZENOH_CONNECT": endpoint})
     procs = [
         spawn([sys.executable, "-m", "nodes.sim", "--params-file", "config/sim.yaml", "--param",
-               "mode:=realtime", "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}]"],
+               "mode:=realtime", "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}]",
+               "--param", f"sensors:={'true' if sensors else 'false'}"],
               env=env, stderr=subprocess.DEVNULL),
         spawn([sys.executable, "-m", "nodes.control", "--ns", "humanoid", "--params-file",
-               "config/controllers.yaml", "--param", "activate:=[joint_state_broadcaster, joint_trajectory_controller]"],
+               "config/controllers.yaml", "--param", f"activate:=[{', '.join(controllers(sensors))}]"],
               env=env, stderr=subprocess.DEVNULL),
     ]
     node = Node("bench_control_client", connect=[endpoint], log_level="warn")
@@ -247,15 +262,29 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--cycles", type=int, default=5000)
     parser.add_argument("--samples", type=int, default=200)
+    parser.add_argument("--sensors", choices=("on", "off", "both"), default="on",
+                        help="the humanoid's IMU and F/T sensors with their three broadcasters; both: off, then on")
     args = parser.parse_args()
+    if args.sensors == "both":
+        figures = {state: measure(state == "on", args) for state in ("off", "on")}
+        print(json.dumps({f"{key}_sensors_{state}": value for state, row in figures.items()
+                          for key, value in row.items()}))
+        return 0
+    measure(args.sensors == "on", args)
+    return 0
+
+
+def measure(sensors: bool, args: argparse.Namespace) -> dict[str, float]:
+    """One measurement (update cost, then latency) with the sensors on or off; prints its table and JSON."""
     port = free_port()
     router = open_router(port)
     try:
         endpoint = loopback_endpoint(port)
-        update = bench_update(endpoint, args.cycles)
-        latency = bench_latency(endpoint, port, args.samples)
+        update = bench_update(endpoint, args.cycles, sensors)
+        latency = bench_latency(endpoint, port, args.samples, sensors)
     finally:
         router.close()
+    print(f"sensors {'on' if sensors else 'off'}")
     rows = [
         ("manager update (JSB + JTC, 22 joints), thread CPU time", update["p50"], update["p99"],
          "1000 budget, goal p99 < 200"),
@@ -276,16 +305,17 @@ def main() -> int:
     for label, p50, p99, note in rows:
         figures = f"{p50:>9.1f} {p99:>9.1f}" if p50 == p50 else " " * 19
         print(f"{label:<58} {figures}  {note}")
-    print(json.dumps({"update_p99_us": round(update["p99"], 1), "update_p50_us": round(update["p50"], 1),
-                      "update_wall_p99_us": round(update["wall_p99"], 1),
-                      "cycle_p99_us": round(latency["cycle_p99"], 1),
-                      "command_latency_p50_us": round(latency["p50"], 1),
-                      "command_latency_p99_us": round(latency["p99"], 1),
-                      "wait_for_state_p50_us": round(latency["wait_p50"], 1),
-                      "state_to_command_p50_us": round(pct(latency["next_cycle"], 50), 1),
-                      "taken_a_period_later": round(latency["late"] / max(latency["n"], 1), 3),
-                      "raw_hop_p50_us": round(latency["hop_p50"], 1)}))
-    return 0
+    figures = {"update_p99_us": round(update["p99"], 1), "update_p50_us": round(update["p50"], 1),
+                 "update_wall_p99_us": round(update["wall_p99"], 1),
+                 "cycle_p99_us": round(latency["cycle_p99"], 1),
+                 "command_latency_p50_us": round(latency["p50"], 1),
+                 "command_latency_p99_us": round(latency["p99"], 1),
+                 "wait_for_state_p50_us": round(latency["wait_p50"], 1),
+                 "state_to_command_p50_us": round(pct(latency["next_cycle"], 50), 1),
+                 "taken_a_period_later": round(latency["late"] / max(latency["n"], 1), 3),
+                 "raw_hop_p50_us": round(latency["hop_p50"], 1)}
+    print(json.dumps(figures))
+    return figures
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@ machine state), e.g. ``--world empty.world --world simple_lab.world``: the table
 world's ratio, its load time (the simulator's ``loaded in`` line) and ``world_cost``, the last world's
 full-stack rate against the first's.
 
-    python bench/lockstep.py [--runs 3] [--seconds 8] [--physics-rate 1000] [--world NAME ...]
+    python bench/lockstep.py [--runs 3] [--seconds 8] [--physics-rate 1000] [--sensors on|off|both] [--world NAME ...]
 """
 
 from __future__ import annotations
@@ -237,11 +237,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--launch", default="humanoid.yaml", help="launch file of the full stack (experiments)")
     parser.add_argument("--world", action="append", default=[],
                         help="world:= of the full stack; repeat to compare worlds in the same run")
+    parser.add_argument("--sensors", choices=("on", "off", "both"), default="on",
+                        help="the robot's IMU and force/torque sensors (sensors:=); both: each in turn every run")
     parser.add_argument("launch_args", nargs="*", metavar="NAME:=VALUE",
                         help="extra launch arguments, e.g. commander:=none (experiments)")
     args = parser.parse_args(argv)
     if args.world:
         return compare_worlds(args)
+    if args.sensors == "both":
+        return compare_sensors(args)
+    args.launch_args = [*args.launch_args, f"sensors:={'true' if args.sensors == 'on' else 'false'}"]
 
     load_before = os.getloadavg()[0]
     rows = []
@@ -277,6 +282,30 @@ def main(argv: list[str] | None = None) -> int:
                                                    for k, v in r.items()} for r in rows],
         "pelvis_min": round(pelvis_min, 4), "cpu_percent": cpu, "load_average": round(load_before, 2),
     }))
+    return 0
+
+
+def compare_sensors(args: argparse.Namespace) -> int:
+    """The full stack with the sensors on and off, alternating within every run, against the same ceiling."""
+    load_before = os.getloadavg()[0]
+    rows: dict[str, list[float]] = {"on": [], "off": []}
+    for run in range(args.runs):
+        ceiling, _ = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
+        order = ("on", "off") if run % 2 == 0 else ("off", "on")
+        fulls = {state: fullstack(args.seconds, args.physics_rate, args.launch,
+                                  (*args.launch_args, f"sensors:={'true' if state == 'on' else 'false'}"))
+                 for state in order}
+        ceiling = statistics.mean([ceiling, inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)[0]])
+        for state, full in fulls.items():
+            rows[state].append(full["steps_per_s"] / ceiling)
+            print(f"run {run + 1} sensors {state}: full stack {full['steps_per_s']:,.0f} steps/s, ratio "
+                  f"{full['steps_per_s'] / ceiling:.3f}", file=sys.stderr)
+    ratio = {state: statistics.median(values) for state, values in rows.items()}
+    print_table([(f"ratio (b)/(a), sensors {state}", f"{value:.3f}", f"{args.runs} runs, median")
+                 for state, value in ratio.items()] +
+                [("sensors on / off", f"{ratio['on'] / ratio['off']:.3f}", "1.0: they cost nothing")], load_before)
+    print(json.dumps({"ratio_sensors_on": round(ratio["on"], 4), "ratio_sensors_off": round(ratio["off"], 4),
+                      "runs": rows, "load_average": round(load_before, 2)}))
     return 0
 
 
