@@ -7,12 +7,12 @@ ros2_controllers' parameters: ``sensor_name`` (the six ``<sensor_name>/force.x``
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, make_dataclass
 
 import msgs
 from msgs.geometry_msgs import WrenchStamped
-from nodes.control.controller import Controller, ControllerError
-from nodes.control.controllers.sensor_broadcaster import require_sensor, require_text
+from nodes.control.controller import ControllerError
+from nodes.control.controllers.sensor_broadcaster import SensorBroadcaster, require_sensor, require_text
 from nodes.control.semantic_components import ForceTorqueSensor
 from nodes.core.param_schema import namespace, param
 
@@ -21,43 +21,16 @@ _vector3 = msgs.builder("geometry_msgs/msg/Vector3")
 _wrench = msgs.builder("geometry_msgs/msg/Wrench")
 
 
-@dataclass(frozen=True)
-class AxisNames:
-    x: str = param("", description="state interface of this axis ('': none)")
-    y: str = param("", description="state interface of this axis ('': none)")
-    z: str = param("", description="state interface of this axis ('': none)")
+def _per_axis_schema(name: str, kind: type, default: object, description: str) -> type:
+    """A parameter group ``force.{x,y,z}`` + ``torque.{x,y,z}``, each axis of ``kind`` with ``default``."""
+    axes = make_dataclass(f"{name}Axes", [(axis, kind, param(default, description=description)) for axis in "xyz"],
+                          frozen=True)
+    return make_dataclass(name, [(quantity, axes, namespace(axes)) for quantity in ("force", "torque")], frozen=True)
 
 
-@dataclass(frozen=True)
-class InterfaceNames:
-    force: AxisNames = namespace(AxisNames)
-    torque: AxisNames = namespace(AxisNames)
-
-
-@dataclass(frozen=True)
-class AxisNumbers:
-    x: float = param(0.0, description="per axis")
-    y: float = param(0.0, description="per axis")
-    z: float = param(0.0, description="per axis")
-
-
-@dataclass(frozen=True)
-class AxisMultipliers:
-    x: float = param(1.0, description="per axis")
-    y: float = param(1.0, description="per axis")
-    z: float = param(1.0, description="per axis")
-
-
-@dataclass(frozen=True)
-class Offsets:
-    force: AxisNumbers = namespace(AxisNumbers)
-    torque: AxisNumbers = namespace(AxisNumbers)
-
-
-@dataclass(frozen=True)
-class Multipliers:
-    force: AxisMultipliers = namespace(AxisMultipliers)
-    torque: AxisMultipliers = namespace(AxisMultipliers)
+InterfaceNames = _per_axis_schema("InterfaceNames", str, "", "state interface of this axis ('': none)")
+Offsets = _per_axis_schema("Offsets", float, 0.0, "added to this axis")
+Multipliers = _per_axis_schema("Multipliers", float, 1.0, "applied to this axis after the offset")
 
 
 @dataclass(frozen=True)
@@ -75,7 +48,7 @@ def _per_axis(group) -> list:
             for f in fields(getattr(group, quantity))]
 
 
-class ForceTorqueSensorBroadcaster(Controller):
+class ForceTorqueSensorBroadcaster(SensorBroadcaster):
     type_name = "force_torque_sensor_broadcaster/ForceTorqueSensorBroadcaster"
     Params = ForceTorqueSensorBroadcasterParameters
     params: ForceTorqueSensorBroadcasterParameters
@@ -93,19 +66,10 @@ class ForceTorqueSensorBroadcaster(Controller):
         require_text(p.frame_id, "frame_id")
         if p.sensor_name:
             require_sensor(self, p.sensor_name, "force_torque")
-        self.sensor = ForceTorqueSensor(p.sensor_name, names or None)
+        self.component = self.sensor = ForceTorqueSensor(p.sensor_name, names or None)
         self._offsets = _per_axis(p.offset)
         self._multipliers = _per_axis(p.multiplier)
         self._pub = self.context.create_publisher(WrenchStamped, "~/wrench")
-
-    def state_interface_configuration(self) -> list[str]:
-        return self.sensor.get_state_interface_names()
-
-    def on_activate(self) -> None:
-        self.sensor.assign_loaned_state_interfaces(self.state_interfaces)
-
-    def on_deactivate(self) -> None:
-        self.sensor.release_interfaces()
 
     def update(self, time: float, period: float) -> None:
         raw = self.sensor.get_wrench()

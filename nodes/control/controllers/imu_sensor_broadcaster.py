@@ -7,8 +7,12 @@ from dataclasses import dataclass
 
 import msgs
 from msgs.sensor_msgs import Imu
-from nodes.control.controller import Controller
-from nodes.control.controllers.sensor_broadcaster import covariance_problem, require_sensor, require_text
+from nodes.control.controllers.sensor_broadcaster import (
+    SensorBroadcaster,
+    covariance_problem,
+    require_sensor,
+    require_text,
+)
 from nodes.control.semantic_components import IMUSensor
 from nodes.core.param_schema import param
 
@@ -30,7 +34,7 @@ class ImuSensorBroadcasterParameters:
         _ZERO_COVARIANCE, validator=covariance_problem, description="row-major x, y, z")
 
 
-class IMUSensorBroadcaster(Controller):
+class IMUSensorBroadcaster(SensorBroadcaster):
     type_name = "imu_sensor_broadcaster/IMUSensorBroadcaster"
     Params = ImuSensorBroadcasterParameters
     params: ImuSensorBroadcasterParameters
@@ -39,20 +43,11 @@ class IMUSensorBroadcaster(Controller):
         require_text(self.params.sensor_name, "sensor_name")
         require_text(self.params.frame_id, "frame_id")
         require_sensor(self, self.params.sensor_name, "imu")
-        self.imu = IMUSensor(self.params.sensor_name)
+        self.component = self.imu = IMUSensor(self.params.sensor_name)
         self._pub = self.context.create_publisher(Imu, "~/imu")
         p = self.params
         self._covariances = (list(p.static_covariance_orientation), list(p.static_covariance_angular_velocity),
                              list(p.static_covariance_linear_acceleration))
-
-    def state_interface_configuration(self) -> list[str]:
-        return self.imu.get_state_interface_names()
-
-    def on_activate(self) -> None:
-        self.imu.assign_loaned_state_interfaces(self.state_interfaces)
-
-    def on_deactivate(self) -> None:
-        self.imu.release_interfaces()
 
     def update(self, time: float, period: float) -> None:
         qx, qy, qz, qw, wx, wy, wz, ax, ay, az = self.imu.get_values()

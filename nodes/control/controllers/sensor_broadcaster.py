@@ -1,8 +1,25 @@
-"""What the two sensor broadcasters share: their sensor must be one the hardware has, of the right type."""
+"""What the two sensor broadcasters share: their sensor must be one the hardware has, of the right type, and
+their state interfaces are a semantic component's."""
 
 from __future__ import annotations
 
 from nodes.control.controller import Controller, ControllerError
+from nodes.control.semantic_components import SemanticComponent
+
+
+class SensorBroadcaster(Controller):
+    """A broadcaster reading one semantic component (``self.component``, made in ``on_configure``)."""
+
+    component: SemanticComponent
+
+    def state_interface_configuration(self) -> list[str]:
+        return self.component.get_state_interface_names()
+
+    def on_activate(self) -> None:
+        self.component.assign_loaned_state_interfaces(self.state_interfaces)
+
+    def on_deactivate(self) -> None:
+        self.component.release_interfaces()
 
 
 def covariance_problem(value: list[float]) -> str | None:
