@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import site
 import subprocess
 import sys
 import threading
@@ -46,15 +47,20 @@ def _run(argv: list[str], **kwargs) -> subprocess.CompletedProcess:
 @pytest.fixture(scope="module")
 def venv(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A fresh venv holding the wheel built from this checkout; dependencies come from the interpreter
-    running the tests (``--system-site-packages``), so nothing is downloaded but the build backend."""
+    running the tests, so nothing is downloaded but the build backend."""
     base = tmp_path_factory.mktemp("wheel")
     _copy_checkout(base / "src")
     _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(base / "dist"), str(base / "src")],
          timeout=600)
     wheels = list((base / "dist").glob("zenroid-*.whl"))
     assert len(wheels) == 1, wheels
-    _run([sys.executable, "-m", "venv", "--system-site-packages", str(base / "venv")], timeout=300)
+    _run([sys.executable, "-m", "venv", str(base / "venv")], timeout=300)
     python = base / "venv" / "bin" / "python"
+    # The dependencies: the site-packages of the interpreter running the tests, which is itself usually a
+    # venv (whose packages --system-site-packages would not reach). A path line in a .pth file does not run
+    # that folder's own .pth files, so an editable zenroid installed there stays out.
+    inner = _run([str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"]).stdout.strip()
+    (Path(inner) / "_test_dependencies.pth").write_text("\n".join(site.getsitepackages()) + "\n")
     # --force-reinstall: the interpreter underneath may hold an editable zenroid of the same version.
     _run([str(python), "-m", "pip", "install", "-q", "--no-index", "--no-deps", "--force-reinstall",
           str(wheels[0])], timeout=300)
