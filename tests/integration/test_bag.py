@@ -22,7 +22,7 @@ from rosbags.typesys import Stores, get_typestore
 import msgs
 from nodes.bag.reader import read_bag
 from tests.conftest import ROOT, wait_until
-from tests.support.samples import still_imu_cdr
+from tests.support.samples import UNDEFINED_TYPE, undefined_type_cdr
 
 JointState = msgs.get_type("sensor_msgs/msg/JointState")
 JAZZY = get_typestore(Stores.ROS2_JAZZY)
@@ -151,7 +151,7 @@ def test_recorded_bag_is_a_rosbag2_bag_for_rosbags(router, tmp_path) -> None:
 
 
 def _rosbags_bag(path: Path, storage: StoragePlugin) -> list[tuple[float, object]]:
-    """JointStates at irregular times over 3 s, plus an Imu (a type zenroid does not define)."""
+    """JointStates at irregular times over 3 s, plus a Temperature (a type zenroid does not define)."""
     js = JAZZY.types["sensor_msgs/msg/JointState"]
     header = JAZZY.types["std_msgs/msg/Header"]
     stamp = JAZZY.types["builtin_interfaces/msg/Time"]
@@ -160,21 +160,21 @@ def _rosbags_bag(path: Path, storage: StoragePlugin) -> list[tuple[float, object
     sent = []
     with Rosbag2Writer(path, version=9, storage_plugin=storage) as writer:
         conn = writer.add_connection("/humanoid/joint_states", js.__msgtype__, typestore=JAZZY)
-        imu = writer.add_connection("/humanoid/imu", "sensor_msgs/msg/Imu", typestore=JAZZY)
+        other = writer.add_connection("/humanoid/temperature", UNDEFINED_TYPE, typestore=JAZZY)
         for i, off in enumerate(offsets):
             m = js(header=header(stamp=stamp(sec=100 + i, nanosec=250), frame_id="base"), name=["a", "b"],
                    position=np.array([0.3 * i, -0.2 * i]), velocity=np.array([], dtype=np.float64),
                    effort=np.array([1.5, 2.5]))
             writer.write(conn, t0 + int(off * 1e9), JAZZY.serialize_cdr(m, js.__msgtype__))
             sent.append((off, m))
-        writer.write(imu, t0 + 5_000_000, still_imu_cdr())
+        writer.write(other, t0 + 5_000_000, undefined_type_cdr())
     return sent
 
 
 @pytest.mark.parametrize("storage", [StoragePlugin.MCAP, StoragePlugin.SQLITE3], ids=["mcap", "sqlite3"])
 def test_plays_bags_written_by_rosbags(router, tmp_path, storage: StoragePlugin) -> None:
     """A rosbag2 directory written by rosbags plays here: every message with its values, in order, with
-    the original timing scaled by --rate; the Imu topic (a type we do not define) is skipped, said so."""
+    the original timing scaled by --rate; the Temperature topic (a type we do not define) is skipped, said so."""
     from nodes.core import Node
 
     rate = 3.0
@@ -194,7 +194,7 @@ def test_plays_bags_written_by_rosbags(router, tmp_path, storage: StoragePlugin)
         result = zenroid(router, "bag", "play", str(bag_dir), "--rate", str(rate), "--quiet")
         assert result.returncode == 0, result.stderr
         assert "Played 9 messages" in result.stdout
-        assert "not played: /humanoid/imu" in result.stderr and "sensor_msgs/msg/Imu" in result.stderr
+        assert "not played: /humanoid/temperature" in result.stderr and UNDEFINED_TYPE in result.stderr
         wait_until(lambda: len(received) >= len(sent), timeout=10, message="every played message")
     finally:
         listener.destroy()

@@ -32,7 +32,7 @@ from msgs.schema_text import full_definition
 from msgs.type_hash import rihs01
 from nodes.bag.reader import BagError, open_bag, read_bag
 from nodes.bag.writer import BagWriter
-from tests.support.samples import sample_message, still_imu_cdr
+from tests.support.samples import UNDEFINED_TYPE, sample_message, undefined_type_cdr
 from tests.unit.test_msgs_properties import ALL, message_strategy
 
 JAZZY = get_typestore(Stores.ROS2_JAZZY)
@@ -253,7 +253,7 @@ def test_directory_without_metadata_still_opens(tmp_path: Path) -> None:
 
 
 def rosbags_bag(path: Path, storage: StoragePlugin, compression: CompressionMode | None = None) -> list[Any]:
-    """A bag written by rosbags: JointStates on two topics plus an Imu (a type zenroid does not define)."""
+    """A bag written by rosbags: JointStates on two topics plus a Temperature (a type zenroid does not define)."""
     js = JAZZY.types["sensor_msgs/msg/JointState"]
     header = JAZZY.types["std_msgs/msg/Header"]
     stamp = JAZZY.types["builtin_interfaces/msg/Time"]
@@ -264,7 +264,7 @@ def rosbags_bag(path: Path, storage: StoragePlugin, compression: CompressionMode
     with writer:
         a = writer.add_connection("/humanoid/joint_states", js.__msgtype__, typestore=JAZZY)
         b = writer.add_connection("/other/joint_states", js.__msgtype__, typestore=JAZZY)
-        imu = writer.add_connection("/imu", "sensor_msgs/msg/Imu", typestore=JAZZY)
+        other = writer.add_connection("/temperature", UNDEFINED_TYPE, typestore=JAZZY)
         for i in range(6):
             m = js(header=header(stamp=stamp(sec=i, nanosec=7), frame_id="base"), name=["l", "r"],
                    position=np.array([0.1 * i, -0.1 * i]), velocity=np.array([1.0, 2.0]),
@@ -273,7 +273,7 @@ def rosbags_bag(path: Path, storage: StoragePlugin, compression: CompressionMode
             t = 10**18 + i * 50_000_000
             writer.write(conn, t, JAZZY.serialize_cdr(m, js.__msgtype__))
             sent.append((conn.topic, t, m))
-        writer.write(imu, 10**18, still_imu_cdr())
+        writer.write(other, 10**18, undefined_type_cdr())
     return sent
 
 
@@ -288,10 +288,10 @@ def test_reads_bags_written_by_rosbags(tmp_path: Path, storage: StoragePlugin,
     info = bag.info()
     assert info["storage"] == storage.name.lower() and info["messages"] == 7
     assert {t["topic"]: t["count"] for t in info["topics"]} == {"/humanoid/joint_states": 3,
-                                                                "/other/joint_states": 3, "/imu": 1}
+                                                                "/other/joint_states": 3, "/temperature": 1}
     unknown: list[tuple[str, str]] = []
     got = list(bag.messages(on_unknown=lambda topic, reason: unknown.append((topic, reason))))
-    assert [u[0] for u in unknown] == ["/imu"] and "sensor_msgs/msg/Imu" in unknown[0][1]
+    assert [u[0] for u in unknown] == ["/temperature"] and UNDEFINED_TYPE in unknown[0][1]
     assert [("/" + m.key, m.log_time_ns) for m in got] == [(topic, t) for topic, t, _ in sent]
     for item, (_, _, m) in zip(got, sent):
         assert item.msg.header.stamp.sec == m.header.stamp.sec and item.msg.header.stamp.nanosec == 7
@@ -299,7 +299,7 @@ def test_reads_bags_written_by_rosbags(tmp_path: Path, storage: StoragePlugin,
         assert item.msg.position == list(m.position) and item.msg.velocity == [1.0, 2.0] and item.msg.effort == []
     only = [m.key for m in bag.messages(["humanoid/joint_states"])]
     assert only == ["humanoid/joint_states"] * 3
-    with pytest.raises(BagError, match="/imu.*sensor_msgs/msg/Imu"):
+    with pytest.raises(BagError, match="/temperature.*" + UNDEFINED_TYPE):
         list(bag.messages())
 
 
