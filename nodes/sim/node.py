@@ -267,6 +267,7 @@ class SimulatorNode(Node):
         self.sim.sample_sensors()
         for link in self.robots.values():
             link.publish_state(step, t)
+            link.publish_plugins(t)
         # clock / model_states / humanoid_state of this same instant, while the controllers compute
         self.outputs.publish()
         waited = False

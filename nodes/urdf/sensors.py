@@ -72,6 +72,31 @@ class Noise:
         return self.type != "none" and any((self.mean, self.stddev, self.bias_mean, self.bias_stddev))
 
 
+# gazebo_ros plugins the simulator runs itself, by the sensor type they belong in
+PLUGINS = {"libgazebo_ros_imu_sensor.so": "imu"}
+
+
+@dataclass
+class GazeboRosPlugin:
+    """A gazebo_ros sensor plugin: publishes the sensor on ``~/out`` of a node named after the plugin, in the
+    ``<ros><namespace>``, unless a ``<remapping>~/out:=topic</remapping>`` says otherwise."""
+
+    filename: str
+    name: str
+    namespace: str = ""
+    remappings: dict[str, str] = field(default_factory=dict)
+    frame_name: str = ""       # header.frame_id; the sensor's link when empty
+
+    def key(self) -> str:
+        """The Zenoh key it publishes on (a ROS name without the leading slash)."""
+        namespace = self.namespace.strip("/")
+        topic = self.remappings.get("~/out", self.remappings.get("out", "~/out"))
+        if topic.startswith("/"):
+            return topic.strip("/")
+        topic = f"{self.name}/{topic[2:]}" if topic.startswith("~/") else topic
+        return f"{namespace}/{topic}" if namespace else topic
+
+
 @dataclass
 class Ros2ControlSensor:
     """``<ros2_control><sensor>``: its state interfaces and params."""
@@ -96,6 +121,7 @@ class SensorSpec:
     measure_direction: str = "child_to_parent"
     noise: dict[str, Noise] = field(default_factory=dict)   # by channel: "angular_velocity.x", "force.z", ...
     collision: str = ""                 # contact: the <contact><collision> name (informative)
+    plugin: GazeboRosPlugin | None = None   # a gazebo_ros plugin publishing it without ros2_control
     line: int | None = None
     update_rate_text: str | None = None   # as written, for the checks' messages
     # filled by the checks:
@@ -204,6 +230,19 @@ def _parse_gazebo_sensor(element: etree._Element, reference: str) -> SensorSpec 
                             noise, f"{where} <force_torque><{quantity}><{axis}><noise>")
     elif kind == "contact":
         spec.collision = _text(element, "contact/collision") or ""
+    for plugin in element.findall("plugin"):
+        filename = plugin.get("filename") or ""
+        if filename in PLUGINS:
+            remappings = {}
+            for remap in plugin.findall("ros/remapping"):
+                source, sep, target = (remap.text or "").strip().partition(":=")
+                if not sep or not source or not target:
+                    raise SensorDeclarationError(f"{where} <plugin> <remapping> '{(remap.text or '')[:80]}' is not "
+                                                 "from:=to", remap.sourceline)
+                remappings[source] = target
+            spec.plugin = GazeboRosPlugin(filename, plugin.get("name") or filename.removesuffix(".so"),
+                                          _text(plugin, "ros/namespace") or "", remappings,
+                                          _text(plugin, "frame_name") or "")
     return spec
 
 
@@ -303,6 +342,14 @@ def sensor_problems(gazebo: list[SensorSpec], ros2_control: list[Ros2ControlSens
             if spec.measure_direction not in FT_DIRECTIONS:
                 problems.append(f"{where} <force_torque><measure_direction> '{spec.measure_direction}' is not one "
                                 f"of {', '.join(FT_DIRECTIONS)}")
+        plugin = spec.plugin
+        if plugin is not None:
+            if PLUGINS[plugin.filename] != spec.type:
+                problems.append(f"{where} <plugin filename='{plugin.filename}'> belongs in a "
+                                f"{PLUGINS[plugin.filename]} sensor, not {spec.type}")
+            if plugin.frame_name and plugin.frame_name not in links:
+                problems.append(f"{where} <plugin> <frame_name> '{plugin.frame_name}' is not a link of the robot (a "
+                                "TF frame the state publisher publishes)")
         rate = _rate_problem(spec)
         if rate:
             problems.append(rate)

@@ -122,3 +122,21 @@ def test_text_where_a_number_belongs_names_the_sensor_and_line():
     xml = robot("", IMU_GAZEBO.replace("<update_rate>250", "<update_rate>fast"))
     with pytest.raises(UrdfError, match=r"sensor 'imu' \(line \d+\) <update_rate>: 'fast' is not a number"):
         parse_urdf(xml)
+
+
+PLUGIN = """<plugin name="imu_plugin" filename="libgazebo_ros_imu_sensor.so">
+  <ros><namespace>/demo</namespace><remapping>~/out:=imu</remapping></ros><frame_name>base</frame_name></plugin>"""
+
+
+def test_a_gazebo_ros_imu_plugin_is_read_with_its_topic_and_frame():
+    (imu,) = sim_parse(robot("", IMU_GAZEBO.replace("</sensor>", PLUGIN + "</sensor>"))).sensors
+    assert (imu.plugin.name, imu.plugin.frame_name, imu.plugin.key()) == ("imu_plugin", "base", "demo/imu")
+    plain = PLUGIN.replace("<ros><namespace>/demo</namespace><remapping>~/out:=imu</remapping></ros>", "")
+    (imu,) = sim_parse(robot("", IMU_GAZEBO.replace("</sensor>", plain + "</sensor>"))).sensors
+    assert imu.plugin.key() == "imu_plugin/out"    # gazebo_ros: ~/out of a node named after the plugin
+
+
+def test_a_plugin_frame_that_tf_does_not_publish_is_refused():
+    xml = robot("", IMU_GAZEBO.replace("</sensor>", PLUGIN.replace(">base<", ">imu_link<") + "</sensor>"))
+    with pytest.raises(UrdfError, match="sensor 'imu'.*<frame_name> 'imu_link' is not a link of the robot"):
+        sim_parse(xml)
