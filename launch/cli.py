@@ -69,7 +69,7 @@ def zenoh_port_of(plan: LaunchPlan) -> int:
 
 
 def ros2_wire_of(plan: LaunchPlan) -> bool:
-    """The ``ros2`` argument (true/false): whether nodes also speak rmw_zenoh (DESIGN §10)."""
+    """The ``ros2`` argument (true/false): whether nodes also speak rmw_zenoh (docs/ros2.md)."""
     text = str(plan.args.get("ros2", "true")).strip().lower()
     if text not in ("true", "false", "1", "0"):
         raise LaunchError(f"argument 'ros2' must be true or false, got '{text}'", Source(plan.file, 1))

@@ -1,6 +1,6 @@
 """The inert launch description: a YAML launch file parsed and checked, nothing substituted or started.
 
-Format (DESIGN §7)::
+Format (docs/launch.md, Format)::
 
     launch:
       - arg: {name: x, default: "0.0", description: "...", choices: [...]}

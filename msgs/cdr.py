@@ -1,6 +1,6 @@
 """CDR (the ROS 2 / DDS wire format) for our message definitions, from and to plain data.
 
-Plain data is what msgpack carries (DESIGN §5): nested dicts with ROS field names, lists, ``bytes`` for
+Plain data is what msgpack carries (docs/architecture.md, Messages on the wire): nested dicts with ROS field names, lists, ``bytes`` for
 ``uint8[]``. A missing field encodes as its ROS default, so the hot paths that pack partial maps still
 produce complete CDR. Encapsulation is little-endian plain CDR (``00 01 00 00``), alignment relative to the
 payload start, 8-byte types aligned to 8, exactly as Fast-CDR (rmw_zenoh, rmw_fastrtps) writes it.

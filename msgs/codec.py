@@ -1,4 +1,4 @@
-"""msgpack codec (DESIGN §5): one map per message, ROS field names, validated decoding.
+"""msgpack codec (docs/architecture.md, Messages on the wire): one map per message, ROS field names, validated decoding.
 
 Errors name the message type, the field path and the reason, e.g.
 ``sensor_msgs/msg/JointState: position[2]: not a finite number (nan)``.

@@ -106,7 +106,7 @@ def _register_action(pkg: str, name: str, text: str) -> None:
     register_spec(parse_message(result, f"{prefix}_Result"))
     register_spec(parse_message(feedback, f"{prefix}_Feedback"))
     uuid = FieldSpec("goal_id", "unique_identifier_msgs/msg/UUID")
-    # The ROS 2 action layout (DESIGN §4): send_goal / get_result services and the feedback topic.
+    # The ROS 2 action layout (docs/architecture.md, Services and actions): send_goal / get_result services and the feedback topic.
     register_spec(MsgSpec(f"{prefix}_SendGoal_Request", (uuid, FieldSpec("goal", f"{prefix}_Goal"))))
     register_spec(MsgSpec(f"{prefix}_SendGoal_Response", (
         FieldSpec("accepted", "bool"), FieldSpec("stamp", "builtin_interfaces/msg/Time"))))

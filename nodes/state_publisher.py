@@ -1,6 +1,6 @@
 """Robot state publisher: URDF -> ``robot_description``; ``joint_states`` -> forward kinematics -> ``tf``.
 
-The ROS ``robot_state_publisher`` behaviour on Zenoh (DESIGN §4):
+The ROS ``robot_state_publisher`` behaviour on Zenoh (docs/robots.md, Robot state publisher):
 
 - ``<ns>/robot_description`` (std_msgs/String) published at start and on change, and latched (a queryable
   answers late joiners);

@@ -229,7 +229,7 @@ class ControllerManagerNode(Node):
             self.logger.info(f"threads at SCHED_FIFO priority {priority} (thread_priority)")
         else:   # as ros2_control: the loop still runs, with more jitter
             self.logger.warn(f"could not enable SCHED_FIFO priority {priority} (thread_priority): {problem}; "
-                             "the control loop runs at normal priority (README: Real-time priority)")
+                             "the control loop runs at normal priority (docs/controllers.md: Real-time priority)")
 
     def _load_config(self, cli_args: Any) -> ManagerConfig:
         config = ManagerConfig()

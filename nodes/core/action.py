@@ -1,4 +1,4 @@
-"""Actions over Zenoh with exactly the ROS 2 layout (DESIGN §4): send_goal / cancel_goal / get_result
+"""Actions over Zenoh with exactly the ROS 2 layout (docs/architecture.md, Services and actions): send_goal / cancel_goal / get_result
 services and feedback / status topics under the action's key."""
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ On a machine with few cores, a lockstep simulation's stepping thread spent about
 waiting for a CPU: every Zenoh frame wakes a thread somewhere (the simulator's own I/O threads, the
 controller manager's), and the scheduler put them on the CPU that was stepping the physics. Keeping that
 one CPU for the stepping thread alone, and every other thread of the launch on the remaining CPUs, made
-the main job's lockstep about 1.4x faster on 2 cores (README, performance). ros2_control's controller manager offers the same idea
+the main job's lockstep about 1.4x faster on 2 cores (docs/performance.md). ros2_control's controller manager offers the same idea
 as its ``cpu_affinity`` parameter.
 
 The launcher chooses the CPU (the last one it may use), starts every process on the others and tells

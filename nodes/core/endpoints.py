@@ -345,7 +345,7 @@ def decode_request(node: NodeRuntime, query: zenoh.Query, cls: Any, what: str,
 
 
 class ServiceServer:
-    """A queryable on ``key``: request map in, response map out (DESIGN §4 wire protocol)."""
+    """A queryable on ``key``: request map in, response map out (docs/architecture.md, Services and actions)."""
 
     def __init__(self, node: NodeRuntime, srv_type: Any, key: str, handler: Callable[[Any], Any], *,
                  inline: bool = False) -> None:

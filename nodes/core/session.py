@@ -1,4 +1,4 @@
-"""Zenoh session setup (DESIGN §3): explicit loopback endpoints, multicast scouting off, always closed."""
+"""Zenoh session setup (docs/architecture.md, Zenoh topology): explicit loopback endpoints, multicast scouting off, always closed."""
 
 from __future__ import annotations
 

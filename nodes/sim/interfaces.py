@@ -8,7 +8,7 @@ import msgs
 
 msgs.add_search_path(Path(__file__).resolve().parent / "definitions")
 
-# Stepping modes (DESIGN §6): lockstep with the controller manager, wall-clock realtime, kinematic playback.
+# Stepping modes (docs/simulator.md, Modes): lockstep with the controller manager, wall-clock realtime, kinematic playback.
 MODES = ("lockstep", "realtime", "kinematic")
 
 SpawnEntity = msgs.get_type("zenroid_sim_msgs/srv/SpawnEntity")

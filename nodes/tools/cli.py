@@ -1,4 +1,4 @@
-"""``zenroid``: the ROS-style command line (DESIGN §8).
+"""``zenroid``: the ROS-style command line (docs/cli.md).
 
 Each verb lives in its own module exposing ``add_arguments(parser)`` and ``run(args) -> int``; modules are
 imported lazily so ``zenroid check_urdf`` never pays for zenoh or DART.

@@ -1,6 +1,6 @@
 """The viewer node: subscribes to the robots' Zenoh keys and writes them to Rerun.
 
-It needs nothing but the keys (DESIGN §4): ``<ns>/robot_description`` (topic + latched queryable),
+It needs nothing but the keys (docs/architecture.md, Key expressions): ``<ns>/robot_description`` (topic + latched queryable),
 ``<ns>/tf``, ``<ns>/tf_static``, ``<ns>/joint_states``, ``<ns>/<jtc>/controller_state``,
 ``<ns>/<jtc>/joint_trajectory``, ``<ns>/humanoid_state``, ``sim/model_states`` and ``sim/clock``.
 Robots come from the ``robots`` parameter, from the models in ``sim/model_states`` and from the node

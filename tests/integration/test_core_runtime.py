@@ -296,7 +296,7 @@ def signal_node_script(router: str, client: Node, script: str, first_line: str, 
 
 
 def test_ctrl_c_while_a_node_starts_ends_it_quietly(router, client) -> None:
-    """Ctrl-C during a slow start (the README test's streaming examples on a loaded machine) ends the process
+    """Ctrl-C during a slow start (the docs test's streaming examples on a loaded machine) ends the process
     with a short line and status 130, no traceback, and the half-built node leaves the graph."""
     status, _, stderr = signal_node_script(router, client, SLOW_START_NODE, "starting", "/slow_start", signal.SIGINT)
     assert status == 130, stderr

@@ -111,7 +111,7 @@ def test_wheel_runs_the_main_job_outside_the_checkout(venv: Path, tmp_path: Path
 @pytest.mark.slow
 def test_zenroid_launch_works_when_ros2_shadows_launch(venv: Path, tmp_path: Path, zenoh_port: int) -> None:
     """A sourced ROS 2 puts its ``launch`` package first on PYTHONPATH, so ``import launch`` (and
-    ``python -m launch``) find ROS's (README says so); ``zenroid launch`` still runs ours."""
+    ``python -m launch``) find ROS's (docs/troubleshooting.md says so); ``zenroid launch`` still runs ours."""
     ros = tmp_path / "opt_ros" / "launch"
     ros.mkdir(parents=True)
     (ros / "__init__.py").write_text('"""Stand-in for ROS 2\'s launch package."""\nROS = True\n')

@@ -1,4 +1,4 @@
-"""The shape of the code base: which package may import what (DESIGN §9, "one idea per module")."""
+"""The shape of the code base: which package may import what (docs/architecture.md, Processes; "one idea per module")."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The ROS 2 wire (DESIGN §10): every node's public endpoints also speak rmw_zenoh (ROS 2 Jazzy).
+"""The ROS 2 wire (docs/ros2.md): every node's public endpoints also speak rmw_zenoh (ROS 2 Jazzy).
 
 A ROS 2 machine with ``RMW_IMPLEMENTATION=rmw_zenoh_cpp`` connected to our router sees our nodes, topics,
 services and actions under their ROS names and talks to them in CDR; our msgpack keys are untouched.
