@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from nodes.control.interfaces import JointInfo
 from nodes.urdf.model import Joint, RobotModel, UrdfError
 from nodes.urdf.model import parse_urdf as parse_model
+from nodes.urdf.rendered_sensors import RenderedSensorSpec, rendered_sensor_problems
 from nodes.urdf.sensors import SensorSpec, sensor_problems
 
 INTERFACES = ("position", "velocity", "effort")
@@ -28,6 +29,7 @@ class RobotInfo:
     joints: list[JointInfo]            # movable joints, URDF order
     has_ros2_control: bool = False
     sensors: list[SensorSpec] = field(default_factory=list)   # checked, with their links and joints
+    rendered_sensors: list[RenderedSensorSpec] = field(default_factory=list)   # cameras and range sensors
 
     def joint(self, name: str) -> JointInfo:
         for joint in self.joints:
@@ -137,11 +139,12 @@ def parse_urdf(xml: str) -> RobotInfo:
 
     has_block = _apply_ros2_control(model, joints)
     problems = sensor_problems(model.sensors, model.ros2_control_sensors, model.links, model.joints)
+    problems += rendered_sensor_problems(model.rendered_sensors, model.links, taken={s.name for s in model.sensors})
     if problems:
         shown = problems[:5] + ([f"... and {len(problems) - 5} more"] if len(problems) > 5 else [])
         raise UrdfError("; ".join(shown))
     return RobotInfo(name=model.name, root_link=roots[0], links=list(model.links), joints=joints,
-                     has_ros2_control=has_block, sensors=model.sensors)
+                     has_ros2_control=has_block, sensors=model.sensors, rendered_sensors=model.rendered_sensors)
 
 
 def _apply_ros2_control(model: RobotModel, joints: list[JointInfo]) -> bool:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from lxml import etree
 
+from nodes.urdf.rendered_sensors import RenderedSensorSpec, parse_rendered_sensors
 from nodes.urdf.rotation import rpy_matrix
 from nodes.urdf.sensors import (
     Ros2ControlSensor,
@@ -140,6 +141,8 @@ class RobotModel:
     # sensors as declared (nodes.urdf.sensors): <gazebo reference><sensor> and <ros2_control><sensor>
     sensors: list[SensorSpec] = field(default_factory=list)
     ros2_control_sensors: list[Ros2ControlSensor] = field(default_factory=list)
+    # cameras and range sensors (nodes.urdf.rendered_sensors), their keys resolved without a namespace
+    rendered_sensors: list[RenderedSensorSpec] = field(default_factory=list)
 
     def roots(self) -> list[str]:
         children = {j.child for j in self.joints.values()}
@@ -406,7 +409,8 @@ def parse_urdf(xml: str | bytes) -> RobotModel:
         raise UrdfError(f"robot '{name}' has no links", root.sourceline)
     try:
         sensors, control_sensors = parse_gazebo_sensors(root), parse_ros2_control_sensors(root)
+        rendered = parse_rendered_sensors(root)
     except SensorDeclarationError as exc:
         raise UrdfError(str(exc), exc.line) from None
     return RobotModel(name, links, joints, _parse_ros2_control(root), duplicate_links, duplicate_joints,
-                      materials, root.sourceline, duplicate_lines, sensors, control_sensors)
+                      materials, root.sourceline, duplicate_lines, sensors, control_sensors, rendered)

@@ -132,11 +132,11 @@ class SensorSpec:
     params: dict[str, str] = field(default_factory=dict)
 
 
-def _where(sensor_name: str, line: int | None) -> str:
+def sensor_where(sensor_name: str, line: int | None) -> str:
     return f"sensor '{sensor_name}'" + (f" (line {line})" if line else "")
 
 
-def _number(text: str | None, what: str, line: int | None) -> float:
+def parse_number(text: str | None, what: str, line: int | None) -> float:
     try:
         value = float((text or "").strip())
     except ValueError:
@@ -146,7 +146,7 @@ def _number(text: str | None, what: str, line: int | None) -> float:
     return value
 
 
-def _flag(text: str | None, what: str, line: int | None) -> bool:
+def parse_flag(text: str | None, what: str, line: int | None) -> bool:
     value = (text or "").strip().lower()
     if value in ("1", "true"):
         return True
@@ -155,16 +155,16 @@ def _flag(text: str | None, what: str, line: int | None) -> bool:
     raise SensorDeclarationError(f"{what}: '{value[:80]}' is not true/false/1/0", line)
 
 
-def _text(element: etree._Element, path: str) -> str | None:
+def child_text(element: etree._Element, path: str) -> str | None:
     found = element.find(path)
     return None if found is None else (found.text or "").strip()
 
 
-def _pose(text: str, what: str, line: int | None) -> np.ndarray:
+def parse_pose(text: str, what: str, line: int | None) -> np.ndarray:
     parts = text.split()
     if len(parts) != 6:
         raise SensorDeclarationError(f"{what}: '{text[:80]}' needs 6 numbers (x y z roll pitch yaw)", line)
-    values = [_number(p, what, line) for p in parts]
+    values = [parse_number(p, what, line) for p in parts]
     if not all(math.isfinite(v) for v in values):
         raise SensorDeclarationError(f"{what}: '{text[:80]}' is not finite", line)
     transform = np.eye(4)
@@ -173,14 +173,14 @@ def _pose(text: str, what: str, line: int | None) -> np.ndarray:
     return transform
 
 
-def _noise(element: etree._Element, what: str) -> Noise:
+def parse_noise(element: etree._Element, what: str) -> Noise:
     line = element.sourceline
-    kind = (element.get("type") or _text(element, "type") or "gaussian").strip()
+    kind = (element.get("type") or child_text(element, "type") or "gaussian").strip()
     numbers = {}
     for key in ("mean", "stddev", "bias_mean", "bias_stddev"):
-        text = _text(element, key)
+        text = child_text(element, key)
         if text is not None:
-            numbers[key] = _number(text, f"{what} <{key}>", line)
+            numbers[key] = parse_number(text, f"{what} <{key}>", line)
     return Noise(kind, line=line, **numbers)
 
 
@@ -188,20 +188,20 @@ def _parse_gazebo_sensor(element: etree._Element, reference: str) -> SensorSpec 
     name = element.get("name") or ""
     kind = element.get("type") or ""
     line = element.sourceline
-    where = _where(name, line)
+    where = sensor_where(name, line)
     if kind in OTHER_SENSOR_TYPES:
         return None
     spec = SensorSpec(name=name, type=kind, reference=reference, line=line)
-    rate_text = _text(element, "update_rate")
+    rate_text = child_text(element, "update_rate")
     if rate_text is not None:
         spec.update_rate_text = rate_text
-        spec.update_rate = _number(rate_text, f"{where} <update_rate>", line)
-    always_on = _text(element, "always_on")
+        spec.update_rate = parse_number(rate_text, f"{where} <update_rate>", line)
+    always_on = child_text(element, "always_on")
     if always_on is not None:
-        spec.always_on = _flag(always_on, f"{where} <always_on>", line)
-    pose = _text(element, "pose")
+        spec.always_on = parse_flag(always_on, f"{where} <always_on>", line)
+    pose = child_text(element, "pose")
     if pose:
-        spec.pose = _pose(pose, f"{where} <pose>", line)
+        spec.pose = parse_pose(pose, f"{where} <pose>", line)
     if kind == "imu":
         imu = element.find("imu")
         if imu is not None:
@@ -209,16 +209,16 @@ def _parse_gazebo_sensor(element: etree._Element, reference: str) -> SensorSpec 
                 for axis in "xyz":
                     noise = imu.find(f"{quantity}/{axis}/noise")
                     if noise is not None:
-                        spec.noise[f"{quantity}.{axis}"] = _noise(noise, f"{where} <imu><{quantity}><{axis}><noise>")
+                        spec.noise[f"{quantity}.{axis}"] = parse_noise(noise, f"{where} <imu><{quantity}><{axis}><noise>")
     elif kind == "force_torque":
         ft = element.find("force_torque")
         shared = element.find("noise")
         if ft is not None:
-            spec.frame = _text(ft, "frame") or spec.frame
-            spec.measure_direction = _text(ft, "measure_direction") or spec.measure_direction
+            spec.frame = child_text(ft, "frame") or spec.frame
+            spec.measure_direction = child_text(ft, "measure_direction") or spec.measure_direction
             shared = ft.find("noise") if ft.find("noise") is not None else shared
         if shared is not None:   # one <noise> for all six axes (Gazebo Classic's)
-            noise = _noise(shared, f"{where} <noise>")
+            noise = parse_noise(shared, f"{where} <noise>")
             for channel in FORCE_TORQUE_INTERFACES:
                 spec.noise[channel] = noise
         if ft is not None:
@@ -226,10 +226,10 @@ def _parse_gazebo_sensor(element: etree._Element, reference: str) -> SensorSpec 
                 for axis in "xyz":
                     noise = ft.find(f"{quantity}/{axis}/noise")
                     if noise is not None:
-                        spec.noise[f"{quantity}.{axis}"] = _noise(
+                        spec.noise[f"{quantity}.{axis}"] = parse_noise(
                             noise, f"{where} <force_torque><{quantity}><{axis}><noise>")
     elif kind == "contact":
-        spec.collision = _text(element, "contact/collision") or ""
+        spec.collision = child_text(element, "contact/collision") or ""
     for plugin in element.findall("plugin"):
         filename = plugin.get("filename") or ""
         if filename in PLUGINS:
@@ -241,8 +241,8 @@ def _parse_gazebo_sensor(element: etree._Element, reference: str) -> SensorSpec 
                                                  "from:=to", remap.sourceline)
                 remappings[source] = target
             spec.plugin = GazeboRosPlugin(filename, plugin.get("name") or filename.removesuffix(".so"),
-                                          _text(plugin, "ros/namespace") or "", remappings,
-                                          _text(plugin, "frame_name") or "")
+                                          child_text(plugin, "ros/namespace") or "", remappings,
+                                          child_text(plugin, "frame_name") or "")
     return spec
 
 
@@ -274,10 +274,10 @@ def _rate_problem(spec: SensorSpec) -> str | None:
     if rate is None:
         return None
     if not math.isfinite(rate) or rate <= 0:
-        return (f"{_where(spec.name, spec.line)} <update_rate> {spec.update_rate_text}: must be a positive number "
+        return (f"{sensor_where(spec.name, spec.line)} <update_rate> {spec.update_rate_text}: must be a positive number "
                 "of Hz (leave it out to sample every control period)")
     if rate > MAX_UPDATE_RATE:
-        return (f"{_where(spec.name, spec.line)} <update_rate> {spec.update_rate_text}: over {MAX_UPDATE_RATE:g} Hz, "
+        return (f"{sensor_where(spec.name, spec.line)} <update_rate> {spec.update_rate_text}: over {MAX_UPDATE_RATE:g} Hz, "
                 "faster than any physics rate")
     return None
 
@@ -285,7 +285,7 @@ def _rate_problem(spec: SensorSpec) -> str | None:
 def _noise_problems(spec: SensorSpec) -> list[str]:
     problems = []
     for channel, noise in spec.noise.items():
-        where = f"{_where(spec.name, noise.line or spec.line)} noise of {channel}"
+        where = f"{sensor_where(spec.name, noise.line or spec.line)} noise of {channel}"
         if noise.type not in NOISE_TYPES:
             problems.append(f"{where}: type '{noise.type}' is not one of {', '.join(NOISE_TYPES)}")
         for key in ("stddev", "bias_stddev"):
@@ -306,7 +306,7 @@ def sensor_problems(gazebo: list[SensorSpec], ros2_control: list[Ros2ControlSens
     by_name: dict[str, SensorSpec] = {}
     parent_joint = {j.child: j for j in joints.values()}
     for spec in gazebo:
-        where = _where(spec.name, spec.line)
+        where = sensor_where(spec.name, spec.line)
         if not spec.name:
             problems.append(f"{where}: <sensor> has no name attribute")
             continue
@@ -357,7 +357,7 @@ def sensor_problems(gazebo: list[SensorSpec], ros2_control: list[Ros2ControlSens
         by_name[spec.name] = spec
     seen: set[str] = set()
     for control in ros2_control:
-        where = f"<ros2_control> {_where(control.name, control.line)}"
+        where = f"<ros2_control> {sensor_where(control.name, control.line)}"
         if control.name in seen:
             problems.append(f"{where}: listed twice")
             continue

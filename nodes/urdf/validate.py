@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nodes.urdf.model import RobotModel
+from nodes.urdf.rendered_sensors import rendered_sensor_problems
 from nodes.urdf.sensors import sensor_problems
 
 
@@ -139,4 +140,5 @@ def validate(model: RobotModel) -> list[Issue]:
     """All problems found, errors first."""
     errors = _tree_errors(model) + _joint_errors(model) + _inertia_errors(model)
     errors += sensor_problems(model.sensors, model.ros2_control_sensors, model.links, model.joints)
+    errors += rendered_sensor_problems(model.rendered_sensors, model.links, taken={s.name for s in model.sensors})
     return [Issue("error", m) for m in errors] + [Issue("warning", m) for m in _warnings(model)]
