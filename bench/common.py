@@ -31,6 +31,9 @@ if TYPE_CHECKING:
 
 ROOT = Path(__file__).resolve().parents[1]
 STOP_GRACE_S = 20.0  # a launcher ends its nodes (each gets its own grace) within this on SIGINT
+# The controllers humanoid.yaml's spawners make active (config/controllers.yaml)
+MAIN_JOB_CONTROLLERS = ("joint_state_broadcaster", "joint_trajectory_controller", "imu_sensor_broadcaster",
+                        "left_foot_ft_broadcaster", "right_foot_ft_broadcaster")
 T = TypeVar("T")
 
 

@@ -51,7 +51,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 import msgs  # noqa: E402 - after the path is set (bench scripts run from anywhere)
-from bench.common import Launch  # noqa: E402
+from bench.common import MAIN_JOB_CONTROLLERS, Launch  # noqa: E402
 from msgs import cdr  # noqa: E402
 from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES  # noqa: E402
 from msgs.registry import get_spec  # noqa: E402
@@ -96,13 +96,12 @@ class Job(Launch):
         s.declare_subscriber("sim/model_states", self._on_model_states)
         s.declare_subscriber("rosout", self._on_rosout)
         self.wait(lambda: self.last_positions, deadline - time.monotonic(), "joint_states")
-        self.wait(lambda: "controller manager ready" in self.output() and self._both_controllers_active(),
-                  deadline - time.monotonic(), "both controllers active", interval=0.2)
+        self.wait(lambda: "controller manager ready" in self.output() and self._controllers_active(),
+                  deadline - time.monotonic(), "the main job's controllers active", interval=0.2)
 
-    def _both_controllers_active(self) -> bool:
+    def _controllers_active(self) -> bool:
         try:
-            return {c["name"]: c["state"] for c in self.controllers()} == {
-                "joint_state_broadcaster": "active", "joint_trajectory_controller": "active"}
+            return {c["name"]: c["state"] for c in self.controllers()} == dict.fromkeys(MAIN_JOB_CONTROLLERS, "active")
         except RuntimeError:
             return False
 

@@ -100,7 +100,7 @@ def test_kill_9_of_each_node_heals_without_a_fall(tmp_path: Path, zenoh_port: in
             scenario.wait_for(flowing_since("humanoid/joint_states", killed, 50), 30,
                               f"joint_states flowing again after kill -9 of '{node}'")
             if node == "controller_manager":
-                scenario.wait_for(lambda: "respawned: restored 2 controller(s)" in scenario.output(), 30,
+                scenario.wait_for(lambda: "respawned: restored 5 controller(s)" in scenario.output(), 30,
                                   "the controllers restored")
                 # resumes from the measured state: the new manager's first knee command is where the knee is
                 # The new manager's first command ends the outage: find it by the step (1 kHz physics), not

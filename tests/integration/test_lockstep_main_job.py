@@ -138,12 +138,20 @@ def run_main_job(port: int, log_dir: Path) -> tuple[dict[tuple[int, int], list[f
         assert names and len(names) == 22
         sensors: dict[str, dict] = {key: {} for key in SENSOR_KEYS}
         for key, sub in sensor_subs.items():
-            while (sample := sub.try_recv()) is not None:
+            # up to RECORD_UNTIL as joint_states: the sensors' last messages may still be on their way
+            newest, until = 0.0, time.monotonic() + 30
+            while newest < RECORD_UNTIL and time.monotonic() < until:
+                sample = sub.try_recv()
+                if sample is None:
+                    time.sleep(0.01)
+                    continue
                 raw = sample.payload.to_bytes()
                 samples.setdefault(key, raw)
                 msg = msgpack.unpackb(raw)
                 stamp = msg["header"]["stamp"]
-                sensors[key][(stamp["sec"], stamp["nanosec"])] = msg
+                newest = stamp["sec"] + stamp["nanosec"] * 1e-9
+                if newest <= RECORD_UNTIL:
+                    sensors[key][(stamp["sec"], stamp["nanosec"])] = msg
             sub.undeclare()
         time.sleep(1.2)   # the simulator moves threads started after its claim off the CPU once a second
         threads = thread_cpus(launch.proc.pid)

@@ -20,7 +20,7 @@ import zenoh.ext
 from rosbags.typesys import Stores, get_typestore
 
 import msgs
-from bench.common import Launch, child_env
+from bench.common import MAIN_JOB_CONTROLLERS, Launch, child_env
 from msgs import cdr
 from msgs.type_hash import rihs01
 from nodes.core.node import Node
@@ -378,7 +378,7 @@ def test_main_job_seen_and_driven_by_ros2_clients(main_job) -> None:
     report = json.loads(client.stdout.strip().splitlines()[-1])
     assert report["joints"] == 22
     assert report["clock_advances"]
-    assert report["controllers"] == {"joint_state_broadcaster": "active", "joint_trajectory_controller": "active"}
+    assert report["controllers"] == dict.fromkeys(MAIN_JOB_CONTROLLERS, "active")
     assert report["topic_command_reached"]
     assert report["goal_status"] == "SUCCEEDED" and report["error_code"] == 0
     assert report["feedback_messages"] > 0
