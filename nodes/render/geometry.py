@@ -1,0 +1,162 @@
+"""The shapes rays are cast against, as triangles: what a ``SceneShape`` describes, turned into a mesh once.
+
+Embree only intersects triangles, so every primitive is triangulated here, in its own shape frame, with
+enough facets that the error is below what the sensors resolve: boxes are exact, cylinders have 32 sides (a
+face seen head-on is at most r (1 - cos(pi/32)) = 0.5 % of the radius off), spheres are icospheres of
+subdivision 3 (1280 faces, every face within 0.5 % of the radius). Meshes arrive as bytes on the wire
+(``SceneShape.vertices`` / ``.triangles``) and are checked before anything trusts them. Triangle counts are
+capped (per mesh and per scene) before any large allocation, so a hostile scene costs an error message, not
+the machine's memory.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+KINDS = ("box", "cylinder", "sphere", "mesh")
+MAX_MESH_TRIANGLES = 200_000
+MAX_SCENE_TRIANGLES = 2_000_000
+CYLINDER_SECTIONS = 32
+SPHERE_SUBDIVISIONS = 3        # icosphere: 20 * 4**3 = 1280 faces, face centres at >= 99.55 % of the radius
+BOX_TRIANGLES = 12
+MAX_SIZE = 1e4                 # m, of any primitive dimension (as nodes.sim.sdf bounds them)
+
+
+class RenderError(ValueError):
+    """A scene, shape or mesh the renderer refuses; the message names the shape and the reason."""
+
+
+@dataclass
+class Shape:
+    """One visual and/or collision shape of a link, in the link frame.
+
+    ``size``: box (x, y, z) full extents; cylinder (radius, length) along the local z, centred; sphere
+    (radius,); unused for a mesh, whose ``vertices`` (N, 3) float32 (scale applied, shape frame) and
+    ``triangles`` (M, 3) uint32 are given. ``rgba`` in [0, 1] is what cameras see; ``visual`` shapes are seen by
+    cameras and gpu_ray / gpu_lidar, ``collision`` shapes by ray / lidar (a shape may be both).
+    """
+
+    kind: str
+    size: tuple[float, ...] = ()
+    pose: np.ndarray | None = None
+    rgba: tuple[float, float, float, float] = (0.7, 0.7, 0.7, 1.0)
+    visual: bool = True
+    collision: bool = True
+    vertices: np.ndarray | None = None
+    triangles: np.ndarray | None = None
+    name: str = ""          # for error messages ("model::link" and the shape's index are fine)
+
+    def __post_init__(self) -> None:
+        if self.pose is None:
+            self.pose = np.eye(4)
+
+    @property
+    def label(self) -> str:
+        return f"{self.kind} shape '{self.name}'" if self.name else f"{self.kind} shape"
+
+
+def triangle_count(shape: Shape) -> int:
+    """Triangles ``triangulate`` makes for ``shape``, known without building anything (for the caps)."""
+    if shape.kind == "box":
+        return BOX_TRIANGLES
+    if shape.kind == "cylinder":
+        return 4 * CYLINDER_SECTIONS      # sides (2 per section) and two fans of caps
+    if shape.kind == "sphere":
+        return 20 * 4 ** SPHERE_SUBDIVISIONS
+    if shape.kind == "mesh":
+        return 0 if shape.triangles is None else int(len(shape.triangles))
+    raise RenderError(f"{shape.label}: kind '{shape.kind}' is not one of {', '.join(KINDS)}")
+
+
+def _sizes(shape: Shape, count: int, what: str) -> tuple[float, ...]:
+    size = tuple(float(s) for s in shape.size)
+    if len(size) < count:
+        raise RenderError(f"{shape.label}: needs {what}, got size {size}")
+    size = size[:count]
+    if not all(math.isfinite(s) and 0.0 < s <= MAX_SIZE for s in size):
+        raise RenderError(f"{shape.label}: {what} {size} must be positive, finite and at most {MAX_SIZE:g} m")
+    return size
+
+
+@functools.lru_cache(maxsize=4)
+def _unit_sphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
+    import trimesh
+
+    mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.uint32)
+
+
+def triangulate(shape: Shape) -> tuple[np.ndarray, np.ndarray]:
+    """``(vertices (N, 3) float32, triangles (M, 3) uint32)`` of ``shape`` in its shape frame; RenderError
+    naming the shape for a bad size, an unknown kind or a mesh over ``MAX_MESH_TRIANGLES``."""
+    import trimesh
+
+    count = triangle_count(shape)
+    if count > MAX_MESH_TRIANGLES:
+        raise RenderError(f"{shape.label}: {count} triangles, over the cap of {MAX_MESH_TRIANGLES} per mesh")
+    if shape.kind == "box":
+        mesh = trimesh.creation.box(extents=_sizes(shape, 3, "x y z extents"))
+        vertices, triangles = mesh.vertices, mesh.faces
+    elif shape.kind == "cylinder":
+        radius, length = _sizes(shape, 2, "radius and length")
+        mesh = trimesh.creation.cylinder(radius=radius, height=length, sections=CYLINDER_SECTIONS)
+        vertices, triangles = mesh.vertices, mesh.faces
+    elif shape.kind == "sphere":
+        (radius,) = _sizes(shape, 1, "a radius")
+        unit, triangles = _unit_sphere(SPHERE_SUBDIVISIONS)
+        vertices = unit * radius
+    else:
+        if shape.vertices is None or shape.triangles is None:
+            raise RenderError(f"{shape.label}: a mesh needs vertices and triangles")
+        vertices, triangles = np.asarray(shape.vertices), np.asarray(shape.triangles)
+        if vertices.ndim != 2 or vertices.shape[1] != 3 or triangles.ndim != 2 or triangles.shape[1] != 3:
+            raise RenderError(f"{shape.label}: vertices must be (N, 3) and triangles (M, 3), got "
+                              f"{vertices.shape} and {triangles.shape}")
+        _check_mesh(vertices, triangles, shape.label)
+    return np.ascontiguousarray(vertices, dtype=np.float32), np.ascontiguousarray(triangles, dtype=np.uint32)
+
+
+def _check_mesh(vertices: np.ndarray, triangles: np.ndarray, label: str) -> None:
+    if not np.isfinite(vertices).all():
+        raise RenderError(f"{label}: a vertex coordinate is not finite")
+    if len(triangles) and (int(triangles.max()) >= len(vertices) or int(triangles.min()) < 0):
+        raise RenderError(f"{label}: a triangle index ({int(triangles.max())}) is out of range of the "
+                          f"{len(vertices)} vertices")
+
+
+def mesh_from_bytes(vertices: bytes, triangles: bytes, label: str = "mesh") -> tuple[np.ndarray, np.ndarray]:
+    """A mesh from its wire form (``SceneShape``): float32 little-endian x y z triples and uint32
+    little-endian index triples, as ``(V (N, 3) float32, F (M, 3) uint32)``. RenderError naming ``label``
+    for lengths that are not whole triples, more than ``MAX_MESH_TRIANGLES`` triangles (checked on the
+    length, before anything is copied), indices out of range or non-finite vertices."""
+    if len(vertices) % 12:
+        raise RenderError(f"{label}: vertices are {len(vertices)} bytes, not a whole number of float32 x y z "
+                          "triples (12 bytes each)")
+    if len(triangles) % 12:
+        raise RenderError(f"{label}: triangles are {len(triangles)} bytes, not a whole number of uint32 index "
+                          "triples (12 bytes each)")
+    count = len(triangles) // 12
+    if count > MAX_MESH_TRIANGLES:
+        raise RenderError(f"{label}: {count} triangles, over the cap of {MAX_MESH_TRIANGLES} per mesh")
+    v = np.frombuffer(vertices, dtype="<f4").reshape(-1, 3).astype(np.float32)
+    f = np.frombuffer(triangles, dtype="<u4").reshape(-1, 3).astype(np.uint32)
+    _check_mesh(v, f, label)
+    return v, f
+
+
+def check_scene_triangles(shapes: list[Shape]) -> int:
+    """The triangles of every shape together; RenderError over ``MAX_SCENE_TRIANGLES`` (nothing built yet)."""
+    total = 0
+    for shape in shapes:
+        count = triangle_count(shape)
+        if count > MAX_MESH_TRIANGLES:
+            raise RenderError(f"{shape.label}: {count} triangles, over the cap of {MAX_MESH_TRIANGLES} per mesh")
+        total += count
+        if total > MAX_SCENE_TRIANGLES:
+            raise RenderError(f"the scene has over {MAX_SCENE_TRIANGLES} triangles (reached at {shape.label}), "
+                              "over the cap for a scene")
+    return total

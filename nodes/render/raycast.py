@@ -1,0 +1,259 @@
+"""Nearest-hit ray casting against the world's shapes with Embree: the one primitive every sensor is built on.
+
+Why two Embree scenes per layer: the world's static links (walls, tables, the ground) never move, so their
+triangles are transformed and their BVH built once; everything else (robots, free objects) is transformed
+with the newest link poses and rebuilt when those poses change (a few milliseconds for a humanoid made of
+primitives: embreex copies vertices element by element, about 0.6 us a triangle). A cast runs the static
+scene first, then the dynamic one with the static hit as its far limit, so the second finds only nearer hits
+and the result is the nearest of both. All the dynamic shapes of a layer go into ONE Embree geometry: the
+build cost is per triangle, and one geometry makes the triangle -> shape lookup a single array index.
+
+Layers: ``visual`` shapes are what cameras and gpu_ray / gpu_lidar see, ``collision`` shapes what ray /
+lidar see (Gazebo's split); a shape may be in both, and each layer is built only when it is first cast
+against after a change (a frame with only a camera due never builds the collision layer).
+
+Threads: ``EmbreeScene.run`` loops over rays in C without the GIL, so a big cast can be split into
+contiguous chunks run on a small pool (``threads``). Every chunk writes only its own slice of the
+preallocated results, and one ray's hit does not depend on the others, so the output is bit-identical
+whatever the thread count or the order the chunks finish in. ``bench/render.py`` measures whether it pays.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from nodes.render.geometry import RenderError, Shape, check_scene_triangles, triangulate
+
+LAYERS = ("visual", "collision")
+NO_LIMIT = np.float32(1e37)          # embreex's own "no far limit"
+MIN_CHUNK_RAYS = 4096                # below this a cast is not split (the pool's overhead is ~50 us a task)
+
+
+@dataclass
+class Hits:
+    """The nearest hit of each ray: ``distance`` float32 (N,) along the (unit) ray, +inf for none;
+    ``shape`` int32 (N,) index into the scene's shapes, -1 for none; ``normal`` float32 (N, 3) unit, world
+    frame, facing the ray (zero for none)."""
+
+    distance: np.ndarray
+    shape: np.ndarray
+    normal: np.ndarray
+
+
+class _Group:
+    """The shapes of one layer that are rebuilt together (the static ones, or the dynamic ones), their
+    triangles in their links' frames, sorted by link so that each link's transform applies to one slice."""
+
+    def __init__(self, links: list[int], local: np.ndarray, prim_shape: np.ndarray,
+                 slices: list[tuple[int, int, int]]) -> None:
+        self.links = np.array(links, dtype=np.intp)         # the links whose poses this group depends on
+        self.local = local                                   # (T * 3, 3) float64, triangle corners, link frame
+        self.prim_shape = prim_shape                         # (T,) int32: Embree primID -> shape index
+        self.slices = slices                                 # (link, first corner, end corner)
+        self.scene = None                                    # an embreex EmbreeScene, once built
+        self.built_with: np.ndarray | None = None            # the poses of self.links it was built with
+        self.seen_version = -1                               # RayScene.version last checked against
+
+    @property
+    def empty(self) -> bool:
+        return len(self.prim_shape) == 0
+
+    def refresh(self, poses: np.ndarray, version: int, device: object) -> None:
+        """Rebuild the Embree scene if the poses of this group's links changed since it was built."""
+        if self.empty or version == self.seen_version:
+            return
+        self.seen_version = version
+        mine = poses[self.links]
+        if self.built_with is not None and np.array_equal(mine, self.built_with):
+            return
+        from embreex import rtcore_scene as rtcs
+        from embreex.mesh_construction import TriangleMesh
+
+        world = np.empty(self.local.shape, dtype=np.float32)
+        for link, start, end in self.slices:
+            pose = poses[link]
+            world[start:end] = self.local[start:end] @ pose[:3, :3].T + pose[:3, 3]
+        scene = rtcs.EmbreeScene(device)
+        TriangleMesh(scene, world.reshape(-1, 3, 3))
+        # run() commits the scene (builds the BVH) on its first call: do it here, on one thread, so that
+        # chunks cast in parallel never race to commit it.
+        scene.run(np.zeros((1, 3), np.float32), np.array([[1.0, 0.0, 0.0]], np.float32), query="DISTANCE")
+        self.scene = scene
+        self.built_with = mine.copy()
+
+
+class RayScene:
+    """The shapes of every link, ready for ``cast``: ``links`` names them (poses follow this order),
+    ``shapes`` are (link index, Shape) pairs (``Hits.shape`` indexes this sequence), ``static_links`` never
+    move. ``update(poses)`` gives the links' world transforms; ``threads`` > 1 splits big casts over a pool.
+    Not thread-safe itself: one thread updates and casts (the pool is internal)."""
+
+    def __init__(self, links: Sequence[str], shapes: Sequence[tuple[int, Shape]], static_links: set[int] = frozenset(),
+                 *, threads: int = 1) -> None:
+        self.links = list(links)
+        self.shapes = [shape for _, shape in shapes]
+        self.shape_links = np.array([link for link, _ in shapes], dtype=np.intp)
+        if threads < 1:
+            raise RenderError(f"threads must be at least 1, got {threads}")
+        self.threads = threads
+        for index, (link, shape) in enumerate(shapes):
+            if not 0 <= link < len(self.links):
+                raise RenderError(f"{shape.label} (shape {index}): link index {link} is not one of the "
+                                  f"{len(self.links)} links")
+        check_scene_triangles(self.shapes)   # refuse before building anything
+        self.static_links = {int(i) for i in static_links}
+        self.rgba = np.array([shape.rgba for shape in self.shapes], dtype=np.float32).reshape(-1, 4)
+        self._groups = self._build_groups(shapes)
+        self._poses: np.ndarray | None = None
+        self.version = 0
+        self._device = None
+        self._pool: ThreadPoolExecutor | None = None
+        self._lock = threading.Lock()
+
+    # ------------------------------------------------------------------ building
+    def _build_groups(self, shapes: Sequence[tuple[int, Shape]]) -> dict[str, tuple[_Group, _Group]]:
+        """Per layer, its (static, dynamic) groups; every shape is triangulated once, in its link frame."""
+        corners: list[np.ndarray] = []
+        for _, shape in shapes:
+            vertices, triangles = triangulate(shape)
+            pose = np.asarray(shape.pose, dtype=np.float64)
+            if pose.shape != (4, 4) or not np.isfinite(pose).all():
+                raise RenderError(f"{shape.label}: pose must be a finite 4x4 matrix")
+            in_link = vertices.astype(np.float64) @ pose[:3, :3].T + pose[:3, 3]
+            corners.append(in_link[triangles.reshape(-1)])             # (T * 3, 3)
+        groups = {}
+        for layer in LAYERS:
+            chosen = [i for i, (_, s) in enumerate(shapes) if (s.visual if layer == "visual" else s.collision)]
+            static = [i for i in chosen if shapes[i][0] in self.static_links]
+            dynamic = [i for i in chosen if shapes[i][0] not in self.static_links]
+            groups[layer] = (self._group(static, corners), self._group(dynamic, corners))
+        return groups
+
+    def _group(self, indices: list[int], corners: list[np.ndarray]) -> _Group:
+        order = sorted(indices, key=lambda i: (self.shape_links[i], i))   # by link, then shape order
+        parts, prim, slices = [], [], []
+        start = 0
+        for i in order:
+            link = int(self.shape_links[i])
+            end = start + len(corners[i])
+            if slices and slices[-1][0] == link:
+                slices[-1] = (link, slices[-1][1], end)
+            else:
+                slices.append((link, start, end))
+            parts.append(corners[i])
+            prim.append(np.full(len(corners[i]) // 3, i, dtype=np.int32))
+            start = end
+        local = np.concatenate(parts) if parts else np.zeros((0, 3))
+        prim_shape = np.concatenate(prim) if prim else np.zeros(0, dtype=np.int32)
+        return _Group(sorted({s[0] for s in slices}), local, prim_shape, slices)
+
+    def update(self, poses: np.ndarray) -> None:
+        """The links' world transforms, (L, 4, 4) in ``links`` order. Cheap: a layer's Embree scenes are
+        rebuilt on its next ``cast``, and only those whose links moved (the static one, normally never)."""
+        poses = np.asarray(poses, dtype=np.float64)
+        if poses.shape != (len(self.links), 4, 4):
+            raise RenderError(f"poses must be ({len(self.links)}, 4, 4), one per link; got {poses.shape}")
+        if not np.isfinite(poses).all():
+            bad = sorted({self.links[i] for i in np.nonzero(~np.isfinite(poses).all(axis=(1, 2)))[0]})
+            raise RenderError(f"a link pose is not finite: {', '.join(bad[:5])}")
+        self._poses = poses.copy()
+        self.version += 1
+
+    def _refresh(self, layer: str) -> tuple[_Group, _Group]:
+        if layer not in self._groups:
+            raise RenderError(f"layer '{layer}' is not one of {', '.join(LAYERS)}")
+        if self._poses is None:
+            raise RenderError("cast before the first update(poses): where the links are is not known")
+        if self._device is None:
+            from embreex import rtcore
+
+            self._device = rtcore.EmbreeDevice()
+        groups = self._groups[layer]
+        for group in groups:
+            group.refresh(self._poses, self.version, self._device)
+        return groups
+
+    def triangles(self, layer: str = "visual") -> int:
+        """Triangles in a layer (static and dynamic)."""
+        return sum(len(g.prim_shape) for g in self._groups[layer])
+
+    # ------------------------------------------------------------------ casting
+    def cast(self, origins: np.ndarray, directions: np.ndarray, *, layer: str = "visual",
+             max_distance: float | np.ndarray | None = None) -> Hits:
+        """The nearest hit along each ray from ``origins`` (N, 3) in unit ``directions`` (N, 3), world frame,
+        among the ``layer``'s shapes. ``max_distance`` (a number, or one per ray) stops the search there:
+        farther surfaces are not hit (cheaper than finding and discarding them)."""
+        groups = self._refresh(layer)
+        origins = np.ascontiguousarray(origins, dtype=np.float32).reshape(-1, 3)
+        directions = np.ascontiguousarray(directions, dtype=np.float32).reshape(-1, 3)
+        count = len(origins)
+        if len(directions) != count:
+            raise RenderError(f"{count} origins but {len(directions)} directions")
+        limit = np.empty(count, dtype=np.float32)   # each group's run() lowers it to its hits, in place
+        limit[:] = NO_LIMIT if max_distance is None else np.minimum(max_distance, NO_LIMIT)
+        shape = np.full(count, -1, dtype=np.int32)
+        normal = np.zeros((count, 3), dtype=np.float32)
+        live = [g for g in groups if not g.empty]
+        chunks = self._chunks(count)
+        if len(chunks) == 1 or not live:
+            self._cast_chunk(live, origins, directions, limit, shape, normal, 0, count)
+        else:
+            pool = self._executor()
+            futures = [pool.submit(self._cast_chunk, live, origins, directions, limit, shape, normal, a, b)
+                       for a, b in chunks]
+            for future in futures:
+                future.result()
+        hit = shape >= 0
+        distance = np.where(hit, limit, np.float32(np.inf)).astype(np.float32, copy=False)
+        return Hits(distance, shape, normal)
+
+    def _chunks(self, count: int) -> list[tuple[int, int]]:
+        if self.threads == 1 or count < 2 * MIN_CHUNK_RAYS:
+            return [(0, count)]
+        # 4 chunks a thread: a camera's sky rows are cheaper than its floor rows, small chunks even that out
+        n = min(4 * self.threads, count // MIN_CHUNK_RAYS)
+        bounds = np.linspace(0, count, n + 1).astype(int)
+        return [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
+
+    def _executor(self) -> ThreadPoolExecutor:
+        with self._lock:
+            if self._pool is None:
+                self._pool = ThreadPoolExecutor(max_workers=self.threads, thread_name_prefix="raycast")
+            return self._pool
+
+    @staticmethod
+    def _cast_chunk(groups: list[_Group], origins: np.ndarray, directions: np.ndarray, limit: np.ndarray,
+                    shape: np.ndarray, normal: np.ndarray, start: int, end: int) -> None:
+        """Cast rays ``start:end`` against every group in turn, writing only that slice of the outputs."""
+        o, d, far = origins[start:end], directions[start:end], limit[start:end]   # views: run() writes far
+        for group in groups:
+            result = group.scene.run(o, d, dists=far, output=1)
+            prim = result["primID"]
+            hit = np.nonzero(prim >= 0)[0]
+            if len(hit):
+                shape[start + hit] = group.prim_shape[prim[hit]]
+                normal[start + hit] = result["Ng"][hit]
+        n = normal[start:end]
+        length = np.sqrt(np.einsum("ij,ij->i", n, n))
+        hit = length > 0
+        # unit, and facing the ray (Embree's geometric normal follows the triangle's winding)
+        sign = np.where(np.einsum("ij,ij->i", n, d) > 0, -1.0, 1.0).astype(np.float32)
+        n[hit] *= (sign[hit] / length[hit])[:, None]
+
+    def close(self) -> None:
+        """End the thread pool (if one was started)."""
+        with self._lock:
+            if self._pool is not None:
+                self._pool.shutdown(wait=True)
+                self._pool = None
+
+    def __enter__(self) -> RayScene:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
