@@ -178,6 +178,91 @@ class SensorDecl:
 
 
 @dataclass
+class Frame:
+    """A sensor's link: no geometry (a camera inside a shape would see its inside), a token mass so every
+    physics engine accepts it, attached by a fixed joint so TF publishes it."""
+
+    name: str
+    mass: float = 0.01
+    colour: str = "dark"   # unused: a frame has no visual
+
+    def xml(self) -> str:
+        inertia = fmt(1e-6)
+        return (f'  <link name="{self.name}">\n    <inertial>\n      <origin xyz="0 0 0" rpy="0 0 0"/>\n'
+                f'      <mass value="{fmt(self.mass)}"/>\n'
+                f'      <inertia ixx="{inertia}" ixy="0" ixz="0" iyy="{inertia}" iyz="0" izz="{inertia}"/>\n'
+                "    </inertial>\n  </link>\n")
+
+
+@dataclass
+class RenderedSensorDecl:
+    """A camera or range sensor as Gazebo Classic users declare it, with the gazebo_ros plugin that publishes
+    it; topics resolve in the robot's namespace (spawn_entity's -robot_namespace)."""
+
+    name: str
+    kind: str          # depth | gpu_ray | ray
+    reference: str     # the link it is on
+    body: str          # the <camera> or <ray> element
+    plugin: str        # the <plugin> element
+
+    def gazebo_xml(self) -> str:
+        return (f'  <gazebo reference="{self.reference}">\n    <sensor name="{self.name}" type="{self.kind}">\n'
+                f"      <always_on>true</always_on>\n{self.body}{self.plugin}    </sensor>\n  </gazebo>\n")
+
+
+def _ray_xml(rate: float, horizontal: tuple[int, float, float], vertical: tuple[int, float, float] | None,
+             range_min: float, range_max: float, resolution: float) -> str:
+    axes = [("horizontal", horizontal)] + ([("vertical", vertical)] if vertical else [])
+    lines = [f"      <update_rate>{fmt(rate)}</update_rate>", "      <ray>", "        <scan>"]
+    for axis, (samples, low, high) in axes:
+        lines += [f"          <{axis}><samples>{samples}</samples><resolution>1</resolution>"
+                  f"<min_angle>{fmt(low)}</min_angle><max_angle>{fmt(high)}</max_angle></{axis}>"]
+    lines += ["        </scan>", f"        <range><min>{fmt(range_min)}</min><max>{fmt(range_max)}</max>"
+              f"<resolution>{fmt(resolution)}</resolution></range>",
+              '        <noise><type>gaussian</type><mean>0</mean><stddev>0.01</stddev></noise>', "      </ray>\n"]
+    return "\n".join(lines)
+
+
+def head_sensors() -> tuple[list[tuple[Frame, Joint]], list[RenderedSensorDecl]]:
+    """The humanoid's eyes: a head RGB-D camera (optical axis along +x at the stand pose), a 16-ring lidar
+    on top of the head and a horizontal laser on the chest; the sensor links sit outside every shape."""
+    quarter = math.pi / 2
+    frames = [
+        (Frame("camera_link"), Joint("camera_joint", "fixed", "head", "camera_link", (0.11, 0, 0.12))),
+        (Frame("camera_optical_frame"), Joint("camera_optical_joint", "fixed", "camera_link", "camera_optical_frame",
+                                              rpy=(-quarter, 0, -quarter))),
+        (Frame("lidar_link"), Joint("lidar_joint", "fixed", "head", "lidar_link", (0, 0, 0.26))),
+        (Frame("laser_link"), Joint("laser_joint", "fixed", "torso", "laser_link", (0.12, 0, 0.30))),
+    ]
+    camera = RenderedSensorDecl(
+        "camera", "depth", "camera_link",
+        "      <update_rate>30</update_rate>\n      <camera>\n        <horizontal_fov>1.047</horizontal_fov>\n"
+        "        <image><width>320</width><height>240</height><format>R8G8B8</format></image>\n"
+        "        <clip><near>0.05</near><far>10</far></clip>\n      </camera>\n",
+        '      <plugin name="camera_controller" filename="libgazebo_ros_camera.so">\n'
+        "        <ros>\n          <remapping>camera/image_raw:=camera/rgb</remapping>\n"
+        "          <remapping>camera/depth/image_raw:=camera/depth</remapping>\n        </ros>\n"
+        "        <camera_name>camera</camera_name>\n        <frame_name>camera_optical_frame</frame_name>\n"
+        "      </plugin>\n")
+    step = 2 * math.pi / 900
+    lidar = RenderedSensorDecl(
+        "lidar", "gpu_ray", "lidar_link",
+        _ray_xml(10, (900, -math.pi, math.pi - step), (16, -math.radians(15), math.radians(15)), 0.2, 30, 0.01),
+        '      <plugin name="lidar" filename="libgazebo_ros_ray_sensor.so">\n'
+        "        <ros><remapping>~/out:=lidar/points</remapping></ros>\n"
+        "        <output_type>sensor_msgs/PointCloud2</output_type>\n        <frame_name>lidar_link</frame_name>\n"
+        "      </plugin>\n")
+    laser = RenderedSensorDecl(
+        "laser", "ray", "laser_link",
+        _ray_xml(20, (720, -quarter, quarter), None, 0.1, 10, 0.01),
+        '      <plugin name="laser" filename="libgazebo_ros_ray_sensor.so">\n'
+        "        <ros><remapping>~/out:=scan</remapping></ros>\n"
+        "        <output_type>sensor_msgs/LaserScan</output_type>\n        <frame_name>laser_link</frame_name>\n"
+        "      </plugin>\n")
+    return frames, [camera, lidar, laser]
+
+
+@dataclass
 class Robot:
     name: str
     header: str
@@ -185,8 +270,9 @@ class Robot:
     joints: list[Joint] = field(default_factory=list)
     ros2_control_joints: list[str] = field(default_factory=list)
     sensors: list[SensorDecl] = field(default_factory=list)
+    rendered_sensors: list[RenderedSensorDecl] = field(default_factory=list)
 
-    def add(self, link: Link, joint: Joint | None = None) -> None:
+    def add(self, link: Link | Frame, joint: Joint | None = None) -> None:
         self.links.append(link)
         if joint is not None:
             self.joints.append(joint)
@@ -229,7 +315,7 @@ class Robot:
             for sensor in self.sensors:
                 out.append(sensor.ros2_control_xml())
             out.append("  </ros2_control>\n")
-            for sensor in self.sensors:
+            for sensor in self.sensors + self.rendered_sensors:
                 out.append(sensor.gazebo_xml())
             out.append(
                 '  <gazebo>\n    <plugin filename="libgazebo_ros2_control.so" name="gazebo_ros2_control">\n'
@@ -344,6 +430,9 @@ def humanoid() -> Robot:
     r.sensors = [SensorDecl("imu_sensor", "imu", "pelvis", "pelvis")]
     r.sensors += [SensorDecl(f"{side}_foot_ft", "force_torque", f"{side}_ankle_roll", f"{side}_foot")
                   for side in ("left", "right")]
+    frames, r.rendered_sensors = head_sensors()
+    for frame, joint in frames:
+        r.add(frame, joint)
     return r
 
 

@@ -23,6 +23,7 @@ from nodes.sim.entity import EntitySpec, Pose, SpawnError
 from nodes.sim.entity_services import EntityServices
 from nodes.sim.interfaces import MODES
 from nodes.sim.outputs import SimOutputs
+from nodes.sim.render_frames import RenderFrames
 from nodes.sim.robot_files import ConfigError, fetch_robot_description, read_model_xml, resolve_robot_file
 from nodes.sim.robot_link import RobotLink
 from nodes.sim.sdf import WorldError, WorldSpec, is_sdf, load_world, parse_model
@@ -109,6 +110,9 @@ class SimulatorNode(Node):
             self._load_world(world_file, ground_size, ground_friction)
         self.robots: dict[str, RobotLink] = {}
         self.outputs = SimOutputs(self, self.sim, self.robots, clock_rate=clock_rate, state_rate=state_rate)
+        self.render = RenderFrames(self, self.sim, self._idle, enabled=sensors,
+                                   camera_pose=self.world_spec.camera_pose if self.world_spec else None)
+        self.render.refresh_scene()
         self._startup_deadline = time.monotonic() + 30.0
         self._next_startup_try = 0.0
         self._next_drain = 0.0
@@ -141,7 +145,9 @@ class SimulatorNode(Node):
         """Spawn and wire up a robot (URDF) or add a model (SDF); returns a status line, raises
         SpawnError/UrdfError/WorldError on failure."""
         if is_sdf(spec.xml):
-            return self._spawn_sdf(spec, reference_frame)
+            status = self._spawn_sdf(spec, reference_frame)
+            self.render.refresh_scene()
+            return status
         entity = self.sim.spawn(spec, reference_frame)
         try:
             self.robots[entity.namespace] = RobotLink(self, self.sim, self.sim.hardware[entity.namespace],
@@ -149,6 +155,7 @@ class SimulatorNode(Node):
         except Exception:
             self.sim.delete(entity.name)
             raise
+        self.render.refresh_scene()
         joints = len(entity.info.joints)
         base = "fixed" if spec.fixed else "floating"
         pos = entity.pose.position
@@ -210,7 +217,9 @@ class SimulatorNode(Node):
             link = self.robots.pop(entity.namespace, None)
             if link is not None:
                 link.destroy()
-        return self.sim.delete(name)
+        deleted = self.sim.delete(name)
+        self.render.refresh_scene()
+        return deleted
 
     # ------------------------------------------------------------------------------------- world control
     def pause(self) -> None:
@@ -231,6 +240,7 @@ class SimulatorNode(Node):
             link.reset()
         self.pacer.restart()
         self.outputs.restart_schedule()
+        self.render.restart_schedule()
         self.outputs.publish(force=True)
 
     def step_paused(self, steps: int) -> None:
@@ -265,6 +275,7 @@ class SimulatorNode(Node):
         step, t = self.sim.step_count, self.world.time
         lockstep = self.sim.mode != "realtime"
         self.sim.sample_sensors()
+        self.render.publish_due(step, t, self.sim.mode == "lockstep")
         for link in self.robots.values():
             link.publish_state(step, t)
             link.publish_plugins(t)

@@ -67,6 +67,10 @@ class Simulation:
                 raise SpawnError(f"reference_frame {frame!r} is neither 'world' nor an existing entity")
             spec.pose = parent.world_pose().compose(spec.pose.validated())
         entity = Entity(spec)
+        for sensor in entity.info.rendered_sensors if self.sensors_enabled else []:
+            if sensor.update_rate > self.physics_rate:
+                raise SpawnError(f"{sensor.where} <update_rate> {sensor.update_rate:g}: over the physics rate "
+                                 f"({self.physics_rate:g} Hz)")
         if entity.namespace in self.hardware:
             raise SpawnError(f"robot namespace {entity.namespace!r} is already used by entity "
                              f"{self.hardware[entity.namespace].entity.name!r}")

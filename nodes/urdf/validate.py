@@ -120,12 +120,17 @@ def _inertia_errors(model: RobotModel) -> list[str]:
     return errors
 
 
+# A link this light without shapes is a frame (a sensor's, say) carrying a token mass: physics engines give
+# a link without <inertial> a whole kilogram (DART does).
+FRAME_MASS = 0.05
+
+
 def _warnings(model: RobotModel) -> list[str]:
     warnings: list[str] = []
     for link in model.links.values():
         if link.inertial is None:
             warnings.append(f"link '{link.name}' has no <inertial> (simulation needs mass and inertia)")
-        elif not link.has_collision:
+        elif not link.has_collision and link.inertial.mass > FRAME_MASS:
             warnings.append(f"link '{link.name}' has mass but no <collision> shape")
     for joint in model.joints.values():
         if joint.movable and joint.effort is None and joint.type != "continuous":

@@ -1,0 +1,156 @@
+"""The simulator's side of the rendered sensors (cameras, depth cameras, lidars, lasers): it publishes the
+scene (``sim/scene``, latched, again on every spawn or delete) and, whenever one of those sensors is due, the
+state it must show (``sim/render/frame``: sim time, step, every link's world transform, the sensors due). The
+renderer (``nodes.render``, a process of its own on the spare core) draws them; the physics never waits for a
+picture, except in lockstep.
+
+Lockstep: every frame is rendered, in order, from its own state, so two runs give the same images bit for bit.
+The simulator lets at most ``max_outstanding`` frames wait for the renderer's ``sim/render/done`` before it
+steps on, so the renderer's queue stays bounded and a lockstep run goes as fast as the slower of the two.
+Realtime: frames go out on time and the renderer draws the newest it has for each sensor (a slow renderer
+drops frames, never the physics).
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import msgs
+from nodes.core import Node
+from nodes.sim.outputs import next_due
+from nodes.sim.scene import SceneError, SceneLinks, build_scene
+from nodes.sim.simulation import Simulation
+
+Scene = msgs.get_type("zenroid_msgs/msg/Scene")
+RenderFrame = msgs.get_type("zenroid_msgs/msg/RenderFrame")
+RenderDone = msgs.get_type("zenroid_msgs/msg/RenderDone")
+_pack_frame = msgs.packer("zenroid_msgs/msg/RenderFrame")
+NO_RENDERER_WARNING_S = 10.0   # wall s with rendered sensors and no renderer before saying so
+DONE_TIMEOUT_S = 5.0           # lockstep: wall s to wait for the renderer before stepping on without it
+
+
+@dataclass
+class _Scheduled:
+    key: str                  # "model::sensor"
+    period: float             # s of sim time
+    next_due: float = 0.0
+
+
+class RenderFrames:
+    def __init__(self, node: Node, sim: Simulation, idle: Callable[[float], None], *, enabled: bool = True,
+                 camera_pose=None, max_outstanding: int = 2) -> None:
+        """``idle(max_wait)`` serves requests while lockstep waits for the renderer; ``enabled`` False (the
+        simulator's ``sensors:=false``) sends no frames."""
+        self.node, self.sim, self.idle = node, sim, idle
+        self.enabled = enabled
+        self.camera_pose = camera_pose
+        self.max_outstanding = max_outstanding
+        self.scene_pub = node.create_publisher(Scene, "/sim/scene", latched=True)
+        self.frame_pub = node.create_publisher(RenderFrame, "/sim/render/frame")
+        self._done = threading.Lock()
+        self._last_done = -1
+        self._sent: list[int] = []          # steps of frames sent in lockstep and not yet done
+        node.create_subscription(RenderDone, "/sim/render/done", self._on_done, inline=True)
+        self.version = 0
+        self._scene_key: tuple = ()
+        self.links = SceneLinks([], [])
+        self.sensors: list[_Scheduled] = []
+        self._since_no_renderer: float | None = None
+        self._warned = False
+        self._renderer_gone = False
+
+    # -- the scene ----------------------------------------------------------------------------------------
+    def refresh_scene(self) -> None:
+        """Publish the scene again when the set of models changed (spawn, delete, a world loaded)."""
+        key = tuple((name, id(model)) for name, model in self.sim.entities.items()) + (
+            self.sim.world.ground is not None,)
+        if key == self._scene_key:
+            return
+        self._scene_key = key
+        self.version += 1
+        try:
+            scene, self.links = build_scene(self.sim.world, self.sim.entities, self.version, self.camera_pose)
+        except SceneError as exc:
+            self.node.logger.error(f"sim/scene: {exc}; the renderer and the viewer keep the previous scene")
+            return
+        self.scene_pub.publish(msgs.from_dict(Scene, scene))
+        self._schedule()
+
+    def _schedule(self) -> None:
+        previous = {s.key: s for s in self.sensors}
+        self.sensors = []
+        if not self.enabled:
+            return
+        for name, model in self.sim.entities.items():
+            info = getattr(model, "info", None)
+            for spec in getattr(info, "rendered_sensors", []):
+                if not spec.always_on:
+                    continue
+                key = f"{name}::{spec.name}"
+                kept = previous.get(key)
+                self.sensors.append(_Scheduled(key, 1.0 / spec.update_rate,
+                                               kept.next_due if kept else self.sim.world.time))
+
+    def restart_schedule(self) -> None:
+        """After a reset of sim time: every sensor is due now."""
+        for sensor in self.sensors:
+            sensor.next_due = self.sim.world.time
+
+    # -- frames -------------------------------------------------------------------------------------------
+    def publish_due(self, step: int, t: float, lockstep: bool) -> None:
+        """A frame for the sensors due at ``t`` (the state the hardware frames of this period carry)."""
+        if not self.sensors:
+            return
+        due = [s for s in self.sensors if t + 1e-9 >= s.next_due]
+        if not due:
+            return
+        for sensor in due:
+            sensor.next_due = next_due(sensor.next_due, t, sensor.period)
+        if not self.frame_pub.has_subscribers:
+            self._no_renderer()
+            return
+        self._since_no_renderer = None
+        wait = lockstep and not self._renderer_gone
+        if wait:
+            self._wait_for_renderer()
+        frame = _pack_frame(stamp=msgs.time_map(t), step=step, scene_version=self.version,
+                            poses=self.links.poses(), sensors=[s.key for s in due], lockstep=wait)
+        if wait:
+            with self._done:
+                self._sent.append(step)
+        self.frame_pub.publish_raw(frame)
+
+    def _on_done(self, msg) -> None:   # a Zenoh thread
+        with self._done:
+            self._last_done = max(self._last_done, int(msg.step))
+            self._sent = [s for s in self._sent if s > self._last_done]
+            self._renderer_gone = False   # a renderer answers (again): lockstep waits for it
+
+    def _wait_for_renderer(self) -> None:
+        deadline = time.monotonic() + DONE_TIMEOUT_S
+        while True:
+            with self._done:
+                if len(self._sent) < self.max_outstanding:
+                    return
+            if time.monotonic() > deadline:
+                self.node.logger.warn(f"sim/render/done: the renderer answered no frame for {DONE_TIMEOUT_S:g} s; "
+                                      "lockstep steps on without waiting for it")
+                self._renderer_gone = True
+                with self._done:
+                    self._sent.clear()
+                return
+            self.idle(0.002)
+
+    def _no_renderer(self) -> None:
+        now = time.monotonic()
+        if self._since_no_renderer is None:
+            self._since_no_renderer = now
+        elif not self._warned and now - self._since_no_renderer > NO_RENDERER_WARNING_S:
+            self._warned = True
+            names = ", ".join(s.key for s in self.sensors)
+            self.node.logger.warn(f"cameras and range sensors ({names}) but no renderer has subscribed to "
+                                  "sim/render/frame for 10 s: start `python -m nodes.render` (launch files do unless "
+                                  "sensors:=false)")

@@ -1,0 +1,128 @@
+"""The world's geometry as the renderer and the viewer see it: every model's links and shapes read from the
+DART skeletons the simulator steps (``sim/scene``), and each link's world transform at one instant (the poses of
+a ``sim/render/frame``).
+
+Reading DART's shape nodes, not the files, covers everything alike: URDF robots (DART's loader built their
+visual and collision shapes with the materials' colours), world files' and spawned SDF models, and the ground.
+Meshes are read again with trimesh (dartpy does not expose a mesh's triangles) and sent as triangles, so a
+renderer on another host needs no file of ours; their size is capped before they are read.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import dartpy as dart
+import numpy as np
+
+from nodes.sim.model import Model
+from nodes.sim.pose import Pose
+from nodes.sim.world import GROUND_NAME, PhysicsWorld
+
+BOX, CYLINDER, SPHERE, MESH = 1, 2, 3, 4
+MAX_MESH_TRIANGLES = 200_000        # one mesh (nodes.render refuses more, too)
+MAX_SCENE_TRIANGLES = 2_000_000     # all meshes of the scene together
+COLLISION_GREY = (0.5, 0.5, 0.5, 1.0)
+
+
+class SceneError(ValueError):
+    """A shape the renderer cannot be given (a mesh over the triangle cap, unreadable): names model and link."""
+
+
+@dataclass
+class SceneLinks:
+    """The scene's links in ``Scene.links`` order, with their body nodes (for the poses of a frame)."""
+
+    names: list[str]
+    bodies: list
+
+    def poses(self) -> list[float]:
+        """12 numbers per link: the first three rows of its world transform, row-major."""
+        out: list[float] = []
+        for body in self.bodies:
+            out.extend(body.getWorldTransform().matrix()[:3].ravel().tolist())
+        return out
+
+
+def _pose(matrix: np.ndarray) -> dict:
+    pose = Pose.from_matrix(matrix)
+    x, y, z = pose.position
+    qx, qy, qz, qw = pose.orientation
+    return {"position": {"x": x, "y": y, "z": z}, "orientation": {"x": qx, "y": qy, "z": qz, "w": qw}}
+
+
+def _mesh_triangles(shape, where: str, budget: int) -> tuple[bytes, bytes, int]:
+    """(vertices, triangles, count) of a DART mesh shape, scale applied; refuses more than ``budget``."""
+    import trimesh  # noqa: PLC0415 - only a world with meshes pays for importing it
+
+    path = shape.getMeshPath()
+    if not path or not Path(path).is_file():
+        raise SceneError(f"{where}: mesh {path!r} cannot be read for the renderer")
+    try:
+        mesh = trimesh.load(path, force="mesh", process=False)
+    except Exception as exc:   # trimesh raises many kinds for a file it cannot read
+        raise SceneError(f"{where}: mesh {path!r} cannot be read for the renderer: {exc}") from None
+    count = len(mesh.faces)
+    if count > min(MAX_MESH_TRIANGLES, budget):
+        raise SceneError(f"{where}: mesh {path!r} has {count} triangles, over the renderer's cap of "
+                         f"{min(MAX_MESH_TRIANGLES, budget)}")
+    vertices = np.asarray(mesh.vertices, dtype=np.float64) * np.asarray(shape.getScale(), dtype=np.float64)
+    return (vertices.astype("<f4").tobytes(), np.asarray(mesh.faces, dtype="<u4").tobytes(), count)
+
+
+def _shape_entry(node, link_index: int, where: str, budget: int) -> tuple[dict, int] | None:
+    shape = node.getShape()
+    visual = node.getVisualAspect() is not None
+    collision = node.getCollisionAspect() is not None
+    if not (visual or collision):
+        return None
+    entry = {"link": link_index, "pose": _pose(node.getRelativeTransform().matrix()), "visual": visual,
+             "collision": collision}
+    rgba = node.getVisualAspect().getRGBA() if visual else COLLISION_GREY
+    entry["color"] = dict(zip("rgba", (float(c) for c in rgba)))
+    triangles = 0
+    if isinstance(shape, dart.dynamics.BoxShape):
+        entry.update(kind=BOX, size=[float(v) for v in shape.getSize()])
+    elif isinstance(shape, dart.dynamics.CylinderShape):
+        entry.update(kind=CYLINDER, size=[float(shape.getRadius()), float(shape.getHeight())])
+    elif isinstance(shape, dart.dynamics.SphereShape):
+        entry.update(kind=SPHERE, size=[float(shape.getRadius())])
+    elif isinstance(shape, dart.dynamics.MeshShape):
+        vertices, faces, triangles = _mesh_triangles(shape, where, budget)
+        entry.update(kind=MESH, size=[], mesh_uri=shape.getMeshPath(), vertices=vertices, triangles=faces)
+    else:
+        return None   # shapes our files never build (capsules, cones, height maps): nothing to render
+    return entry, triangles
+
+
+def build_scene(world: PhysicsWorld, models: dict[str, Model], version: int,
+                camera_pose: np.ndarray | None = None) -> tuple[dict, SceneLinks]:
+    """The plain data of a zenroid_msgs/Scene (the ground first, then the models in order) and its links."""
+    skeletons = [(GROUND_NAME, world.ground, "", True, "")] if world.ground is not None else []
+    for name, model in models.items():
+        description = getattr(getattr(model, "spec", None), "xml", "") if model.namespace else ""
+        skeletons.append((name, model.skeleton, model.namespace, model.static, description))
+    scene = {"version": version, "models": [], "namespaces": [], "static_models": [], "descriptions": [],
+             "links": [], "link_models": [], "shapes": [], "has_camera_pose": camera_pose is not None,
+             "camera_pose": _pose(camera_pose if camera_pose is not None else np.eye(4))}
+    bodies = []
+    budget = MAX_SCENE_TRIANGLES
+    for model_index, (name, skeleton, namespace, static, description) in enumerate(skeletons):
+        scene["models"].append(name)
+        scene["namespaces"].append(namespace)
+        scene["static_models"].append(bool(static))
+        scene["descriptions"].append(description)
+        for i in range(skeleton.getNumBodyNodes()):
+            body = skeleton.getBodyNode(i)
+            link_index = len(bodies)
+            scene["links"].append(f"{name}::{body.getName()}")
+            scene["link_models"].append(model_index)
+            bodies.append(body)
+            for j in range(body.getNumShapeNodes()):
+                made = _shape_entry(body.getShapeNode(j), link_index, f"model {name!r} link {body.getName()!r}",
+                                    budget)
+                if made is not None:
+                    scene["shapes"].append(made[0])
+                    budget -= made[1]
+    return scene, SceneLinks(list(scene["links"]), bodies)
