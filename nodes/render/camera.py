@@ -47,11 +47,23 @@ ENCODINGS = ("rgb8", "bgr8", "mono8")
 class CameraImage:
     """One rendered frame: ``color`` (H, W, 3) uint8 in the spec's channel order (rgb8, bgr8) or (H, W)
     for mono8; with a depth camera, ``depth`` (H, W) float32 metres along the optical axis (REP 117 -inf /
-    +inf) and ``points`` (H, W, 3) float32 in the optical frame (NaN where the depth is not finite)."""
+    +inf) and ``points`` (H, W, 3) float32 in the optical frame (NaN where the depth is not finite);
+    ``encoding`` is the spec's, for ``rgb``."""
 
     color: np.ndarray
     depth: np.ndarray | None = None
     points: np.ndarray | None = None
+    encoding: str = "rgb8"
+
+    @property
+    def rgb(self) -> np.ndarray:
+        """``color`` as (H, W, 3) uint8 in r g b order, what a point cloud's rgb field packs: the image
+        itself for rgb8, its channels reversed (a view) for bgr8, the grey value in all three for mono8."""
+        if self.encoding == "bgr8":
+            return self.color[..., ::-1]
+        if self.encoding == "mono8":
+            return np.repeat(self.color[..., None], 3, axis=2)
+        return self.color
 
 
 def intrinsics(spec: CameraSpec) -> tuple[float, float, float]:
@@ -118,7 +130,7 @@ def render_camera(scene: RayScene, spec: CameraSpec, sensor_pose: np.ndarray,
             image = image[..., ::-1]
     color = np.ascontiguousarray(np.clip(image * 255.0 + 0.5, 0.0, 255.0).astype(np.uint8))
     if not spec.depth:
-        return CameraImage(color)
+        return CameraImage(color, encoding=spec.encoding)
     points = rays.optical * np.where(seen, hits.distance, np.float32(np.nan))[:, None]
     return CameraImage(color, depth.reshape(h, w).astype(np.float32, copy=False),
-                       points.reshape(h, w, 3).astype(np.float32, copy=False))
+                       points.reshape(h, w, 3).astype(np.float32, copy=False), spec.encoding)
