@@ -1,9 +1,18 @@
 """The shapes rays are cast against, as triangles: what a ``SceneShape`` describes, turned into a mesh once.
 
 Embree only intersects triangles, so every primitive is triangulated here, in its own shape frame, with
-enough facets that the error is below what the sensors resolve: boxes are exact, cylinders have 32 sides (a
-face seen head-on is at most r (1 - cos(pi/32)) = 0.5 % of the radius off), spheres are icospheres of
-subdivision 3 (1280 faces, every face within 0.5 % of the radius). Meshes arrive as bytes on the wire
+enough facets that the error is below what the sensors resolve, and no more: every dynamic triangle is
+uploaded again each frame (``raycast``), so facets cost time. Boxes are exact. Curved surfaces are
+"balanced": the polygon's vertices sit slightly outside the true surface and its flat faces slightly inside,
+so the surface is within +-e of the true radius instead of -2e..0:
+
+- cylinders: the fewest sides (a multiple of 4, at least 12) that keep the side within
+  ``CYLINDER_TOLERANCE`` (1 mm) of the radius: 12 sides up to r = 5.7 cm, 32 at r = 0.4 m, 256 at most;
+- spheres: icospheres, the lowest subdivision (at least 2: 320 faces, +-0.9 % of the radius) that keeps the
+  surface within ``SPHERE_TOLERANCE`` (2 mm): subdivision 2 up to r = 22 cm, 3 (1280 faces, +-0.23 %) up to
+  88 cm, then 4 and 5. The error is always under 1 % of the radius.
+
+Meshes arrive as bytes on the wire
 (``SceneShape.vertices`` / ``.triangles``) and are checked before anything trusts them. Triangle counts are
 capped (per mesh and per scene) before any large allocation, so a hostile scene costs an error message, not
 the machine's memory.
@@ -20,8 +29,10 @@ import numpy as np
 KINDS = ("box", "cylinder", "sphere", "mesh")
 MAX_MESH_TRIANGLES = 200_000
 MAX_SCENE_TRIANGLES = 2_000_000
-CYLINDER_SECTIONS = 32
-SPHERE_SUBDIVISIONS = 3        # icosphere: 20 * 4**3 = 1280 faces, face centres at >= 99.55 % of the radius
+CYLINDER_TOLERANCE = 0.001     # m, of a cylinder's side from its radius
+CYLINDER_SECTIONS = (12, 256)   # fewest and most sides
+SPHERE_TOLERANCE = 0.002       # m, of a sphere's surface from its radius
+SPHERE_SUBDIVISIONS = (2, 5)   # icosphere subdivisions: 320 to 20480 faces
 BOX_TRIANGLES = 12
 MAX_SIZE = 1e4                 # m, of any primitive dimension (as nodes.sim.sdf bounds them)
 
@@ -59,14 +70,49 @@ class Shape:
         return f"{self.kind} shape '{self.name}'" if self.name else f"{self.kind} shape"
 
 
+def cylinder_sections(radius: float) -> int:
+    """Sides of a balanced polygon within ``CYLINDER_TOLERANCE`` of a circle of ``radius``: its error is
+    r (1 - cos(pi / n)) / (1 + cos(pi / n))."""
+    low, high = CYLINDER_SECTIONS
+    for sections in range(low, high, 4):
+        half = math.cos(math.pi / sections)
+        if radius * (1.0 - half) / (1.0 + half) <= CYLINDER_TOLERANCE:
+            return sections
+    return high
+
+
+@functools.lru_cache(maxsize=8)
+def _unit_sphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """The unit icosphere's vertices and faces, and the distance of its nearest face plane from the centre."""
+    import trimesh
+
+    mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
+    vertices, faces = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.uint32)
+    corners = vertices[faces]
+    normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    nearest = float(np.abs(np.einsum("ij,ij->i", normals, corners[:, 0])).min())
+    return vertices, faces, nearest
+
+
+def sphere_subdivisions(radius: float) -> int:
+    """The icosphere subdivision whose balanced surface is within ``SPHERE_TOLERANCE`` of ``radius``."""
+    low, high = SPHERE_SUBDIVISIONS
+    for subdivisions in range(low, high):
+        nearest = _unit_sphere(subdivisions)[2]
+        if radius * (1.0 - nearest) / (1.0 + nearest) <= SPHERE_TOLERANCE:
+            return subdivisions
+    return high
+
+
 def triangle_count(shape: Shape) -> int:
     """Triangles ``triangulate`` makes for ``shape``, known without building anything (for the caps)."""
     if shape.kind == "box":
         return BOX_TRIANGLES
     if shape.kind == "cylinder":
-        return 4 * CYLINDER_SECTIONS      # sides (2 per section) and two fans of caps
+        return 4 * cylinder_sections(_sizes(shape, 2, "radius and length")[0])   # 2 a side, 2 cap fans
     if shape.kind == "sphere":
-        return 20 * 4 ** SPHERE_SUBDIVISIONS
+        return 20 * 4 ** sphere_subdivisions(_sizes(shape, 1, "a radius")[0])
     if shape.kind == "mesh":
         return 0 if shape.triangles is None else int(len(shape.triangles))
     raise RenderError(f"{shape.label}: kind '{shape.kind}' is not one of {', '.join(KINDS)}")
@@ -82,14 +128,6 @@ def _sizes(shape: Shape, count: int, what: str) -> tuple[float, ...]:
     return size
 
 
-@functools.lru_cache(maxsize=4)
-def _unit_sphere(subdivisions: int) -> tuple[np.ndarray, np.ndarray]:
-    import trimesh
-
-    mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=1.0)
-    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.uint32)
-
-
 def triangulate(shape: Shape) -> tuple[np.ndarray, np.ndarray]:
     """``(vertices (N, 3) float32, triangles (M, 3) uint32)`` of ``shape`` in its shape frame; RenderError
     naming the shape for a bad size, an unknown kind or a mesh over ``MAX_MESH_TRIANGLES``."""
@@ -103,12 +141,14 @@ def triangulate(shape: Shape) -> tuple[np.ndarray, np.ndarray]:
         vertices, triangles = mesh.vertices, mesh.faces
     elif shape.kind == "cylinder":
         radius, length = _sizes(shape, 2, "radius and length")
-        mesh = trimesh.creation.cylinder(radius=radius, height=length, sections=CYLINDER_SECTIONS)
+        sections = cylinder_sections(radius)
+        half = math.cos(math.pi / sections)
+        mesh = trimesh.creation.cylinder(radius=radius * 2.0 / (1.0 + half), height=length, sections=sections)
         vertices, triangles = mesh.vertices, mesh.faces
     elif shape.kind == "sphere":
         (radius,) = _sizes(shape, 1, "a radius")
-        unit, triangles = _unit_sphere(SPHERE_SUBDIVISIONS)
-        vertices = unit * radius
+        unit, triangles, nearest = _unit_sphere(sphere_subdivisions(radius))
+        vertices = unit * (radius * 2.0 / (1.0 + nearest))
     else:
         if shape.vertices is None or shape.triangles is None:
             raise RenderError(f"{shape.label}: a mesh needs vertices and triangles")

@@ -15,6 +15,7 @@ from nodes.render.geometry import (
     RenderError,
     Shape,
     mesh_from_bytes,
+    triangle_count,
     triangulate,
 )
 from nodes.render.lidar import render_ray
@@ -227,15 +228,24 @@ def test_nearest_of_static_and_dynamic_and_normals_face_the_ray() -> None:
     assert scene.cast(np.zeros((1, 3)), directions[:1]).shape.tolist() == [0]
 
 
-def test_every_primitive_is_within_a_percent_of_its_size() -> None:
-    for shape, radius in [(Shape("sphere", (0.5,)), 0.5), (Shape("cylinder", (0.5, 2.0)), 0.5)]:
+def test_every_primitive_is_within_its_tolerance() -> None:
+    """Balanced facets: vertices just outside the true surface, face planes just inside, both within the
+    tolerance (cylinders 1 mm, spheres 2 mm and 1 % of the radius)."""
+    for kind, radius in [("sphere", 0.03), ("sphere", 0.1), ("sphere", 0.6), ("cylinder", 0.03),
+                         ("cylinder", 0.1), ("cylinder", 0.8)]:
+        shape = Shape(kind, (radius,) if kind == "sphere" else (radius, 1.0))
         vertices, triangles = triangulate(shape)
-        centres = vertices[triangles].mean(axis=1)[:, :2] if shape.kind == "cylinder" else \
-            vertices[triangles].mean(axis=1)
-        distances = np.linalg.norm(centres, axis=1)
-        assert distances.max() <= radius * 1.0001
-        if shape.kind == "sphere":
-            assert distances.min() >= radius * 0.99
+        assert len(triangles) == triangle_count(shape)
+        corners = vertices[triangles].astype(np.float64)
+        normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+        normals /= np.linalg.norm(normals, axis=1)[:, None]
+        if kind == "cylinder":   # the sides only, distances from the axis
+            side = np.abs(normals[:, 2]) < 1e-6
+            corners, normals = corners[side][..., :2], normals[side][:, :2]
+        planes = np.abs(np.einsum("ij,ij->i", normals, corners[:, 0]))
+        outermost = np.linalg.norm(corners, axis=-1).max()
+        tolerance = 0.001 if kind == "cylinder" else min(0.002, 0.01 * radius) if radius > 0.2 else 0.01 * radius
+        assert radius - tolerance <= planes.min() < radius < outermost <= radius + tolerance, (kind, radius)
     vertices, triangles = triangulate(Shape("box", (1, 2, 3)))
     assert len(triangles) == 12 and np.allclose(vertices.max(axis=0), [0.5, 1.0, 1.5])
 

@@ -125,8 +125,6 @@ def test_laser_scan_round_trips_with_infinities(scene: RayScene) -> None:
         assert decoded["scan_time"] == pytest.approx(0.05)
         assert np.array_equal(np.array(decoded["ranges"], np.float32), scan.ranges[0])
         assert np.array_equal(np.array(decoded["intensities"], np.float32), scan.intensities[0])
-    with pytest.raises(msgs.DecodeError, match="not a finite number"):   # what a default decoder says
-        msgs.decode(msgs.get_type("sensor_msgs/msg/LaserScan"), msgs.packer("sensor_msgs/msg/LaserScan")(**payload))
 
 
 def test_laser_scan_of_a_lidar_takes_the_middle_ring(scene: RayScene) -> None:
