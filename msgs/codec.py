@@ -6,6 +6,7 @@ Errors name the message type, the field path and the reason, e.g.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Callable
@@ -61,9 +62,21 @@ def encode(msg: Any) -> bytes:
 _fast_default_decoders: dict[str, Callable[[Any], Any]] = {}  # the common case without hashing Limits
 
 
+# Types whose float fields carry infinities as values: REP 117's LaserScan ranges (+inf: no return, -inf: too
+# near; NaN: an erroneous reading). Everywhere else a non-finite number is refused.
+NONFINITE_VALUES = frozenset({"sensor_msgs/msg/LaserScan"})
+
+
+@functools.lru_cache(maxsize=16)
+def _allowing_nonfinite(limits: Limits) -> Limits:
+    return dataclasses.replace(limits, allow_nonfinite=True)
+
+
 def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFAULT_LIMITS) -> Any:
     """Decode and validate ``data`` as a ``cls`` message; raises ``DecodeError``."""
     type_name = cls._type
+    if type_name in NONFINITE_VALUES and not limits.allow_nonfinite:
+        limits = _allowing_nonfinite(limits)
     size = len(data)
     if size > limits.max_message_bytes:
         raise DecodeError(type_name, "", f"message is {size} bytes, over the {limits.max_message_bytes}-byte limit")
@@ -288,8 +301,11 @@ def _array_decoder(f: FieldSpec, limits: Limits) -> Callable[[Any], Any]:
 
     if f.is_bytes:
         def dec_bytes(v: Any) -> bytes:
-            if isinstance(v, (bytes, bytearray)):
-                check_len(len(v))
+            if isinstance(v, (bytes, bytearray)):   # bin: bounded by the message size, not the array limit
+                if fixed is not None and len(v) != fixed:
+                    raise _FieldError(f"expected exactly {fixed} bytes, got {len(v)}")
+                if bound is not None and len(v) > bound:
+                    raise _FieldError(f"at most {bound} bytes allowed, got {len(v)}")
                 return bytes(v)
             if isinstance(v, list):
                 check_len(len(v))

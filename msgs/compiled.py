@@ -186,10 +186,11 @@ def _check_lines(f: FieldSpec, var: str, env: dict[str, Any], index: str, allow_
             size.append(f"len({var}) != {f.array_size}")
         if f.upper_bound is not None:
             size.append(f"len({var}) > {f.upper_bound}")
-        size.append(f"len({var}) > _MAXLEN")
         if f.is_bytes:
-            # bin, or a list of ints the precise decoder converts
-            return [f"if type({var}) is not bytes or {' or '.join(size)}:", *fail]
+            # bin (one object, bounded by the message size, as an image is), or a list of ints the precise
+            # decoder converts
+            return [f"if type({var}) is not bytes{''.join(' or ' + c for c in size)}:", *fail]
+        size.append(f"len({var}) > _MAXLEN")
         lines = [f"if type({var}) is not list or {' or '.join(size)}:", *fail]
         if f.base in FLOAT_TYPES:
             finite = "" if allow_nonfinite else f" or not _isfinite(sum({var}))"

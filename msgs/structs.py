@@ -90,7 +90,9 @@ def _field_type(f: FieldSpec, max_array_length: int, allow_nonfinite: bool, oute
         lengths = {"max_length": max_array_length if f.upper_bound is None else min(f.upper_bound, max_array_length)}
         if f.array_size is not None:
             lengths = {"min_length": f.array_size, "max_length": min(f.array_size, max_array_length)}
-        if f.is_bytes:
+        if f.is_bytes:   # bin: one object, bounded by the message size (an image), not by the array limit
+            if f.array_size is None and f.upper_bound is None:
+                return bytes
             return Annotated[bytes, msgspec.Meta(**lengths)]
         return Annotated[list[_scalar_type(f, max_array_length, allow_nonfinite, outer)], msgspec.Meta(**lengths)]
     return _scalar_type(f, max_array_length, allow_nonfinite, outer)

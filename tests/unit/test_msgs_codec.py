@@ -191,3 +191,24 @@ def test_bad_definitions_are_clear() -> None:
         parse_message("float64 x\nint32 x\n", "p/msg/T")
     with pytest.raises(DefinitionError, match="not an integer"):
         parse_message("int32 X = 1.5\n", "p/msg/T")
+
+
+def test_a_laser_scan_carries_rep_117_infinities_and_other_types_still_refuse_them() -> None:
+    LaserScan, Imu = msgs.get_type("sensor_msgs/msg/LaserScan"), msgs.get_type("sensor_msgs/msg/Imu")
+    scan = decode(LaserScan, encode(LaserScan(ranges=[1.5, math.inf, -math.inf], range_max=10.0)))
+    assert scan.ranges == [1.5, math.inf, -math.inf]
+    with pytest.raises(DecodeError, match="angular_velocity.x: not a finite number"):
+        decode(Imu, packed({"angular_velocity": {"x": math.inf}}))
+
+
+def test_an_image_larger_than_the_array_limit_decodes_in_every_path() -> None:
+    """uint8[] as bin is one object, bounded by the message size: a 640x480 depth image (1.2 MB) is more bytes
+    than max_array_length entries; as a list of ints the array limit still holds."""
+    Image = msgs.get_type("sensor_msgs/msg/Image")
+    data = bytes(range(256)) * (640 * 480 * 4 // 256)
+    fields = {"height": 480, "width": 640, "encoding": "32FC1", "step": 2560, "data": data}
+    assert decode(Image, encode(Image(**fields))).data == data                    # the msgspec path
+    small = Limits(max_array_length=10)
+    assert decode(Image, packed(fields), small).data == data                       # the compiled / precise paths
+    with pytest.raises(DecodeError, match=r"data: too long \(11 exceeds max_array_len\(10\)\)"):
+        decode(Image, packed({"data": list(range(11))}), small)

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 import msgs
 from msgs import structs
+from msgs.codec import NONFINITE_VALUES
 from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
 from msgs.registry import get_class, get_spec
 
@@ -112,8 +113,9 @@ JSON_LIKE = st.recursive(
     max_leaves=12)
 
 
-def _wrong_values(f: FieldSpec) -> list[Any]:
-    """Values no decoder may accept for field ``f`` (the whole field replaced)."""
+def _wrong_values(f: FieldSpec, nonfinite_ok: bool = False) -> list[Any]:
+    """Values no decoder may accept for field ``f`` (the whole field replaced); ``nonfinite_ok``: the type
+    carries infinities and NaN as values (msgs.codec.NONFINITE_VALUES: REP 117's LaserScan)."""
     nested = {"zz_unknown_field": 1}
     if f.is_bytes:
         wrong: list[Any] = [1.5, "text", {}, [300], [-1], ["x"]]
@@ -126,7 +128,8 @@ def _wrong_values(f: FieldSpec) -> list[Any]:
         elif f.is_primitive and f.base == "bool":
             element = [["x"], [{}]]
         elif f.is_primitive:
-            element = [["x"], [{}], [None]] + ([[math.nan], [math.inf]] if f.base in FLOAT_TYPES else [])
+            element = [["x"], [{}], [None]] + (
+                [[math.nan], [math.inf]] if f.base in FLOAT_TYPES and not nonfinite_ok else [])
         else:
             element = [[1], ["x"], [nested]]
         wrong = [1.5, "text", {}, *element]
@@ -142,7 +145,7 @@ def _wrong_values(f: FieldSpec) -> list[Any]:
         # out of range, where msgpack can still carry the number (int64 / uint64 are the whole of it)
         return ["x", 1.5, [], {}, math.nan, *(v for v in (lo - 1, hi + 1) if -(2**63) <= v < 2**64)]
     if f.base in FLOAT_TYPES:
-        return ["x", [], {}, math.nan, math.inf, -math.inf]
+        return ["x", [], {}] + ([] if nonfinite_ok else [math.nan, math.inf, -math.inf])
     wrong = [1, 1.5, [], {}]
     if f.string_bound is not None:
         wrong.append("x" * (f.string_bound + 1))
@@ -186,7 +189,7 @@ def test_each_type_names_the_field_with_a_wrong_value(type_name: str, data: st.D
     cls = get_class(type_name)
     plain = msgs.to_dict(data.draw(message_strategy(type_name)))
     f = data.draw(st.sampled_from(_fields_of(type_name)))
-    plain[f.name] = data.draw(st.sampled_from(_wrong_values(f)))
+    plain[f.name] = data.draw(st.sampled_from(_wrong_values(f, type_name in NONFINITE_VALUES)))
     result = _decode_or_decode_error(cls, msgpack.packb(plain, use_bin_type=True))
     assert isinstance(result, msgs.DecodeError), f"{type_name}.{f.name} = {plain[f.name]!r} was accepted"
     assert re.match(rf"{re.escape(f.name)}($|[.\[])", result.path), (result.path, str(result))
@@ -218,7 +221,7 @@ def test_the_struct_fast_path_accepts_only_what_the_precise_path_accepts_and_bui
         if f.is_array and f.is_primitive and f.base in FLOAT_TYPES and plain[f.name]:
             plain[f.name] = [int(x) if math.isfinite(x) and abs(x) < 2**53 else x for x in plain[f.name]]
         else:
-            plain[f.name] = data.draw(st.sampled_from(_wrong_values(f)))
+            plain[f.name] = data.draw(st.sampled_from(_wrong_values(f, type_name in NONFINITE_VALUES)))
     payload = msgpack.packb(plain, use_bin_type=True)
     fast = structs.decoder(type_name, 1000, False)
     assert fast is not None
