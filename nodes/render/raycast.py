@@ -12,6 +12,10 @@ Layers: ``visual`` shapes are what cameras and gpu_ray / gpu_lidar see, ``collis
 lidar see (Gazebo's split); a shape may be in both, and each layer is built only when it is first cast
 against after a change (a frame with only a camera due never builds the collision layer).
 
+Back faces are culled (by default): a ray that meets a surface from inside its shape is cast on from just
+past it, so a sensor inside its own housing sees out, as it does in Gazebo (Ogre culls back faces). Only
+rays that met a back face are cast again: none, in the usual scene.
+
 Threads: ``EmbreeScene.run`` loops over rays in C without the GIL, so a big cast can be split into
 contiguous chunks run on a small pool (``threads``). Every chunk writes only its own slice of the
 preallocated results, and one ray's hit does not depend on the others, so the output is bit-identical
@@ -32,6 +36,8 @@ from nodes.render.geometry import RenderError, Shape, check_scene_triangles, tri
 LAYERS = ("visual", "collision")
 NO_LIMIT = np.float32(1e37)          # embreex's own "no far limit"
 MIN_CHUNK_RAYS = 4096                # below this a cast is not split (the pool's overhead is ~50 us a task)
+MAX_BACK_FACES = 4                   # back faces a ray passes through (nested housings) before one counts
+BACK_FACE_STEP = np.float32(1e-4)    # m past a back face before casting on (float32 at 100 m: 8 um)
 
 
 @dataclass
@@ -183,34 +189,70 @@ class RayScene:
         return sum(len(g.prim_shape) for g in self._groups[layer])
 
     # ------------------------------------------------------------------ casting
+    def prepare(self, layer: str = "visual") -> None:
+        """Build the ``layer``'s Embree scenes for the newest poses now (``cast`` does it when needed)."""
+        self._refresh(layer)
+
     def cast(self, origins: np.ndarray, directions: np.ndarray, *, layer: str = "visual",
-             max_distance: float | np.ndarray | None = None) -> Hits:
+             max_distance: float | np.ndarray | None = None, cull_back_faces: bool = True) -> Hits:
         """The nearest hit along each ray from ``origins`` (N, 3) in unit ``directions`` (N, 3), world frame,
         among the ``layer``'s shapes. ``max_distance`` (a number, or one per ray) stops the search there:
-        farther surfaces are not hit (cheaper than finding and discarding them)."""
+        farther surfaces are not hit (cheaper than finding and discarding them).
+
+        ``cull_back_faces``: a ray that meets a surface from inside its shape goes on through it, as a GPU
+        renderer culls back faces. A sensor inside its own link's housing (a camera at the centre of its
+        box visual, a lidar inside its collision cylinder: common in URDFs, and fine in Gazebo) then sees
+        out instead of seeing the housing from inside. Primitives are wound outwards; a mesh wound inwards
+        is seen from inside only, as in Gazebo."""
         groups = self._refresh(layer)
         origins = np.ascontiguousarray(origins, dtype=np.float32).reshape(-1, 3)
         directions = np.ascontiguousarray(directions, dtype=np.float32).reshape(-1, 3)
         count = len(origins)
         if len(directions) != count:
             raise RenderError(f"{count} origins but {len(directions)} directions")
-        limit = np.empty(count, dtype=np.float32)   # each group's run() lowers it to its hits, in place
+        limit = np.empty(count, dtype=np.float32)
         limit[:] = NO_LIMIT if max_distance is None else np.minimum(max_distance, NO_LIMIT)
+        live = [g for g in groups if not g.empty]
+        distance, shape, normal = self._nearest(live, origins, directions, limit.copy())
+        if cull_back_faces:
+            travelled = np.zeros(count, dtype=np.float32)   # to the last back face passed through
+            for _ in range(MAX_BACK_FACES):
+                back = np.nonzero((shape >= 0) & (np.einsum("ij,ij->i", normal, directions) > 0))[0]
+                if not len(back):
+                    break
+                travelled[back] += distance[back] + BACK_FACE_STEP
+                rest = limit[back] - travelled[back]
+                d = directions[back]
+                sub_distance, sub_shape, sub_normal = self._nearest(
+                    live, origins[back] + d * travelled[back, None], d, np.maximum(rest, 0.0))
+                sub_shape[rest <= 0] = -1
+                distance[back], shape[back], normal[back] = sub_distance, sub_shape, sub_normal
+            distance = np.where(shape >= 0, travelled + distance, distance)
+        hit = shape >= 0
+        distance = np.where(hit, distance, np.float32(np.inf)).astype(np.float32, copy=False)
+        # unit, and facing the ray (Embree's geometric normal follows the triangle's winding: outwards)
+        length = np.sqrt(np.einsum("ij,ij->i", normal, normal))
+        facing = np.where(np.einsum("ij,ij->i", normal, directions) > 0, -1.0, 1.0).astype(np.float32)
+        normal[hit] *= (facing[hit] / length[hit])[:, None]
+        return Hits(distance, shape, normal)
+
+    def _nearest(self, groups: list[_Group], origins: np.ndarray, directions: np.ndarray,
+                 limit: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(distance, shape, raw Embree normal) of the nearest hit of each ray within ``limit`` (overwritten
+        with the hit distances), in chunks on the pool when it is worth it."""
+        count = len(origins)
         shape = np.full(count, -1, dtype=np.int32)
         normal = np.zeros((count, 3), dtype=np.float32)
-        live = [g for g in groups if not g.empty]
         chunks = self._chunks(count)
-        if len(chunks) == 1 or not live:
-            self._cast_chunk(live, origins, directions, limit, shape, normal, 0, count)
+        if len(chunks) == 1 or not groups:
+            self._cast_chunk(groups, origins, directions, limit, shape, normal, 0, count)
         else:
             pool = self._executor()
-            futures = [pool.submit(self._cast_chunk, live, origins, directions, limit, shape, normal, a, b)
+            futures = [pool.submit(self._cast_chunk, groups, origins, directions, limit, shape, normal, a, b)
                        for a, b in chunks]
             for future in futures:
                 future.result()
-        hit = shape >= 0
-        distance = np.where(hit, limit, np.float32(np.inf)).astype(np.float32, copy=False)
-        return Hits(distance, shape, normal)
+        return limit, shape, normal
 
     def _chunks(self, count: int) -> list[tuple[int, int]]:
         if self.threads == 1 or count < 2 * MIN_CHUNK_RAYS:
@@ -238,12 +280,6 @@ class RayScene:
             if len(hit):
                 shape[start + hit] = group.prim_shape[prim[hit]]
                 normal[start + hit] = result["Ng"][hit]
-        n = normal[start:end]
-        length = np.sqrt(np.einsum("ij,ij->i", n, n))
-        hit = length > 0
-        # unit, and facing the ray (Embree's geometric normal follows the triangle's winding)
-        sign = np.where(np.einsum("ij,ij->i", n, d) > 0, -1.0, 1.0).astype(np.float32)
-        n[hit] *= (sign[hit] / length[hit])[:, None]
 
     def close(self) -> None:
         """End the thread pool (if one was started)."""

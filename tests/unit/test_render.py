@@ -228,6 +228,27 @@ def test_nearest_of_static_and_dynamic_and_normals_face_the_ray() -> None:
     assert scene.cast(np.zeros((1, 3)), directions[:1]).shape.tolist() == [0]
 
 
+def test_a_sensor_inside_its_housing_sees_out() -> None:
+    """Back faces are culled: a camera at the centre of its box visual, a lidar inside its collision
+    cylinder (both common in URDFs) see the wall, not their housing from inside."""
+    wall = Shape("box", (THICKNESS, 4.0, 4.0), pose(2.0), WALL_RGBA, name="wall")
+    box = Shape("box", (0.05, 0.05, 0.05), np.eye(4), (0.1, 0.1, 0.1, 1.0), name="camera_link::visual")
+    can = Shape("cylinder", (0.05, 0.07), np.eye(4), (0.1, 0.1, 0.1, 1.0), name="lidar_link::collision")
+    shell = Shape("sphere", (0.5,), np.eye(4), (0.5, 0.5, 0.5, 1.0), name="dome")   # two back faces deep
+    scene = RayScene(["room", "sensor"], [(0, wall), (1, box), (1, can), (0, shell)], {0})
+    scene.update(np.stack([np.eye(4), np.eye(4)]))
+    spec = CameraSpec(width=32, height=24, depth=True, near=0.01)
+    picture = render_camera(scene, spec, np.eye(4))
+    v, u = centre(spec)
+    assert picture.depth[v, u] == pytest.approx(1.95, abs=0.01)
+    assert picture.color[v, u, 0] > picture.color[v, u, 2]    # the wall's orange, not the housing's grey
+    lidar = RaySpec(horizontal=RayAxis(20, 1.0, -0.2, 0.2), vertical=RayAxis(3, 1.0, -0.1, 0.1), range_min=0.01)
+    ranges = render_ray(scene, lidar, np.eye(4)).ranges
+    assert np.all(ranges > 1.9) and np.all(np.isfinite(ranges))
+    hits = scene.cast(np.zeros((1, 3)), np.array([[1.0, 0, 0]]), cull_back_faces=False)
+    assert hits.distance[0] == pytest.approx(0.025, abs=1e-4) and hits.shape[0] == 1   # the box, from inside
+
+
 def test_every_primitive_is_within_its_tolerance() -> None:
     """Balanced facets: vertices just outside the true surface, face planes just inside, both within the
     tolerance (cylinders 1 mm, spheres 2 mm and 1 % of the radius)."""
@@ -334,7 +355,11 @@ def test_mesh_bytes_are_checked() -> None:
     rotate = np.eye(4)
     rotate[:3, :3] = [[0, 0, 1], [1, 0, 0], [0, 1, 0]]      # local x -> world y, y -> z, z -> x
     rotate[:3, 3] = (1.0, -0.2, -0.2)
-    scene = RayScene(["m"], [(0, Shape("mesh", pose=rotate, vertices=v, triangles=f, name="tri"))])
-    scene.update(np.eye(4)[None])
-    hits = scene.cast(np.zeros((1, 3)), np.array([[1.0, 0, 0]]))
-    assert hits.distance[0] == pytest.approx(1.0, abs=1e-5) and hits.shape[0] == 0
+    facing = Shape("mesh", pose=rotate, vertices=v, triangles=f[:, ::-1].copy(), name="tri")   # normal -x
+    away = Shape("mesh", pose=rotate, vertices=v, triangles=f, name="tri")                       # normal +x
+    for shape, seen in ((facing, True), (away, False)):   # a one-sided mesh is seen from its front only
+        scene = RayScene(["m"], [(0, shape)])
+        scene.update(np.eye(4)[None])
+        hits = scene.cast(np.zeros((1, 3)), np.array([[1.0, 0, 0]]))
+        assert (hits.distance[0] == pytest.approx(1.0, abs=1e-5) and hits.shape[0] == 0) if seen else \
+            (hits.distance[0] == np.inf and hits.shape[0] == -1)
