@@ -145,8 +145,8 @@ class SensorDecl:
     """A sensor as a ROS user declares it: ``<ros2_control><sensor>`` plus ``<gazebo reference><sensor>``."""
 
     name: str
-    kind: str          # imu | force_torque
-    reference: str     # a link (imu) or the measured joint (force_torque)
+    kind: str          # imu | force_torque | contact
+    reference: str     # a link (imu, contact) or the measured joint (force_torque)
     frame_id: str      # the TF frame its readings are in
     update_rate: float = 1000.0
 
@@ -170,6 +170,12 @@ class SensorDecl:
                                  f"</noise></{axis}>")
                 lines.append(f"        </{quantity}>")
             lines.append("      </imu>")
+        elif self.kind == "contact":   # no ros2_control interfaces: gazebo_ros' bumper plugin publishes it
+            side = self.name.removesuffix("_contact")
+            lines += [f"      <contact><collision>{self.reference}_collision</collision></contact>",
+                      f'      <plugin name="{self.name}_bumper" filename="libgazebo_ros_bumper.so">',
+                      f"        <ros><remapping>bumper_states:={side}/contacts</remapping></ros>",
+                      "        <frame_name>world</frame_name>", "      </plugin>"]
         else:
             lines += ["      <force_torque>", "        <frame>child</frame>",
                       "        <measure_direction>child_to_parent</measure_direction>", "      </force_torque>"]
@@ -313,7 +319,8 @@ class Robot:
             for name in self.ros2_control_joints:
                 out.append(control_joint_xml(name))
             for sensor in self.sensors:
-                out.append(sensor.ros2_control_xml())
+                if sensor.kind != "contact":
+                    out.append(sensor.ros2_control_xml())
             out.append("  </ros2_control>\n")
             for sensor in self.sensors + self.rendered_sensors:
                 out.append(sensor.gazebo_xml())
@@ -429,6 +436,8 @@ def humanoid() -> Robot:
     # a pelvis IMU and a force/torque sensor in each ankle, measuring the load between the leg and the foot
     r.sensors = [SensorDecl("imu_sensor", "imu", "pelvis", "pelvis")]
     r.sensors += [SensorDecl(f"{side}_foot_ft", "force_torque", f"{side}_ankle_roll", f"{side}_foot")
+                  for side in ("left", "right")]
+    r.sensors += [SensorDecl(f"{side}_foot_contact", "contact", f"{side}_foot", "world", update_rate=100)
                   for side in ("left", "right")]
     frames, r.rendered_sensors = head_sensors()
     for frame, joint in frames:
@@ -687,6 +696,8 @@ def atlas() -> Robot:
     r.ros2_control_joints = [j.name for j in r.joints]
     r.sensors = [SensorDecl("imu_sensor", "imu", "pelvis", "pelvis")]
     r.sensors += [SensorDecl(f"{side}_foot_ft", "force_torque", f"{p}_leg_lax", f"{p}_foot")
+                  for side, p in (("left", "l"), ("right", "r"))]
+    r.sensors += [SensorDecl(f"{side}_foot_contact", "contact", f"{p}_foot", "world", update_rate=100)
                   for side, p in (("left", "l"), ("right", "r"))]
     return r
 

@@ -11,7 +11,6 @@ from collections import deque
 from typing import Any
 
 import msgs
-from msgs.sensor_msgs import Imu
 from msgs.zenroid_msgs import HardwareJoint, HardwareSensor
 from nodes.core import Node
 from nodes.core.endpoints import SingleSender, source_label
@@ -23,6 +22,7 @@ from nodes.sim.interfaces import (
     HardwareState,
     HumanoidState,
 )
+from nodes.sim.plugins import SensorPlugins
 from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import CommandInbox
 
@@ -34,9 +34,6 @@ _pack_humanoid_state = msgs.packer("humanoid_msgs/msg/HumanoidState")
 _pack_heartbeat = msgs.packer("zenroid_msgs/msg/HardwareHeartbeat")
 _header = msgs.builder("std_msgs/msg/Header")
 _point = msgs.builder("geometry_msgs/msg/Point")
-_pack_imu = msgs.packer("sensor_msgs/msg/Imu")
-_quaternion = msgs.builder("geometry_msgs/msg/Quaternion")
-_vector3 = msgs.builder("geometry_msgs/msg/Vector3")
 
 Command = HardwareCommand   # a decoded zenroid_msgs/HardwareCommand
 # Commands kept in Zenoh's buffer between two control periods (the oldest go first): lockstep needs the
@@ -85,12 +82,10 @@ class RobotLink:
                                                     raw=True, with_source=True, pulled=True,
                                                     backlog=COMMAND_BACKLOG)
         self.info_srv = node.create_service(GetHardwareInfo, f"{ns}/hardware/info", self._on_info)
-        # gazebo_ros sensor plugins (libgazebo_ros_imu_sensor.so): published from here, at the sensor's rate
-        self._plugins = [(sensor, node.create_publisher(Imu, "/" + sensor.spec.plugin.key(), reliable=False),
-                          sensor.spec.plugin.frame_name or sensor.spec.link, _imu_covariances(sensor.spec))
-                         for sensor in self.sensors.sensors if sensor.spec.plugin is not None]
+        # gazebo_ros sensor plugins (IMU, force/torque, bumper): published from here, at the sensor's rate
+        self.plugins = SensorPlugins(node, self.sensors, self.namespace)
         self._endpoints = [self.state_pub, self.humanoid_pub, self.heartbeat_pub, self.command_sub, self.info_srv,
-                           *(publisher for _, publisher, _, _ in self._plugins)]
+                           *self.plugins.publishers]
 
     def destroy(self) -> None:
         for endpoint in self._endpoints:
@@ -150,15 +145,7 @@ class RobotLink:
 
     def publish_plugins(self, sim_time: float) -> None:
         """What the gazebo_ros sensor plugins publish: each sensor read at ``sim_time``, as its plugin would."""
-        for sensor, publisher, frame, (angular_cov, linear_cov) in self._plugins:
-            if sensor.stamp != sim_time:
-                continue   # not read this period (its update_rate is lower than the control rate)
-            qx, qy, qz, qw, wx, wy, wz, ax, ay, az = sensor.values
-            publisher.publish_raw(_pack_imu(
-                header=_header(stamp=msgs.time_map(sim_time), frame_id=frame),
-                orientation=_quaternion(x=qx, y=qy, z=qz, w=qw), angular_velocity=_vector3(x=wx, y=wy, z=wz),
-                angular_velocity_covariance=angular_cov, linear_acceleration=_vector3(x=ax, y=ay, z=az),
-                linear_acceleration_covariance=linear_cov), droppable=True)
+        self.plugins.publish(sim_time)
 
     def publish_heartbeat(self, step: int, sim_time: float) -> None:
         self.heartbeat_pub.publish_raw(_pack_heartbeat(stamp=msgs.time_map(sim_time), step=step, paused=True),
@@ -210,14 +197,3 @@ class RobotLink:
             joints=[HardwareJoint(**row) for row in self.hardware.joint_table()],
             sensors=[HardwareSensor(**row) for row in self.sensors.table()],
         )
-
-
-def _imu_covariances(spec) -> tuple[list[float], list[float]]:
-    """Diagonal covariances from the noise stddevs (as gazebo_ros_imu_sensor fills them)."""
-    def diagonal(quantity: str) -> list[float]:
-        out = [0.0] * 9
-        for i, axis in enumerate("xyz"):
-            noise = spec.noise.get(f"{quantity}.{axis}")
-            out[4 * i] = noise.stddev ** 2 if noise is not None and noise.active else 0.0
-        return out
-    return diagonal("angular_velocity"), diagonal("linear_acceleration")

@@ -68,6 +68,7 @@ class _Sensor:
     def __init__(self, spec: SensorSpec, skeleton: dart.dynamics.Skeleton, seed: int, entity: str) -> None:
         self.spec = spec
         self.name = spec.name
+        self.entity = entity
         self.body = skeleton.getBodyNode(spec.link)
         if self.body is None:
             raise ValueError(f"sensor '{spec.name}': link '{spec.link}' was not loaded by DART")
@@ -194,12 +195,42 @@ class ContactPoint:
 
 
 class ContactSensor(_Sensor):
+    """The contacts of a link's collision shapes in the last step, each with a share of the link's contact force.
+
+    DART's collision result carries no forces (its constraint solver keeps the impulses), so the link's total
+    contact force comes from Newton's law on the link: m a = m g + (the parent joint's force on it) + contacts,
+    with a the centre of mass's acceleration averaged over the sensor period (one step's swings with a contact
+    impulse, as the IMU's does). Each contact point gets a share in proportion to its penetration depth."""
+
     channels = ()
 
     def __init__(self, *args) -> None:
         super().__init__(*args)
         self.contacts: list[ContactPoint] = []
         self._contacts_of: Callable[[], list] = list
+        self._com_velocity: np.ndarray | None = None
+
+    def reset(self) -> None:
+        super().reset()
+        self._com_velocity = None
+
+    def _contact_force(self, t: float, gravity: np.ndarray) -> np.ndarray:
+        """The world force on the link from everything it touches."""
+        body = self.body
+        velocity = np.asarray(body.getCOMLinearVelocity())
+        dt = t - self.stamp
+        if self._com_velocity is not None and dt > _EPS:
+            acceleration = (velocity - self._com_velocity) / dt
+        else:
+            acceleration = np.asarray(body.getCOMLinearAcceleration())
+        self._com_velocity = velocity
+        joint = body.getParentJoint()
+        on_parent = np.zeros(3)
+        if joint is not None and joint.getParentBodyNode() is not None:
+            # what this link applies to its parent through the joint ([torque, force] in the link frame, as the
+            # force/torque sensor reads it): the joint's force on the link is its opposite
+            on_parent = body.getWorldTransform().rotation() @ np.asarray(joint.getWrenchToChildBodyNode())[3:]
+        return body.getMass() * (acceleration - gravity) + on_parent
 
     def measure(self, t: float, gravity: np.ndarray) -> list[float]:
         found = []
@@ -214,11 +245,16 @@ class ContactSensor(_Sensor):
                 other, sign = first, -1.0
             else:
                 continue
-            force = sign * np.asarray(contact.force)
             normal = sign * np.asarray(contact.normal)
             name = f"{other.getSkeleton().getName()}::{other.getName()}" if other is not None else ""
             found.append(ContactPoint(tuple(np.asarray(contact.point).tolist()), tuple(normal.tolist()),
-                                      tuple(force.tolist()), float(contact.penetrationDepth), name))
+                                      (0.0, 0.0, 0.0), float(contact.penetrationDepth), name))
+        total = self._contact_force(t, gravity)
+        if found:
+            depths = np.array([max(c.depth, 0.0) for c in found])
+            shares = depths / depths.sum() if depths.sum() > 0 else np.full(len(found), 1.0 / len(found))
+            for contact, share in zip(found, shares, strict=True):
+                contact.force = tuple((total * share).tolist())
         self.contacts = found
         return []
 

@@ -34,6 +34,7 @@ from nodes.urdf.sensors import (
     parse_noise,
     parse_number,
     parse_pose,
+    resolve_topic,
     sensor_where,
 )
 
@@ -217,26 +218,11 @@ def _remappings(plugin: etree._Element, where: str) -> dict[str, str]:
     return out
 
 
-def _resolve(namespace: str, node: str, topic: str, remappings: dict[str, str]) -> str:
-    """A plugin topic as ROS 2 resolves it: remapped (by its written or its ``~/`` form), ``~/`` is the
-    plugin node's name, relative names go under the namespace; the key has no leading slash."""
-    for source in (topic, f"~/{topic}", topic.removeprefix("~/")):
-        if source in remappings:
-            topic = remappings[source]
-            break
-    if topic.startswith("/"):
-        return topic.strip("/")
-    if topic.startswith("~/"):
-        topic = f"{node}/{topic[2:]}"
-    namespace = namespace.strip("/")
-    return f"{namespace}/{topic}" if namespace else topic
-
-
 def _keys(spec: RenderedSensorSpec, plugin: etree._Element | None, namespace: str) -> dict[str, str]:
     """Where each output goes: the plugin's topics as gazebo_ros names them, or, without a plugin, new
     Gazebo's ``<topic>`` (default: the sensor's name) under the robot's namespace."""
     if plugin is None:
-        base = _resolve(namespace, spec.name, spec.name, {})
+        base = resolve_topic(namespace, spec.name, spec.name, {})
         if spec.camera is not None:
             keys = {"image": f"{base}/image_raw", "camera_info": f"{base}/camera_info"}
             if spec.camera.depth:
@@ -249,14 +235,14 @@ def _keys(spec: RenderedSensorSpec, plugin: etree._Element | None, namespace: st
     remappings = _remappings(plugin, spec.where)
     if spec.camera is not None:   # gazebo_ros_camera: <camera_name> (default: the sensor's name) in the namespace
         camera = child_text(plugin, "camera_name") or spec.name
-        keys = {"image": _resolve(ros_namespace, node, f"{camera}/image_raw", remappings),
-                "camera_info": _resolve(ros_namespace, node, f"{camera}/camera_info", remappings)}
+        keys = {"image": resolve_topic(ros_namespace, node, f"{camera}/image_raw", remappings),
+                "camera_info": resolve_topic(ros_namespace, node, f"{camera}/camera_info", remappings)}
         if spec.camera.depth:
-            keys.update(depth=_resolve(ros_namespace, node, f"{camera}/depth/image_raw", remappings),
-                        depth_info=_resolve(ros_namespace, node, f"{camera}/depth/camera_info", remappings),
-                        points=_resolve(ros_namespace, node, f"{camera}/points", remappings))
+            keys.update(depth=resolve_topic(ros_namespace, node, f"{camera}/depth/image_raw", remappings),
+                        depth_info=resolve_topic(ros_namespace, node, f"{camera}/depth/camera_info", remappings),
+                        points=resolve_topic(ros_namespace, node, f"{camera}/points", remappings))
         return keys
-    return {spec.ray.output: _resolve(ros_namespace, node, "~/out", remappings)}   # gazebo_ros_ray_sensor
+    return {spec.ray.output: resolve_topic(ros_namespace, node, "~/out", remappings)}   # gazebo_ros_ray_sensor
 
 
 def _parse(element: etree._Element, reference: str, namespace: str) -> RenderedSensorSpec:

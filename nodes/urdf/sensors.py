@@ -72,14 +72,37 @@ class Noise:
         return self.type != "none" and any((self.mean, self.stddev, self.bias_mean, self.bias_stddev))
 
 
-# gazebo_ros plugins the simulator runs itself, by the sensor type they belong in
-PLUGINS = {"libgazebo_ros_imu_sensor.so": "imu"}
+# gazebo_ros plugins the simulator runs itself, by the sensor type they belong in, and the topic each
+# publishes on before remapping (gazebo_plugins' names: sensor_msgs/Imu, geometry_msgs/WrenchStamped,
+# gazebo_msgs/ContactsState)
+PLUGINS = {"libgazebo_ros_imu_sensor.so": "imu", "libgazebo_ros_ft_sensor.so": "force_torque",
+           "libgazebo_ros_bumper.so": "contact"}
+PLUGIN_TOPICS = {"libgazebo_ros_imu_sensor.so": "~/out", "libgazebo_ros_ft_sensor.so": "wrench",
+                 "libgazebo_ros_bumper.so": "bumper_states"}
+
+
+def resolve_topic(namespace: str, node: str, topic: str, remappings: dict[str, str], out_alias: bool = False) -> str:
+    """A plugin's topic as ROS 2 resolves it: remapped (by its written or its ``~/`` form; with ``out_alias``,
+    ``~/out`` also remaps a sensor plugin's own topic name, as users write it for every sensor plugin), ``~/``
+    is the plugin node's name, a relative name goes under the namespace; the key has no leading slash."""
+    aliases = ("~/out", "out") if out_alias else ()
+    for source in (topic, f"~/{topic}", topic.removeprefix("~/"), *aliases):
+        if source in remappings:
+            topic = remappings[source]
+            break
+    if topic.startswith("/"):
+        return topic.strip("/")
+    if topic.startswith("~/"):
+        topic = f"{node}/{topic[2:]}"
+    namespace = namespace.strip("/")
+    return f"{namespace}/{topic}" if namespace else topic
 
 
 @dataclass
 class GazeboRosPlugin:
-    """A gazebo_ros sensor plugin: publishes the sensor on ``~/out`` of a node named after the plugin, in the
-    ``<ros><namespace>``, unless a ``<remapping>~/out:=topic</remapping>`` says otherwise."""
+    """A gazebo_ros sensor plugin: publishes the sensor on its topic (``PLUGIN_TOPICS``) of a node named
+    after the plugin, in its ``<ros><namespace>`` (else the robot's, as spawn_entity's -robot_namespace
+    sets it), unless a ``<remapping>`` says otherwise."""
 
     filename: str
     name: str
@@ -87,14 +110,10 @@ class GazeboRosPlugin:
     remappings: dict[str, str] = field(default_factory=dict)
     frame_name: str = ""       # header.frame_id; the sensor's link when empty
 
-    def key(self) -> str:
+    def key(self, robot_namespace: str = "") -> str:
         """The Zenoh key it publishes on (a ROS name without the leading slash)."""
-        namespace = self.namespace.strip("/")
-        topic = self.remappings.get("~/out", self.remappings.get("out", "~/out"))
-        if topic.startswith("/"):
-            return topic.strip("/")
-        topic = f"{self.name}/{topic[2:]}" if topic.startswith("~/") else topic
-        return f"{namespace}/{topic}" if namespace else topic
+        return resolve_topic(self.namespace or robot_namespace, self.name, PLUGIN_TOPICS[self.filename],
+                             self.remappings, out_alias=True)
 
 
 @dataclass
@@ -347,7 +366,8 @@ def sensor_problems(gazebo: list[SensorSpec], ros2_control: list[Ros2ControlSens
             if PLUGINS[plugin.filename] != spec.type:
                 problems.append(f"{where} <plugin filename='{plugin.filename}'> belongs in a "
                                 f"{PLUGINS[plugin.filename]} sensor, not {spec.type}")
-            if plugin.frame_name and plugin.frame_name not in links:
+            frames_allowed = ("world",) if spec.type == "contact" else ()   # the bumper's contacts: world frame
+            if plugin.frame_name and plugin.frame_name not in links and plugin.frame_name not in frames_allowed:
                 problems.append(f"{where} <plugin> <frame_name> '{plugin.frame_name}' is not a link of the robot (a "
                                 "TF frame the state publisher publishes)")
         rate = _rate_problem(spec)

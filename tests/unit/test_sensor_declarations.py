@@ -64,15 +64,19 @@ def test_a_force_torque_sensor_on_a_link_measures_its_parent_joint_and_camera_ty
     assert (ft.joint, ft.link) == ("ankle", "foot") and ft.state_interfaces == []
 
 
-def test_shipped_humanoids_declare_the_pelvis_imu_and_the_ankle_force_torque_sensors():
+def test_shipped_humanoids_declare_the_pelvis_imu_the_ankle_force_torque_and_the_foot_contact_sensors():
     from nodes.sim.robot_files import read_robot_xml
 
-    for name, ankles in (("humanoid.urdf", ("left_ankle_roll", "right_ankle_roll")),
-                         ("humanoid_20dof.urdf.xacro", ("left_ankle_roll", "right_ankle_roll")),
-                         ("atlas.urdf", ("l_leg_lax", "r_leg_lax"))):
+    for name, ankles, feet in (("humanoid.urdf", ("left_ankle_roll", "right_ankle_roll"), ("left_foot", "right_foot")),
+                               ("humanoid_20dof.urdf.xacro", ("left_ankle_roll", "right_ankle_roll"),
+                                ("left_foot", "right_foot")),
+                               ("atlas.urdf", ("l_leg_lax", "r_leg_lax"), ("l_foot", "r_foot"))):
         info = sim_parse(read_robot_xml(ROOT / "robots" / name))
         sensors = {s.name: s for s in info.sensors}
-        assert set(sensors) == {"imu_sensor", "left_foot_ft", "right_foot_ft"}, name
+        assert set(sensors) == {"imu_sensor", "left_foot_ft", "right_foot_ft", "left_foot_contact",
+                                "right_foot_contact"}, name
+        assert (sensors["left_foot_contact"].link, sensors["right_foot_contact"].link) == feet
+        assert sensors["left_foot_contact"].plugin.key("humanoid") == "humanoid/left_foot/contacts"   # bumper plugin
         assert sensors["imu_sensor"].link == "pelvis"
         assert sensors["imu_sensor"].state_interfaces == list(IMU_INTERFACES)
         assert (sensors["left_foot_ft"].joint, sensors["right_foot_ft"].joint) == ankles
