@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nodes.render.geometry import dot, rotate
 from nodes.render.raycast import RayScene
 from nodes.urdf.rendered_sensors import CameraSpec
 
@@ -73,7 +74,7 @@ def intrinsics(spec: CameraSpec) -> tuple[float, float, float]:
 
 @dataclass(frozen=True)
 class _Rays:
-    sensor: np.ndarray     # (H * W, 3) float64 unit directions in the sensor frame, row-major pixels
+    sensor: np.ndarray     # (H * W, 3) float32 unit directions in the sensor frame, row-major pixels
     optical: np.ndarray    # (H * W, 3) float32 unit directions in the optical frame
     axial: np.ndarray      # (H * W,) float32: optical z of the unit direction (depth = ray length * axial)
 
@@ -85,7 +86,8 @@ def _rays(horizontal_fov: float, width: int, height: int) -> _Rays:
     v, u = np.mgrid[0:height, 0:width].astype(np.float64)
     optical = np.stack([(u - cx) / f, (v - cy) / f, np.ones_like(u)], axis=-1).reshape(-1, 3)
     optical /= np.linalg.norm(optical, axis=1)[:, None]
-    rays = _Rays(optical @ OPTICAL_TO_SENSOR.T, optical.astype(np.float32), optical[:, 2].astype(np.float32))
+    rays = _Rays(rotate(optical, OPTICAL_TO_SENSOR).astype(np.float32), optical.astype(np.float32),
+                 optical[:, 2].astype(np.float32))
     for array in (rays.sensor, rays.optical, rays.axial):
         array.flags.writeable = False      # shared by every render of this geometry
     return rays
@@ -107,23 +109,22 @@ def render_camera(scene: RayScene, spec: CameraSpec, sensor_pose: np.ndarray,
         raise ValueError(f"camera encoding '{spec.encoding}' is not one of {', '.join(ENCODINGS)}")
     rays = _rays(float(spec.horizontal_fov), int(spec.width), int(spec.height))
     pose = np.asarray(sensor_pose, dtype=np.float64)
-    directions = rays.sensor @ pose[:3, :3].T
-    origins = np.broadcast_to(pose[:3, 3].astype(np.float32), directions.shape)
+    directions = rotate(rays.sensor, pose[:3, :3].astype(np.float32))
     # the far clip plane is a depth: along a slanted ray it is at far / axial
-    hits = scene.cast(origins, directions, layer="visual", max_distance=np.float32(spec.far) / rays.axial)
+    hits = scene.cast(pose[:3, 3], directions, layer="visual", max_distance=np.float32(spec.far) / rays.axial)
     depth = hits.distance * rays.axial                                   # +inf stays +inf
     depth[depth > spec.far] = np.inf
     too_near = depth < spec.near
     seen = np.isfinite(depth) & ~too_near
     depth[too_near] = -np.inf
 
-    shade = AMBIENT + DIFFUSE * np.maximum(0.0, hits.normal @ -LIGHT_DIRECTION.astype(np.float32))
+    shade = AMBIENT + DIFFUSE * np.maximum(0.0, dot(hits.normal, -LIGHT_DIRECTION.astype(np.float32)))
     colour = np.empty((len(depth), 3), dtype=np.float32)
     colour[:] = BACKGROUND
     colour[seen] = scene.rgba[hits.shape[seen], :3] * shade[seen, None]
     h, w = spec.height, spec.width
     if spec.encoding == "mono8":
-        image = _noisy((colour @ LUMINANCE).reshape(h, w), spec, rng)
+        image = _noisy(dot(colour, LUMINANCE).reshape(h, w), spec, rng)
     else:
         image = _noisy(colour.reshape(h, w, 3), spec, rng)
         if spec.encoding == "bgr8":

@@ -188,6 +188,21 @@ def mesh_from_bytes(vertices: bytes, triangles: bytes, label: str = "mesh") -> t
     return v, f
 
 
+def rotate(rows: np.ndarray, rotation: np.ndarray, translation: np.ndarray | None = None) -> np.ndarray:
+    """``rows @ rotation.T (+ translation)`` for (N, 3) rows, by three broadcast products instead of a
+    matrix product: numpy hands ``@`` to OpenBLAS, whose worker threads then spin for a while after each
+    call, burning the other core (measured: a 320x240 camera frame took twice the CPU time)."""
+    out = rows[:, 0:1] * rotation[:, 0] + rows[:, 1:2] * rotation[:, 1] + rows[:, 2:3] * rotation[:, 2]
+    if translation is not None:
+        out += translation
+    return out
+
+
+def dot(rows: np.ndarray, vector: np.ndarray) -> np.ndarray:
+    """``rows @ vector`` for (N, 3) rows without BLAS (see ``rotate``)."""
+    return rows[:, 0] * vector[0] + rows[:, 1] * vector[1] + rows[:, 2] * vector[2]
+
+
 def check_scene_triangles(shapes: list[Shape]) -> int:
     """The triangles of every shape together; RenderError over ``MAX_SCENE_TRIANGLES`` (nothing built yet)."""
     total = 0

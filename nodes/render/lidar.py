@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nodes.render.geometry import dot, rotate
 from nodes.render.raycast import RayScene
 from nodes.urdf.rendered_sensors import RayAxis, RaySpec
 
@@ -67,9 +68,8 @@ def render_ray(scene: RayScene, spec: RaySpec, sensor_pose: np.ndarray,
     beams = directions(spec.horizontal, spec.vertical)
     shape = beams.shape[:2]
     pose = np.asarray(sensor_pose, dtype=np.float64)
-    world = beams.reshape(-1, 3) @ pose[:3, :3].T
-    origins = np.broadcast_to(pose[:3, 3].astype(np.float32), world.shape)
-    hits = scene.cast(origins, world, layer="visual" if spec.visual else "collision",
+    world = rotate(beams.reshape(-1, 3), pose[:3, :3])
+    hits = scene.cast(pose[:3, 3], world, layer="visual" if spec.visual else "collision",
                       max_distance=np.float32(spec.range_max))
     ranges = hits.distance.copy()
     ranges[ranges > spec.range_max] = np.inf
@@ -87,7 +87,7 @@ def render_ray(scene: RayScene, spec: RaySpec, sensor_pose: np.ndarray,
 
     intensities = np.zeros(len(ranges), dtype=np.float32)
     if valid.any():
-        surface = scene.rgba[hits.shape[valid], :3] @ LUMINANCE
+        surface = dot(scene.rgba[hits.shape[valid], :3], LUMINANCE)
         incidence = np.abs(np.einsum("ij,ij->i", hits.normal[valid], world[valid].astype(np.float32)))
         intensities[valid] = np.clip(surface * incidence, 0.0, 1.0)
     return RangeScan(ranges.reshape(shape), intensities.reshape(shape), beams)

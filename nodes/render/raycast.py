@@ -3,7 +3,7 @@
 Why two Embree scenes per layer: the world's static links (walls, tables, the ground) never move, so their
 triangles are transformed and their BVH built once; everything else (robots, free objects) is transformed
 with the newest link poses and rebuilt when those poses change (a few milliseconds for a humanoid made of
-primitives: embreex copies vertices element by element, about 0.6 us a triangle). A cast runs the static
+primitives: embreex copies vertices element by element, about 0.3 us a triangle). A cast runs the static
 scene first, then the dynamic one with the static hit as its far limit, so the second finds only nearer hits
 and the result is the nearest of both. All the dynamic shapes of a layer go into ONE Embree geometry: the
 build cost is per triangle, and one geometry makes the triangle -> shape lookup a single array index.
@@ -30,8 +30,9 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.lib.stride_tricks import as_strided
 
-from nodes.render.geometry import RenderError, Shape, check_scene_triangles, triangulate
+from nodes.render.geometry import RenderError, Shape, check_scene_triangles, rotate, triangulate
 
 LAYERS = ("visual", "collision")
 NO_LIMIT = np.float32(1e37)          # embreex's own "no far limit"
@@ -80,12 +81,14 @@ class _Group:
         from embreex import rtcore_scene as rtcs
         from embreex.mesh_construction import TriangleMesh
 
-        world = np.empty(self.local.shape, dtype=np.float32)
+        world = np.empty(self.local.shape, dtype=np.float64)
         for link, start, end in self.slices:
             pose = poses[link]
-            world[start:end] = self.local[start:end] @ pose[:3, :3].T + pose[:3, 3]
+            world[start:end] = rotate(self.local[start:end], pose[:3, :3], pose[:3, 3])
         scene = rtcs.EmbreeScene(device)
-        TriangleMesh(scene, world.reshape(-1, 3, 3))
+        # embreex reads the array element by element through Python indexing; from an object array that is
+        # a stored float, not a new numpy scalar: 2.2x faster uploads (bench/render.py, rebuild)
+        TriangleMesh(scene, world.reshape(-1, 3, 3).astype(object))
         # run() commits the scene (builds the BVH) on its first call: do it here, on one thread, so that
         # chunks cast in parallel never race to commit it.
         scene.run(np.zeros((1, 3), np.float32), np.array([[1.0, 0.0, 0.0]], np.float32), query="DISTANCE")
@@ -130,7 +133,7 @@ class RayScene:
             pose = np.asarray(shape.pose, dtype=np.float64)
             if pose.shape != (4, 4) or not np.isfinite(pose).all():
                 raise RenderError(f"{shape.label}: pose must be a finite 4x4 matrix")
-            in_link = vertices.astype(np.float64) @ pose[:3, :3].T + pose[:3, 3]
+            in_link = rotate(vertices.astype(np.float64), pose[:3, :3], pose[:3, 3])
             corners.append(in_link[triangles.reshape(-1)])             # (T * 3, 3)
         groups = {}
         for layer in LAYERS:
@@ -195,8 +198,8 @@ class RayScene:
 
     def cast(self, origins: np.ndarray, directions: np.ndarray, *, layer: str = "visual",
              max_distance: float | np.ndarray | None = None, cull_back_faces: bool = True) -> Hits:
-        """The nearest hit along each ray from ``origins`` (N, 3) in unit ``directions`` (N, 3), world frame,
-        among the ``layer``'s shapes. ``max_distance`` (a number, or one per ray) stops the search there:
+        """The nearest hit along each ray from ``origins`` (N, 3), or one origin (3,) for all (a sensor's), in
+        unit ``directions`` (N, 3), world frame, among the ``layer``'s shapes. ``max_distance`` (a number, or one per ray) stops the search there:
         farther surfaces are not hit (cheaper than finding and discarding them).
 
         ``cull_back_faces``: a ray that meets a surface from inside its shape goes on through it, as a GPU
@@ -205,11 +208,18 @@ class RayScene:
         out instead of seeing the housing from inside. Primitives are wound outwards; a mesh wound inwards
         is seen from inside only, as in Gazebo."""
         groups = self._refresh(layer)
-        origins = np.ascontiguousarray(origins, dtype=np.float32).reshape(-1, 3)
         directions = np.ascontiguousarray(directions, dtype=np.float32).reshape(-1, 3)
-        count = len(origins)
-        if len(directions) != count:
-            raise RenderError(f"{count} origins but {len(directions)} directions")
+        count = len(directions)
+        origins = np.asarray(origins, dtype=np.float32)
+        if origins.shape == (3,):
+            # one origin, repeated by a zero stride (no copy): Embree only reads it, but embreex's typed
+            # buffer argument asks for a writable array
+            one = origins.copy()
+            origins = as_strided(one, shape=(count, 3), strides=(0, one.itemsize), writeable=True)
+        else:
+            origins = np.ascontiguousarray(origins).reshape(-1, 3)
+        if len(origins) != count:
+            raise RenderError(f"{len(origins)} origins but {count} directions")
         limit = np.empty(count, dtype=np.float32)
         limit[:] = NO_LIMIT if max_distance is None else np.minimum(max_distance, NO_LIMIT)
         live = [g for g in groups if not g.empty]
@@ -230,10 +240,12 @@ class RayScene:
             distance = np.where(shape >= 0, travelled + distance, distance)
         hit = shape >= 0
         distance = np.where(hit, distance, np.float32(np.inf)).astype(np.float32, copy=False)
-        # unit, and facing the ray (Embree's geometric normal follows the triangle's winding: outwards)
+        # unit, and facing the ray (Embree's geometric normal follows the triangle's winding: outwards);
+        # misses keep their zero normal
         length = np.sqrt(np.einsum("ij,ij->i", normal, normal))
-        facing = np.where(np.einsum("ij,ij->i", normal, directions) > 0, -1.0, 1.0).astype(np.float32)
-        normal[hit] *= (facing[hit] / length[hit])[:, None]
+        scale = np.where(np.einsum("ij,ij->i", normal, directions) > 0, np.float32(-1.0), np.float32(1.0))
+        np.divide(scale, length, out=scale, where=length > 0)
+        normal *= scale[:, None]
         return Hits(distance, shape, normal)
 
     def _nearest(self, groups: list[_Group], origins: np.ndarray, directions: np.ndarray,
@@ -276,10 +288,9 @@ class RayScene:
         for group in groups:
             result = group.scene.run(o, d, dists=far, output=1)
             prim = result["primID"]
-            hit = np.nonzero(prim >= 0)[0]
-            if len(hit):
-                shape[start + hit] = group.prim_shape[prim[hit]]
-                normal[start + hit] = result["Ng"][hit]
+            hit = prim >= 0      # a miss's -1 indexes prim_shape's last entry: masked out by copyto
+            np.copyto(shape[start:end], group.prim_shape[prim], where=hit)
+            np.copyto(normal[start:end], result["Ng"], where=hit[:, None])
 
     def close(self) -> None:
         """End the thread pool (if one was started)."""
