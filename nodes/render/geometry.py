@@ -28,6 +28,7 @@ import numpy as np
 
 KINDS = ("box", "cylinder", "sphere", "mesh")
 MAX_MESH_TRIANGLES = 200_000
+MAX_MESH_VERTICES = 3 * MAX_MESH_TRIANGLES   # more than 3 a triangle are never used
 MAX_SCENE_TRIANGLES = 2_000_000
 CYLINDER_TOLERANCE = 0.001     # m, of a cylinder's side from its radius
 CYLINDER_SECTIONS = (12, 256)   # fewest and most sides
@@ -153,6 +154,8 @@ def triangulate(shape: Shape) -> tuple[np.ndarray, np.ndarray]:
         if shape.vertices is None or shape.triangles is None:
             raise RenderError(f"{shape.label}: a mesh needs vertices and triangles")
         vertices, triangles = np.asarray(shape.vertices), np.asarray(shape.triangles)
+        if len(vertices) > MAX_MESH_VERTICES:
+            raise RenderError(f"{shape.label}: {len(vertices)} vertices, over the cap of {MAX_MESH_VERTICES} per mesh")
         if vertices.ndim != 2 or vertices.shape[1] != 3 or triangles.ndim != 2 or triangles.shape[1] != 3:
             raise RenderError(f"{shape.label}: vertices must be (N, 3) and triangles (M, 3), got "
                               f"{vertices.shape} and {triangles.shape}")
@@ -171,8 +174,9 @@ def _check_mesh(vertices: np.ndarray, triangles: np.ndarray, label: str) -> None
 def mesh_from_bytes(vertices: bytes, triangles: bytes, label: str = "mesh") -> tuple[np.ndarray, np.ndarray]:
     """A mesh from its wire form (``SceneShape``): float32 little-endian x y z triples and uint32
     little-endian index triples, as ``(V (N, 3) float32, F (M, 3) uint32)``. RenderError naming ``label``
-    for lengths that are not whole triples, more than ``MAX_MESH_TRIANGLES`` triangles (checked on the
-    length, before anything is copied), indices out of range or non-finite vertices."""
+    for lengths that are not whole triples, more than ``MAX_MESH_TRIANGLES`` triangles or
+    ``MAX_MESH_VERTICES`` vertices (checked on the lengths, before anything is copied), indices out of range
+    or non-finite vertices."""
     if len(vertices) % 12:
         raise RenderError(f"{label}: vertices are {len(vertices)} bytes, not a whole number of float32 x y z "
                           "triples (12 bytes each)")
@@ -182,6 +186,8 @@ def mesh_from_bytes(vertices: bytes, triangles: bytes, label: str = "mesh") -> t
     count = len(triangles) // 12
     if count > MAX_MESH_TRIANGLES:
         raise RenderError(f"{label}: {count} triangles, over the cap of {MAX_MESH_TRIANGLES} per mesh")
+    if len(vertices) // 12 > MAX_MESH_VERTICES:
+        raise RenderError(f"{label}: {len(vertices) // 12} vertices, over the cap of {MAX_MESH_VERTICES} per mesh")
     v = np.frombuffer(vertices, dtype="<f4").reshape(-1, 3).astype(np.float32)
     f = np.frombuffer(triangles, dtype="<u4").reshape(-1, 3).astype(np.uint32)
     _check_mesh(v, f, label)

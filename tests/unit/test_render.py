@@ -349,8 +349,10 @@ def test_mesh_bytes_are_checked() -> None:
     bad[1, 2] = np.nan
     with pytest.raises(RenderError, match=r"not finite"):
         mesh_from_bytes(bad.tobytes(), triangles.tobytes())
-    with pytest.raises(RenderError, match=r"over the cap"):
+    with pytest.raises(RenderError, match=r"200001 triangles, over the cap"):
         mesh_from_bytes(vertices.tobytes(), bytes(12 * (MAX_MESH_TRIANGLES + 1)))
+    with pytest.raises(RenderError, match=r"600001 vertices, over the cap"):
+        mesh_from_bytes(bytes(12 * (3 * MAX_MESH_TRIANGLES + 1)), triangles.tobytes())
     # a mesh shape renders: the triangle in the plane x = 1 (rotated into it), seen by a laser
     rotate = np.eye(4)
     rotate[:3, :3] = [[0, 0, 1], [1, 0, 0], [0, 1, 0]]      # local x -> world y, y -> z, z -> x
