@@ -38,6 +38,7 @@ LAYERS = ("visual", "collision")
 NO_LIMIT = np.float32(1e37)          # embreex's own "no far limit"
 DEFAULT_THREADS = 2                  # bench/render.py: a 320x240 RGB-D frame 1.7x sooner, no more CPU time
 MIN_CHUNK_RAYS = 4096                # below this a cast is not split (the pool's overhead is ~50 us a task)
+OBJECT_UPLOAD_TRIANGLES = 50_000     # up to this many, uploaded from an object array (faster, bigger)
 MAX_BACK_FACES = 4                   # back faces a ray passes through (nested housings) before one counts
 BACK_FACE_STEP = np.float32(1e-4)    # m past a back face before casting on (float32 at 100 m: 8 um)
 
@@ -60,7 +61,7 @@ class _Group:
     def __init__(self, links: list[int], local: np.ndarray, prim_shape: np.ndarray,
                  slices: list[tuple[int, int, int]]) -> None:
         self.links = np.array(links, dtype=np.intp)         # the links whose poses this group depends on
-        self.local = local                                   # (T * 3, 3) float64, triangle corners, link frame
+        self.local = local                                   # (T * 3, 3) float32, triangle corners, link frame
         self.prim_shape = prim_shape                         # (T,) int32: Embree primID -> shape index
         self.slices = slices                                 # (link, first corner, end corner)
         self.scene = None                                    # an embreex EmbreeScene, once built
@@ -88,8 +89,10 @@ class _Group:
             world[start:end] = rotate(self.local[start:end], pose[:3, :3], pose[:3, 3])
         scene = rtcs.EmbreeScene(device)
         # embreex reads the array element by element through Python indexing; from an object array that is
-        # a stored float, not a new numpy scalar: 2.2x faster uploads (bench/render.py, rebuild)
-        TriangleMesh(scene, world.reshape(-1, 3, 3).astype(object))
+        # a stored float, not a new numpy scalar: 2.2x faster uploads (bench/render.py, rebuild), but 32
+        # bytes a coordinate, so only for the few thousand triangles of moving links
+        corners = world.reshape(-1, 3, 3)
+        TriangleMesh(scene, corners.astype(object) if len(corners) <= OBJECT_UPLOAD_TRIANGLES else corners)
         # run() commits the scene (builds the BVH) on its first call: do it here, on one thread, so that
         # chunks cast in parallel never race to commit it.
         scene.run(np.zeros((1, 3), np.float32), np.array([[1.0, 0.0, 0.0]], np.float32), query="DISTANCE")
@@ -135,7 +138,7 @@ class RayScene:
             if pose.shape != (4, 4) or not np.isfinite(pose).all():
                 raise RenderError(f"{shape.label}: pose must be a finite 4x4 matrix")
             in_link = rotate(vertices.astype(np.float64), pose[:3, :3], pose[:3, 3])
-            corners.append(in_link[triangles.reshape(-1)])             # (T * 3, 3)
+            corners.append(in_link[triangles.reshape(-1)].astype(np.float32))   # (T * 3, 3)
         groups = {}
         for layer in LAYERS:
             chosen = [i for i, (_, s) in enumerate(shapes) if (s.visual if layer == "visual" else s.collision)]
@@ -158,7 +161,7 @@ class RayScene:
             parts.append(corners[i])
             prim.append(np.full(len(corners[i]) // 3, i, dtype=np.int32))
             start = end
-        local = np.concatenate(parts) if parts else np.zeros((0, 3))
+        local = np.concatenate(parts) if parts else np.zeros((0, 3), dtype=np.float32)
         prim_shape = np.concatenate(prim) if prim else np.zeros(0, dtype=np.int32)
         return _Group(sorted({s[0] for s in slices}), local, prim_shape, slices)
 
@@ -188,9 +191,10 @@ class RayScene:
             group.refresh(self._poses, self.version, self._device)
         return groups
 
-    def triangles(self, layer: str = "visual") -> int:
-        """Triangles in a layer (static and dynamic)."""
-        return sum(len(g.prim_shape) for g in self._groups[layer])
+    def triangles(self, layer: str = "visual") -> tuple[int, int]:
+        """(static, dynamic) triangles of a layer: the dynamic ones are uploaded again on every change."""
+        static, dynamic = self._groups[layer]
+        return len(static.prim_shape), len(dynamic.prim_shape)
 
     # ------------------------------------------------------------------ casting
     def prepare(self, layer: str = "visual") -> None:
