@@ -7,8 +7,10 @@ new every frame (so every frame rebuilds the dynamic scene of the layer it casts
 the humanoid URDF's own: the head RGB-D camera (320x240, also at 640x480), the 16x900 gpu_ray lidar (visual
 shapes) and the 720-ray laser (ray: collision shapes).
 
-Per sensor and thread count, medians over repeats of: ms a frame (update + rebuild + cast + image/scan
-making) wall and CPU, rays/s; the rebuild alone; the cast alone (same poses: no rebuild). Then the payloads
+Per sensor and thread count (1 and 2 interleaved, so that the machine's noise hits both alike), medians
+over repeats of: ms a frame (update + rebuild + cast + image/scan making) wall and CPU, rays/s; the rebuild
+alone; the cast alone (same poses: no rebuild). Two threads only help while the other core is idle: with
+another job on it, wall time equals CPU time whatever the thread count. Then the payloads
 (dicts + msgpack, as the renderer node publishes them), the cost of one core for the issue's defaults, how
 fast a 640x480 rgb8 Image encodes (msgpack, CDR) against its size, and ways to make LaserScan's float lists.
 
@@ -144,16 +146,18 @@ class Bench:
         return self.poses[frame][self.robot_links[spec.reference]] @ spec.pose
 
 
+def one_pass(run: Callable[[int], object], frames: int) -> tuple[float, float]:
+    """(wall ms, CPU ms) a call of ``run(frame)``, over one pass of the frames."""
+    wall, cpu = time.perf_counter(), time.process_time()
+    for frame in range(frames):
+        run(frame)
+    return (time.perf_counter() - wall) / frames * 1e3, (time.process_time() - cpu) / frames * 1e3
+
+
 def median_time(run: Callable[[int], object], frames: int, repeats: int) -> tuple[float, float]:
     """(wall ms, CPU ms) a call of ``run(frame)``, median over ``repeats`` passes over the frames."""
-    walls, cpus = [], []
-    for _ in range(repeats):
-        wall, cpu = time.perf_counter(), time.process_time()
-        for frame in range(frames):
-            run(frame)
-        walls.append((time.perf_counter() - wall) / frames * 1e3)
-        cpus.append((time.process_time() - cpu) / frames * 1e3)
-    return statistics.median(walls), statistics.median(cpus)
+    samples = [one_pass(run, frames) for _ in range(repeats)]
+    return statistics.median(s[0] for s in samples), statistics.median(s[1] for s in samples)
 
 
 def draw(scene: RayScene, spec: RenderedSensorSpec, pose: np.ndarray, rng: np.random.Generator):
@@ -251,35 +255,45 @@ def main() -> None:
     for layer, (static, dynamic) in layers.items():
         rows.append((f"{layer} triangles: static, dynamic", f"{static}, {dynamic}",
                      "the dynamic ones are uploaded again every frame"))
-    for threads in (1, 2):
-        scene = bench.scene(threads)
-        for label, spec in cases.items():
-            rays = (spec.camera.width * spec.camera.height) if spec.camera else spec.ray.rays
-            layer = "visual" if spec.camera is not None or spec.ray.visual else "collision"
-            rng = np.random.default_rng(0)
+    scenes = {threads: bench.scene(threads) for threads in (1, 2)}
+    for label, spec in cases.items():
+        rays = (spec.camera.width * spec.camera.height) if spec.camera else spec.ray.rays
+        layer = "visual" if spec.camera is not None or spec.ray.visual else "collision"
+        rng = np.random.default_rng(0)
 
-            def frame(i: int, spec: RenderedSensorSpec = spec, scene: RayScene = scene, rng=rng) -> None:
-                scene.update(bench.poses[i])
-                draw(scene, spec, bench.sensor_pose(spec, i), rng)
+        def frame(i: int, scene: RayScene, spec: RenderedSensorSpec = spec, rng=rng) -> None:
+            scene.update(bench.poses[i])
+            draw(scene, spec, bench.sensor_pose(spec, i), rng)
 
-            def rebuild(i: int, scene: RayScene = scene, layer: str = layer) -> None:
-                scene.update(bench.poses[i])
-                scene.prepare(layer)
+        def rebuild(i: int, scene: RayScene, layer: str = layer) -> None:
+            scene.update(bench.poses[i])
+            scene.prepare(layer)
 
-            def cast_only(i: int, spec: RenderedSensorSpec = spec, scene: RayScene = scene, rng=rng) -> None:
-                draw(scene, spec, bench.sensor_pose(spec, 0), rng)
+        def cast_only(i: int, scene: RayScene, spec: RenderedSensorSpec = spec, rng=rng) -> None:
+            draw(scene, spec, bench.sensor_pose(spec, 0), rng)
 
-            frame(0)                                      # warm: caches of ray directions, the static scenes
-            wall, cpu = median_time(frame, args.frames, args.repeats)
-            rebuild_ms, _ = median_time(rebuild, args.frames, args.repeats)
-            scene.update(bench.poses[0])
-            cast_ms, _ = median_time(cast_only, args.frames, args.repeats)
+        samples: dict[tuple[int, str], list[tuple[float, float]]] = {}
+        for scene in scenes.values():
+            frame(0, scene)                               # warm: caches of ray directions, the static scenes
+        for _ in range(args.repeats):   # 1 and 2 threads interleaved: the machine's noise hits both alike
+            for threads, scene in scenes.items():
+                for name, run in (("frame", frame), ("rebuild", rebuild)):
+                    samples.setdefault((threads, name), []).append(
+                        one_pass(lambda i, run=run, scene=scene: run(i, scene), args.frames))
+                scene.update(bench.poses[0])
+                samples.setdefault((threads, "cast"), []).append(
+                    one_pass(lambda i, scene=scene: cast_only(i, scene), args.frames))
+        for threads in scenes:
+            wall, cpu, rebuild_ms, cast_ms = (statistics.median(s[k] for s in samples[(threads, name)])
+                                              for name, k in (("frame", 0), ("frame", 1), ("rebuild", 0),
+                                                              ("cast", 0)))
             key = f"{label}, {threads} thread{'s' if threads > 1 else ''}"
             results[key] = {"frame_ms": round(wall, 2), "frame_cpu_ms": round(cpu, 2),
                             "rays_per_s": round(rays / wall * 1e3), "rebuild_ms": round(rebuild_ms, 2),
                             "cast_only_ms": round(cast_ms, 2)}
             rows.append((f"{key}: ms a frame (CPU ms)", f"{wall:.1f} ({cpu:.1f})",
                          f"{rays / wall / 1e3:.2f} M rays/s; rebuild {rebuild_ms:.1f} ms, no-rebuild {cast_ms:.1f} ms"))
+    for scene in scenes.values():
         scene.close()
 
     # the payloads, as the node makes and packs them (thread count does not matter)
