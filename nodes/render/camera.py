@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodes.render.geometry import dot, rotate
+from nodes.render.geometry import RenderError, dot, rotate
 from nodes.render.raycast import RayScene
 from nodes.urdf.rendered_sensors import CameraSpec
 
@@ -106,7 +106,7 @@ def render_camera(scene: RayScene, spec: CameraSpec, sensor_pose: np.ndarray,
     """The camera described by ``spec`` at ``sensor_pose`` (4x4 world pose of its sensor frame: +x forward)
     in ``scene``'s visual layer; noise from ``rng`` if the spec has some (``None``: none)."""
     if spec.encoding not in ENCODINGS:
-        raise ValueError(f"camera encoding '{spec.encoding}' is not one of {', '.join(ENCODINGS)}")
+        raise RenderError(f"camera encoding '{spec.encoding}' is not one of {', '.join(ENCODINGS)}")
     rays = _rays(float(spec.horizontal_fov), int(spec.width), int(spec.height))
     pose = np.asarray(sensor_pose, dtype=np.float64)
     directions = rotate(rays.sensor, pose[:3, :3].astype(np.float32))
