@@ -60,7 +60,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                                     "exists)"}),
              _WAIT_FOR_PUBLISHER,
              ("--field", {"default": "", "help": "print only this field (dotted path, e.g. position or position.0)"}),
-             ("--json", {"action": "store_true", "help": "one JSON object per line instead of YAML"}))
+             ("--json", {"action": "store_true", "help": "one JSON object per line instead of YAML"}),
+             ("--truncate-length", {"type": int, "default": TRUNCATE_LENGTH,
+                                    "help": f"arrays and byte strings longer than this print their first N items "
+                                            f"and a summary (default {TRUNCATE_LENGTH}; an image's pixels, a "
+                                            "cloud's points)"}),
+             ("--full-length", {"action": "store_true", "help": "print every item of every array"}))
     add_verb(sub, "pub", "publish a message given as YAML", "key", "type", ("values", {"nargs": "?", "default": "{}"}),
              ("--once", "-1", {"action": "store_true", "help": "publish once and exit"}),
              ("-r", "--rate", {"type": float, "default": 1.0, "help": "Hz (default 1)"}),
@@ -137,6 +142,25 @@ def _decode_any(sample: Any) -> tuple[str, Any]:
         return type_name or "?", msgpack.unpackb(payload, raw=False)
     except Exception:  # noqa: BLE001 - not msgpack: show bytes
         return type_name or "?", payload
+
+
+TRUNCATE_LENGTH = 128
+
+
+def _truncated(data: Any, limit: int) -> Any:
+    """``data`` with every array over ``limit`` items cut to its first ``limit`` and a summary, as ros2 topic
+    echo's --truncate-length does (bytes: a summary only: an image's pixels are no reading matter)."""
+    if isinstance(data, dict):
+        return {key: _truncated(value, limit) for key, value in data.items()}
+    if isinstance(data, (bytes, bytearray)):
+        if len(data) <= limit:
+            return list(data)
+        return f"<{len(data)} bytes: {bytes(data[:16]).hex(' ')} ...>"
+    if isinstance(data, list):
+        if len(data) <= limit:
+            return [_truncated(item, limit) for item in data]
+        return [_truncated(item, limit) for item in data[:limit]] + [f"... {len(data) - limit} more"]
+    return data
 
 
 def _pick(data: Any, path: str) -> Any:
@@ -237,6 +261,8 @@ def _echo(args: argparse.Namespace) -> int:
             try:
                 if args.field:
                     data = _pick(data, args.field)
+                if not args.full_length:
+                    data = _truncated(data, max(0, args.truncate_length))
                 if args.json:
                     write_line(json.dumps(data, default=lambda b: list(b)))
                 elif args.field and isinstance(data, str):
