@@ -9,6 +9,10 @@ the last ``PLOT_SECONDS`` up to the time cursor, the newest on the right as in r
 ``LEGEND_SECONDS`` of empty axis on the left where the legend sits (the default corner): it never covers data.
 The time panel follows the newest data (``play_state="following"``), so a viewer opened late shows the
 present, not the start.
+
+The sensors get two tabs: "imu" (angular velocity and linear acceleration of each IMU, columns of the robot
+entity like the joints) and "camera" (each camera's image and depth image in 2-D views). The 3-D view starts
+where the world file's ``<gui><camera><pose>`` puts Gazebo's camera, when it has one.
 """
 
 from __future__ import annotations
@@ -21,13 +25,16 @@ import rerun.blueprint as rrb
 from rerun.blueprint.encodings import ComponentSourceKind, VisualizerComponentMapping
 
 from .scene import BALANCE_SERIES, PALETTE, SIM_TIMELINE, PlotGroup, lighter, robot_entity, series_component
+from .sensors import IMU_SERIES
 
 # The side panel's tabs, in this order (the viewer's ``plots`` parameter picks some).
-PLOT_TABS = ("positions", "velocities", "efforts", "commanded", "balance")
+PLOT_TABS = ("positions", "velocities", "efforts", "commanded", "balance", "imu", "camera")
 QUANTITY_TABS = {"positions": "position", "velocities": "velocity", "efforts": "effort"}
 PLOT_SECONDS = 8.0  # history shown in a plot, up to the time cursor
 LEGEND_SECONDS = 4.0  # empty time before that history, under the legend (Rerun 0.41's default corner: bottom left)
 CURSOR_MARGIN = 0.3  # s of axis past the cursor, so the newest point is not on the plot's edge
+# Without a world camera: a three-quarter view from the front left of a standing humanoid, like RViz's orbit.
+DEFAULT_EYE, DEFAULT_TARGET = [1.9, 1.4, 1.3], [0.0, 0.0, 0.55]
 
 
 @dataclass
@@ -37,10 +44,12 @@ class RobotLayout:
     groups: Sequence[PlotGroup] = ()  # joint_states plot groups
     controllers: Mapping[str, Sequence[PlotGroup]] = field(default_factory=dict)  # controller -> its plot groups
     has_balance: bool = False
+    imus: Sequence[tuple[str, str]] = ()  # (column part, label) per IMU
+    cameras: Sequence[tuple[str, bool]] = ()  # (camera entity, has a depth image) per camera
 
     def key(self) -> tuple:
         return (tuple(self.groups), tuple((c, tuple(g)) for c, g in sorted(self.controllers.items())),
-                self.has_balance)
+                self.has_balance, tuple(self.imus), tuple(self.cameras))
 
 
 def title(group: str) -> str:
@@ -112,23 +121,40 @@ def robot_plots(namespace: str, layout: RobotLayout, timeline: str = SIM_TIMELIN
         tabs.append(rrb.Vertical(time_series(f"{prefix}CoM, ZMP (m), balanced (1/0)", entity, timeline,
                                              series(entity, "balance:values", BALANCE_SERIES, PALETTE[:6])),
                                  name="balance"))
+    if layout.imus and "imu" in plots:
+        views = [time_series(f"{prefix}{label}: {what}", entity, timeline,
+                             series(entity, f"{kind}:{part}", IMU_SERIES, PALETTE[:3]))
+                 for part, label in layout.imus
+                 for kind, what in (("angular_velocity", "angular velocity (rad/s)"),
+                                    ("linear_acceleration", "linear acceleration (m/s²)"))]
+        tabs.append(grid(views, "imu"))
+    if layout.cameras and "camera" in plots:
+        views = []
+        for camera, depth in layout.cameras:
+            label = camera.rsplit("/", 1)[-1]
+            # The image alone ("$origin": not the depth image below it), then the depth image.
+            views.append(rrb.Spatial2DView(name=f"{prefix}{label}", origin=camera, contents=["$origin"]))
+            if depth:
+                views.append(rrb.Spatial2DView(name=f"{prefix}{label} depth", origin=f"{camera}/depth"))
+        tabs.append(grid(views, "camera"))
     return rrb.Tabs(*tabs, active_tab=0, name=namespace)
 
 
 def build_blueprint(robots: Mapping[str, RobotLayout] | None = None, timeline: str = SIM_TIMELINE,
-                    ground: bool = True, plots: Sequence[str] = PLOT_TABS) -> rrb.Blueprint:
+                    ground: bool = True, plots: Sequence[str] = PLOT_TABS,
+                    eye: tuple[Sequence[float], Sequence[float]] | None = None) -> rrb.Blueprint:
     """``robots``: namespace -> its plot layout; ``timeline``: the one the time panel follows; ``ground``: draw
-    the ground grid; ``plots``: the tabs beside the 3-D scene (of ``PLOT_TABS``; none: the scene alone)."""
+    the ground grid; ``plots``: the tabs beside the 3-D scene (of ``PLOT_TABS``; none: the scene alone);
+    ``eye``: (position, look target) of the 3-D view's camera (the world's GUI camera), else the default."""
     robots = robots or {}
+    position, target = eye if eye is not None else (DEFAULT_EYE, DEFAULT_TARGET)
     scene = rrb.Spatial3DView(
         name="scene", origin="world",
         # The ground: the viewer's own grid (0.5 m, z = 0), like RViz's Grid display. It is part of the
         # layout, not of the data, so the web server never drops it from a short history.
         line_grid=rrb.LineGrid3D(visible=ground, spacing=0.5, plane=rr.components.Plane3D.XY,
                                  color=[150, 155, 160, 255], stroke_width=1.5),
-        # A three-quarter view from the front left of a standing humanoid, like RViz's default orbit.
-        eye_controls=rrb.EyeControls3D(position=[1.9, 1.4, 1.3], look_target=[0.0, 0.0, 0.55],
-                                       eye_up=[0.0, 0.0, 1.0]),
+        eye_controls=rrb.EyeControls3D(position=list(position), look_target=list(target), eye_up=[0.0, 0.0, 1.0]),
     )
     side: rrb.Container | rrb.View | None
     several = len(robots) > 1

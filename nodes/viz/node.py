@@ -2,7 +2,10 @@
 
 It needs nothing but the keys (docs/architecture.md, Key expressions): ``<ns>/robot_description`` (topic + latched queryable),
 ``<ns>/tf``, ``<ns>/tf_static``, ``<ns>/joint_states``, ``<ns>/<jtc>/controller_state``,
-``<ns>/<jtc>/joint_trajectory``, ``<ns>/humanoid_state``, ``sim/model_states`` and ``sim/clock``.
+``<ns>/<jtc>/joint_trajectory``, ``<ns>/humanoid_state``, ``sim/model_states`` and ``sim/clock``; the world
+from ``sim/scene`` (latched) and ``sim/link_states``; a robot's body sensors (any ``sensor_msgs/Imu`` and
+``geometry_msgs/WrenchStamped`` under its namespace) and the cameras, lidars and lasers its URDF declares
+(the renderer's ``Image``, ``CameraInfo``, ``PointCloud2`` and ``LaserScan`` keys).
 Robots come from the ``robots`` parameter, from the models in ``sim/model_states`` and from the node
 graph (anyone publishing ``<ns>/robot_description`` or ``<ns>/joint_states``). It only subscribes, so it
 cannot slow the control loop; every stream has its own rate limit and excess messages are dropped.
@@ -11,6 +14,7 @@ cannot slow the control loop; every stream has its own rate limit and excess mes
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import queue
 import threading
@@ -23,29 +27,54 @@ import rerun as rr
 
 import msgs
 from msgs.control_msgs import JointTrajectoryControllerState as ControllerState
-from msgs.gazebo_msgs import ModelStates
+from msgs.gazebo_msgs import LinkStates, ModelStates
+from msgs.geometry_msgs import WrenchStamped
 from msgs.humanoid_msgs import HumanoidState
 from msgs.rosgraph_msgs import Clock
-from msgs.sensor_msgs import JointState
+from msgs.sensor_msgs import CameraInfo, Image, Imu, JointState, LaserScan, PointCloud2
 from msgs.std_msgs import String
 from msgs.tf2_msgs import TFMessage
 from msgs.trajectory_msgs import JointTrajectory
 from msgs.visualization_msgs import Marker, MarkerArray
+from msgs.zenroid_msgs import Scene
 from nodes.core import Node, Subscription
 from nodes.core import graph as core_graph
 from nodes.core.latched import fetch_latched
 from nodes.urdf.model import UrdfError
+from nodes.urdf.rendered_sensors import RenderedSensorSpec, parse_rendered_sensors
+from nodes.urdf.sensors import SensorDeclarationError
+from nodes.urdf.xml_safety import parse_xml
 
 from .blueprint import PLOT_TABS, QUANTITY_TABS, RobotLayout, build_blueprint
+from .clouds import cloud_points, intensity_colors, scan_points
+from .images import SensorDataError, color_image, depth_millimetres, intrinsics
 from .markers import MarkerError, MarkerLayer
 from .ratelimit import RateLimiter
 from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, SceneTime, is_wall_stamp, parse_model
+from .sensors import (
+    LIDAR_RADIUS,
+    SCAN_COLOR,
+    SCAN_RADIUS,
+    CameraFrame,
+    RenderedSensors,
+    camera_entity,
+    fallback_k,
+    force_arrow,
+    imu_columns,
+    sensor_part,
+    to_world,
+)
 from .sink import Output, OutputPlan
+from .world import WorldModels, WorldProblem, read_scene
 
 MARKER_TYPES = {"visualization_msgs/msg/Marker": Marker, "visualization_msgs/msg/MarkerArray": MarkerArray}
 # RViz's default marker topics (global and per robot), and seed 002's trajectory marker topic.
 GLOBAL_MARKER_TOPICS = {"visualization_marker": Marker, "visualization_marker_array": MarkerArray,
                         "visualization/trajectory": Marker}
+# Body sensors found in the graph under a robot's namespace, and the main job's keys (subscribed at once).
+BODY_SENSOR_TYPES = {"sensor_msgs/msg/Imu": "imu", "geometry_msgs/msg/WrenchStamped": "wrench"}
+DEFAULT_BODY_SENSORS = {"imu": ["imu_sensor_broadcaster/imu"],
+                        "wrench": ["left_foot_ft_broadcaster/wrench", "right_foot_ft_broadcaster/wrench"]}
 
 DISCOVERY_PERIOD = 2.0
 LATEST_FRESH = 1.0  # s a controller_state or humanoid_state stays in the plot rows after it stops coming
@@ -86,7 +115,15 @@ class RobotView:
     tf_seen: bool = False
     pending_static: list = field(default_factory=list)  # tf_static rows that came before the scene
     limits: dict[str, RateLimiter] = field(default_factory=dict)
-    latest: dict[str, LatchedStream] = field(default_factory=dict)  # "humanoid_state", "controller:<name>"
+    # "humanoid_state", "controller:<name>", "imu:<key>", "wrench:<key>", "image:<camera>", "depth:<camera>",
+    # "info:<camera>", "range:<key>"
+    latest: dict[str, LatchedStream] = field(default_factory=dict)
+    body_sensors: dict[str, tuple[str, Subscription]] = field(default_factory=dict)  # key -> ("imu" | "wrench", sub)
+    imus: dict[str, str] = field(default_factory=dict)  # key -> column part, once it has sent data
+    rendered: list[Subscription] = field(default_factory=list)  # the URDF's cameras, lidars, lasers
+    cameras: dict[str, RenderedSensorSpec] = field(default_factory=dict)  # camera name -> its spec
+    ranges: dict[str, str] = field(default_factory=dict)  # key -> "points" | "scan"
+    sensors: RenderedSensors | None = None
     last_positions: dict[str, float] = field(default_factory=dict)
     first_state: float = 0.0  # monotonic time of the first joint_states with a model
 
@@ -131,6 +168,26 @@ class Viewer(Node):
         self.quantities = [q for tab, q in QUANTITY_TABS.items() if tab in self.plots]
         self.tf_fallback_after = p("tf_fallback_after", 1.0, min_value=0.0,
                                    description="s of joint_states without tf before frames come from our FK")
+        # The world and the sensors (issues 25-27): each rendered-sensor entity costs a page one chunk per
+        # flush, so images and clouds come at a few Hz, images JPEG-compressed (docs/viewer.md).
+        self.show_world = p("world", True, description="draw the world's models (sim/scene) beside the robots")
+        self.world_rate = p("world_rate", 5.0, min_value=0.1, description=(
+            "Hz of the world's moving models (sim/link_states is read at this rate)"))
+        self.show_imu = p("imu", True, description="plot every sensor_msgs/Imu under a robot's namespace")
+        self.show_wrenches = p("wrenches", True, description=(
+            "draw every geometry_msgs/WrenchStamped under a robot's namespace as a force arrow"))
+        self.wrench_scale = p("wrench_scale", 0.001, min_value=0.0, description="m of force arrow per N")
+        self.show_cameras = p("cameras", True, description="draw the cameras of the robots' URDFs (images, frusta)")
+        self.show_depth = p("depth", True, description="also their depth images (points in the 3-D view)")
+        self.show_ranges = p("ranges", True, description="draw the lidars' and lasers' points of the robots' URDFs")
+        self.image_rate = p("image_rate", 2.0, min_value=0.1, max_value=30.0,
+                            description="Hz of each camera's rows (image, depth, pose)")
+        self.cloud_rate = p("cloud_rate", 2.0, min_value=0.1, max_value=30.0,
+                            description="Hz of each robot's lidar and laser row")
+        self.jpeg_quality = p("jpeg_quality", 75, type=int, min_value=1, max_value=100,
+                              description="JPEG quality of the camera images sent to the viewer")
+        self.cloud_max_points = p("cloud_max_points", 20000, type=int, min_value=100, description=(
+            "points per cloud at most (every k-th point beyond)"))
 
         self.sim_now = 0.0
         self.sim_clock_seen = False
@@ -141,6 +198,9 @@ class Viewer(Node):
         self.inbox: queue.SimpleQueue = queue.SimpleQueue()  # work from the discovery thread
         self.layout_key: tuple = ()
         self.pending_layout: tuple[tuple, float] = ((), 0.0)  # the newest layout key and since when
+        self.scene_checked = False  # sim/scene was asked for once (its GUI camera is the layout's view)
+        self.world_names: set[str] = set()  # the models sim/scene says are not robots (no namespace)
+        self.link_states: Subscription | None = None
 
         self.recording = rr.RecordingStream("zenroid_viz",
                                             batcher_config=rr.ChunkBatcherConfig(flush_tick=flush_period))
@@ -168,6 +228,10 @@ class Viewer(Node):
         self.model_states_limit = RateLimiter(self.rates["model_states"])
         self.subscribe(Clock, "/sim/clock", self.on_clock, self.clock_limit)
         self.subscribe(ModelStates, "/sim/model_states", self.on_model_states, self.model_states_limit)
+        self.world = WorldModels(self.recording) if self.show_world else None
+        self.link_states_limit = RateLimiter(self.world_rate)
+        # sim/scene also tells world models from robots; handled on the timer's thread (it may drop subscriptions)
+        self.subscribe(Scene, "/sim/scene", lambda m: self.inbox.put(("scene", "", m)))
         for namespace in self.robot_list:
             self.add_robot(namespace)
         self.create_timer(0.1, self.drain_inbox, sim_time=False)
@@ -231,6 +295,7 @@ class Viewer(Node):
         robot = RobotView(namespace)
         robot.limits = {stream: RateLimiter(hz) for stream, hz in self.rates.items()}
         robot.limits["fk"] = RateLimiter(self.rates["tf"])
+        robot.limits["ranges"] = RateLimiter(self.cloud_rate)
         self.robots[namespace] = robot
         sub, limits, ns = self.subscribe, robot.limits, namespace
         robot.subscriptions += [
@@ -245,10 +310,24 @@ class Viewer(Node):
         ]
         for controller in self.controller_names:
             self.add_controller(robot, controller)
+        for kind, topics in DEFAULT_BODY_SENSORS.items():
+            for topic in topics:
+                self.add_body_sensor(robot, kind, f"{ns}/{topic}")
         self.add_marker_topic(f"{ns}/visualization_marker", Marker)
         self.add_marker_topic(f"{ns}/visualization_marker_array", MarkerArray)
         self.logger.info(f"showing robot '{namespace}'")
         return robot
+
+    def drop_robot(self, namespace: str) -> None:
+        """Forget a namespace taken for a robot that is not one (a world model seen in sim/model_states)."""
+        robot = self.robots.pop(namespace)
+        subscriptions = [*robot.subscriptions, *(s for subs in robot.controllers.values() for s in subs),
+                         *(s for _, s in robot.body_sensors.values()), *robot.rendered]
+        for topic in (f"{namespace}/visualization_marker", f"{namespace}/visualization_marker_array"):
+            if topic in self.marker_topics:
+                subscriptions.append(self.marker_topics.pop(topic))
+        for sub in subscriptions:
+            sub.destroy()
 
     def add_controller(self, robot: RobotView, controller: str) -> None:
         if controller in robot.controllers:
@@ -259,6 +338,224 @@ class Viewer(Node):
             self.subscribe(JointTrajectory, f"{base}/joint_trajectory",
                            lambda m, r=robot, c=controller: self.on_trajectory(r, c, m)),
         ]
+
+    # -- sensors -------------------------------------------------------------------------------------
+    def add_body_sensor(self, robot: RobotView, kind: str, key: str) -> None:
+        """An IMU (plotted in the robot's rows) or a force/torque sensor (an arrow among its markers): only
+        the newest message is kept, decoded when a row takes it (they come at 1 kHz)."""
+        key = key.strip("/")
+        if key in robot.body_sensors or (kind == "imu" and not self.show_imu) or \
+                (kind == "wrench" and not self.show_wrenches):
+            return
+        if kind == "imu":
+            part = sensor_part(robot.namespace, key)
+            robot.body_sensors[key] = (kind, self.latch(robot, f"imu:{key}", Imu, f"/{key}", on_arrival=(
+                lambda r=robot, k=key, p=part: r.imus.setdefault(k, p))))
+        else:
+            robot.body_sensors[key] = (kind, self.latch(robot, f"wrench:{key}", WrenchStamped, f"/{key}"))
+
+    def body_sensor_values(self, robot: RobotView) -> dict[str, dict[str, np.ndarray]]:
+        """The IMUs' plot columns for this row; the force arrows are updated on the way."""
+        columns: dict[str, dict[str, np.ndarray]] = {}
+        scene = robot.scene
+        for key, (sensor, _) in robot.body_sensors.items():
+            msg = self.latest(robot, f"{sensor}:{key}")
+            try:
+                if sensor == "imu":
+                    if msg is not None and "imu" in self.plots:
+                        for kind, parts in imu_columns(sensor_part(robot.namespace, key), msg).items():
+                            columns.setdefault(kind, {}).update(parts)
+                    continue
+                frame = None if msg is None or scene is None else scene.frame_pose(msg.header.frame_id)
+                if msg is not None and frame is None:
+                    self.logger.warn_throttle(10.0, f"{key}: frame_id '{msg.header.frame_id}' is not in tf (yet): "
+                                              "no force arrow", key=f"wrench_frame:{key}")
+                if scene is not None:
+                    arrow = force_arrow(frame, msg, self.wrench_scale) if frame is not None else None
+                    scene.update_arrow(key, *(arrow or (None,)))
+            except SensorDataError as exc:
+                self.logger.warn_throttle(5.0, f"{key}: {exc}: skipped", key=f"sensor:{key}")
+                if scene is not None and sensor == "wrench":
+                    scene.update_arrow(key, None)
+        return columns
+
+    def add_rendered_sensors(self, robot: RobotView, xml_text: str) -> None:
+        """Subscribe to the cameras, lidars and lasers the robot's URDF declares, on the keys the renderer
+        publishes them (gazebo_ros' names, remappings applied): the colour and depth images with their
+        CameraInfo, lidar PointCloud2s and LaserScans (a depth camera's own PointCloud2 is left out: Rerun
+        lifts the depth image into the same points through the pinhole, and 30 Hz x 2.4 MB would be the
+        biggest stream of the job)."""
+        for sub in robot.rendered:
+            sub.destroy()
+        robot.rendered, robot.cameras, robot.ranges = [], {}, {}
+        if not (self.show_cameras or self.show_ranges):
+            return
+        try:
+            specs = parse_rendered_sensors(parse_xml(xml_text.encode()), robot.namespace)
+        except (SensorDeclarationError, UrdfError, ValueError) as exc:
+            self.logger.warn(f"robot '{robot.namespace}': its cameras and range sensors are not drawn: {exc}")
+            return
+        if robot.sensors is None:
+            robot.sensors = RenderedSensors(self.recording, robot.namespace, self.jpeg_quality)
+        for spec in specs:
+            keys = spec.keys
+            if spec.camera is not None and self.show_cameras and "image" in keys:
+                name = spec.name
+                robot.cameras[name] = spec
+                robot.limits[f"camera:{name}"] = RateLimiter(self.image_rate)
+                due = functools.partial(self.camera_arrived, robot, name)
+                robot.rendered.append(self.latch(robot, f"image:{name}", Image, f"/{keys['image']}", on_arrival=due))
+                if "camera_info" in keys:
+                    robot.rendered.append(self.latch(robot, f"info:{name}", CameraInfo, f"/{keys['camera_info']}"))
+                if self.show_depth and spec.camera.depth and "depth" in keys:
+                    robot.rendered.append(self.latch(robot, f"depth:{name}", Image, f"/{keys['depth']}",
+                                                     on_arrival=due))
+            elif spec.ray is not None and self.show_ranges and ("points" in keys or "scan" in keys):
+                kind = "points" if "points" in keys else "scan"
+                key = keys[kind]
+                robot.ranges[key] = kind
+                robot.rendered.append(self.latch(robot, f"range:{key}", PointCloud2 if kind == "points" else LaserScan,
+                                                 f"/{key}", on_arrival=lambda r=robot: self.ranges_arrived(r)))
+        if specs:
+            self.logger.info(f"robot '{robot.namespace}': sensors {', '.join(s.name for s in specs)} "
+                             f"({', '.join(k for s in specs for k in s.keys.values())})")
+
+    def camera_arrived(self, robot: RobotView, camera: str) -> None:
+        """A camera's image or depth image came (on Zenoh's thread): a row at ``image_rate``."""
+        limiter = robot.limits.get(f"camera:{camera}")
+        if limiter is None or not limiter.ready():
+            return
+        with self.lock:
+            self.log_camera(robot, camera)
+
+    def log_camera(self, robot: RobotView, camera: str) -> None:
+        """The camera's newest image and depth image, its pinhole (CameraInfo's K, else the URDF's field of
+        view) and its optical frame in the world."""
+        spec = robot.cameras.get(camera)
+        if spec is None or robot.scene is None or robot.sensors is None or not robot.present:
+            return
+        color_msg, depth_msg = self.latest(robot, f"image:{camera}"), self.latest(robot, f"depth:{camera}")
+        first = color_msg or depth_msg
+        if first is None:
+            return
+        key = f"{robot.namespace}/{spec.keys.get('image', camera)}"
+        try:
+            color = color_image(color_msg) if color_msg is not None else None
+        except SensorDataError as exc:
+            self.logger.warn_throttle(5.0, f"{key}: image skipped: {exc}", key=f"image:{key}")
+            color = None
+        depth_key = spec.keys.get("depth", key)
+        try:
+            depth = depth_millimetres(depth_msg) if depth_msg is not None else None
+        except SensorDataError as exc:
+            self.logger.warn_throttle(5.0, f"{depth_key}: depth image skipped: {exc}", key=f"image:{depth_key}")
+            depth = None
+        if color is None and depth is None:
+            return
+        height, width = (color[0] if color is not None else depth).shape[:2]
+        info = self.latest(robot, f"info:{camera}")
+        k = None
+        if info is not None:
+            try:
+                k = intrinsics(info, width, height)[0]
+            except SensorDataError as exc:
+                self.logger.warn_throttle(5.0, f"{spec.keys.get('camera_info', key)}: {exc}: the frustum comes "
+                                          "from the URDF's field of view", key=f"info:{key}")
+        if k is None:
+            k = fallback_k(width, height, spec.camera.horizontal_fov if spec.camera else 1.047)
+        frame_id = first.header.frame_id or spec.frame_id
+        pose = robot.scene.frame_pose(frame_id)
+        if pose is None:
+            self.logger.warn_throttle(10.0, f"{key}: frame_id '{frame_id}' is not in tf (yet): not drawn",
+                                      key=f"camera_frame:{key}")
+            return
+        robot.sensors.log_camera(self.stamp_or_now(first.header.stamp), camera,
+                                 CameraFrame(pose, k, width, height, color, depth))
+
+    def ranges_arrived(self, robot: RobotView) -> None:
+        """A lidar cloud or a laser scan came (on Zenoh's thread): a row of all of them at ``cloud_rate``."""
+        if not robot.limits["ranges"].ready():
+            return
+        with self.lock:
+            self.log_ranges(robot)
+
+    def log_ranges(self, robot: RobotView) -> None:
+        """Every range sensor's newest points in the world: lidars by intensity, lasers red."""
+        if robot.scene is None or robot.sensors is None or not robot.present:
+            return
+        clouds, stamp = [], None
+        for key, kind in robot.ranges.items():
+            msg = self.latest(robot, f"range:{key}")
+            if msg is None:
+                continue
+            try:
+                if kind == "points":
+                    xyz, intensity, rgb = cloud_points(msg, self.cloud_max_points)
+                    colors = intensity_colors(intensity) if intensity is not None else (
+                        rgb if rgb is not None else np.full((len(xyz), 3), 200, np.uint8))
+                    radius = LIDAR_RADIUS
+                else:
+                    xyz, _ = scan_points(msg)
+                    colors, radius = np.tile(np.array(SCAN_COLOR, np.uint8), (len(xyz), 1)), SCAN_RADIUS
+            except SensorDataError as exc:
+                self.logger.warn_throttle(5.0, f"{key}: skipped: {exc}", key=f"range:{key}")
+                continue
+            pose = robot.scene.frame_pose(msg.header.frame_id)
+            if pose is None:
+                self.logger.warn_throttle(10.0, f"{key}: frame_id '{msg.header.frame_id}' is not in tf (yet): "
+                                          "not drawn", key=f"range_frame:{key}")
+                continue
+            clouds.append((to_world(pose, xyz), colors, radius))
+            stamp = msg.header.stamp if stamp is None else stamp
+        if clouds:
+            robot.sensors.log_ranges(self.stamp_or_now(stamp), clouds)
+
+    # -- the world (sim/scene) -----------------------------------------------------------------------
+    def on_scene(self, msg: Any) -> None:
+        """A (new) scene: the world's models are drawn again (a spawned or deleted model)."""
+        self.scene_checked = True
+        if len(msg.namespaces) == len(msg.models):
+            self.world_names = {m for m, ns in zip(msg.models, msg.namespaces, strict=True) if not ns}
+            for name in self.world_names & set(self.robots):
+                robot = self.robots[name]
+                if robot.scene is None and name not in self.robot_list:  # taken for a robot before the scene
+                    self.drop_robot(name)
+        if self.world is None or (msg.version == self.world.version and self.world.layout.shapes):
+            return
+        try:
+            layout, problems = read_scene(msg)
+        except WorldProblem as exc:
+            self.logger.warn_throttle(5.0, f"{exc}: scene ignored", key="scene")
+            return
+        for problem in problems[:5]:
+            self.logger.warn_throttle(30.0, f"{problem}: skipped", key=f"scene:{problem[:60]}")
+        self.world.load(layout, self.sim_now)
+        self.logger.info(f"world: scene version {layout.version}, {len(layout.models)} models drawn "
+                         f"({len(layout.shapes)} shapes)")
+
+    def on_link_states(self, msg: Any) -> None:
+        if self.world is None:
+            return
+        if len(msg.pose) != len(msg.name):
+            self.logger.warn_throttle(5.0, f"sim/link_states: {len(msg.name)} names but {len(msg.pose)} poses: "
+                                      "ignored", key="link_states_len")
+            return
+        moved, problems = self.world.update_poses(msg.name, msg.pose)
+        for problem in problems[:3]:
+            self.logger.warn_throttle(10.0, f"{problem}: the link keeps its last pose", key=f"link:{problem[:60]}")
+        if moved:
+            self.world.log(self.sim_now)
+
+    def follow_link_states(self) -> None:
+        """Read sim/link_states only while the world needs poses: the simulator publishes it (every link of
+        every model at 100 Hz) only while someone subscribes."""
+        want = self.world is not None and bool(self.world.layout.links) and self.world.needs_link_states()
+        if want and self.link_states is None:
+            self.link_states = self.subscribe(LinkStates, "/sim/link_states", self.on_link_states,
+                                              self.link_states_limit)
+        elif not want and self.link_states is not None:
+            self.link_states.destroy()
+            self.link_states = None
 
     # -- markers (visualization_msgs) ----------------------------------------------------------------
     def add_marker_topic(self, topic: str, marker_type: Any) -> None:
@@ -324,6 +621,7 @@ class Viewer(Node):
             return
         robot.description = xml_text
         robot.scene = scene
+        self.add_rendered_sensors(robot, xml_text)
         count = scene.log_model(self.sim_now)
         if scene.skipped_meshes:
             self.logger.warn(f"robot '{robot.namespace}': meshes not found, not drawn: {scene.skipped_meshes[:3]}")
@@ -371,8 +669,9 @@ class Viewer(Node):
                                       "ignored", key="model_states_len")
             return
         names = set(msg.name)
-        if self.discover:
-            for name in names - set(self.robots):
+        # A model is a robot unless sim/scene says it is a world model (no namespace): wait for its answer.
+        if self.discover and self.scene_checked:
+            for name in names - set(self.robots) - self.world_names:
                 if name and name != "ground_plane":
                     self.add_robot(name)
                     self.inbox.put(("fetch", name))
@@ -434,6 +733,7 @@ class Viewer(Node):
             robot.first_state = robot.first_state or time.monotonic()
             scene.base_known = time.monotonic() - robot.first_state > 1.0
         balance = self.balance(robot)
+        sensors = self.body_sensor_values(robot)
         if robot.limits["markers"].ready():
             if balance is not None:
                 scene.update_balance(*balance[1])
@@ -441,7 +741,8 @@ class Viewer(Node):
         # The robot's row: its pose, markers and every plotted value (controllers, balance: the latest).
         scene.log_joint_states(when, msg.name, msg.position, msg.velocity, msg.effort, self.quantities,
                                controllers=self.controller_values(robot) if "commanded" in self.plots else None,
-                               balance=balance[0] if balance and "balance" in self.plots else None)
+                               balance=balance[0] if balance and "balance" in self.plots else None,
+                               extra=sensors)
 
     def controller_values(self, robot: RobotView) -> dict[str, tuple[list[str], list[float], list[float]]]:
         """Each controller's latest (joint names, reference, actual positions), for the plot row."""
@@ -462,7 +763,8 @@ class Viewer(Node):
 
     def balance(self, robot: RobotView) -> tuple[list[float], tuple] | None:
         """The latest humanoid_state as the balance plot's values (CoM x y z, ZMP x y, is_balanced) and the
-        balance markers' arguments; None without a fresh, finite one."""
+        balance markers' arguments (with the measured centre of pressure, when the feet measured one); None
+        without a fresh, finite one."""
         msg = self.latest(robot, "humanoid_state")
         if msg is None:
             return None
@@ -470,8 +772,10 @@ class Viewer(Node):
         if not all(math.isfinite(v) for v in com + (msg.zmp_x, msg.zmp_y)):
             return None
         polygon = [(p.x, p.y, p.z) for p in msg.support_polygon]
+        cop = (msg.cop_x, msg.cop_y) if msg.cop_measured and math.isfinite(msg.cop_x) and \
+            math.isfinite(msg.cop_y) else None
         return ([*com, msg.zmp_x, msg.zmp_y, 1.0 if msg.is_balanced else 0.0],
-                (com, (msg.zmp_x, msg.zmp_y), msg.is_balanced, polygon))
+                (com, (msg.zmp_x, msg.zmp_y), msg.is_balanced, polygon, cop))
 
     def on_trajectory(self, robot: RobotView, controller: str, msg: Any) -> None:
         """The target pose of a trajectory sent on the topic: its last point."""
@@ -499,6 +803,8 @@ class Viewer(Node):
                 return
 
     def discover_once(self) -> None:
+        if not self.scene_checked:
+            self.fetch_scene()
         if self.discover:
             for entry in core_graph.snapshot(self.session, timeout=1.0):
                 if entry.kind != "pub":
@@ -510,9 +816,22 @@ class Viewer(Node):
                     self.inbox.put(("controller", parts[0], parts[1]))
                 if entry.type_name in MARKER_TYPES:  # anyone publishing markers, as RViz lets you pick
                     self.inbox.put(("markers", entry.name, entry.type_name))
+                if entry.type_name in BODY_SENSOR_TYPES and len(parts) > 1:
+                    self.inbox.put(("body", parts[0], BODY_SENSOR_TYPES[entry.type_name], entry.name))
         for namespace, robot in list(self.robots.items()):
             if robot.scene is None and robot.present:
                 self.fetch(namespace)
+
+    def fetch_scene(self) -> None:
+        """The latched sim/scene, published before we subscribed (later ones come on the topic)."""
+        try:
+            scene = fetch_latched(self.session, Scene, "sim/scene", timeout=1.0)
+        except msgs.DecodeError as exc:
+            self.logger.warn_throttle(30.0, f"sim/scene: bad latched reply: {exc}", key="fetch:scene")
+            scene = None
+        if scene is not None:
+            self.inbox.put(("scene", "", scene))
+        self.inbox.put(("scene_checked", ""))
 
     def fetch(self, namespace: str) -> None:
         """Ask the latched queryables for what was published before we subscribed."""
@@ -546,12 +865,20 @@ class Viewer(Node):
                 self.add_marker_topic(namespace, MARKER_TYPES[item[2]])
             elif kind == "fetch":
                 threading.Thread(target=self.fetch, args=(namespace,), daemon=True).start()
+            elif kind == "scene":
+                self.on_scene(item[2])
+            elif kind == "scene_checked":
+                self.scene_checked = True
+            elif kind == "body":
+                if namespace in self.robots:
+                    self.add_body_sensor(self.robots[namespace], item[2], item[3])
             elif namespace in self.robots:
                 robot = self.robots[namespace]
                 if kind == "description" and robot.scene is None and robot.present:
                     self.on_description(robot, item[2])
                 elif kind == "tf_static":
                     self.on_tf(robot, item[2], static=True)
+        self.follow_link_states()
         self.update_layout()
 
     def robot_layout(self, robot: RobotView) -> RobotLayout:
@@ -560,7 +887,10 @@ class Viewer(Node):
             return RobotLayout(has_balance=robot.has_balance)
         return RobotLayout(groups=list(scene.plot_groups), controllers={
             c: scene.controller_groups[c] for c in sorted(robot.controllers) if c in scene.controller_groups},
-            has_balance=robot.has_balance)
+            has_balance=robot.has_balance,
+            imus=tuple((part, key.removeprefix(f"{robot.namespace}/")) for key, part in sorted(robot.imus.items())),
+            cameras=tuple((camera_entity(robot.namespace, name), bool(self.show_depth and spec.camera.depth))
+                          for name, spec in sorted(robot.cameras.items()) if spec.camera is not None))
 
     def update_layout(self) -> None:
         """Send the blueprint when robots, plot groups, controllers, balance plots or the timeline change,
@@ -568,17 +898,20 @@ class Viewer(Node):
         that open later, and each one costs them a chunk per view and property (the humanoid's: ~160) to take
         in before they show the present. So there is no start-up layout either (``Output`` sends none)."""
         layout = {ns: self.robot_layout(r) for ns, r in sorted(self.robots.items()) if r.present}
-        key = (self.timeline, tuple((ns, lay.key()) for ns, lay in layout.items()))
+        eye = self.world.layout.eye if self.world is not None else None
+        key = (self.timeline, tuple((ns, lay.key()) for ns, lay in layout.items()), repr(eye))
         now = time.monotonic()
         if key != self.pending_layout[0]:
             self.pending_layout = (key, now)
         settled = now - self.pending_layout[1]
         # Until every robot's joints are known, the layout would only be sent again a moment later: wait
         # (up to LAYOUT_WAIT), and a viewer opened meanwhile shows Rerun's own layout of what it has.
-        incomplete = not layout or any(not lay.groups for lay in layout.values())
+        incomplete = not layout or any(not lay.groups for lay in layout.values()) or \
+            (self.world is not None and not self.scene_checked)
         if key != self.layout_key and settled >= (LAYOUT_WAIT if incomplete else LAYOUT_SETTLE):
             self.layout_key = key
-            self.recording.send_blueprint(build_blueprint(layout, self.timeline, self.show_ground, self.plots))
+            self.recording.send_blueprint(build_blueprint(layout, self.timeline, self.show_ground, self.plots,
+                                                          eye=eye))
 
     def keyframe(self) -> None:
         """Every idle robot's model and markers again (see ``RobotScene.refresh``), and the user markers."""
@@ -586,6 +919,8 @@ class Viewer(Node):
             for robot in self.robots.values():
                 if robot.scene is not None and robot.present:
                     robot.scene.refresh(self.sim_now, self.keyframe_period)
+            if self.world is not None:
+                self.world.refresh(self.sim_now, self.keyframe_period)
         self.flush_markers(refresh=True)
 
     def on_process_exit(self) -> None:

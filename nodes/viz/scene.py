@@ -10,16 +10,19 @@ changes is one row of one entity, logged with each joint_states sample:
                                                      visual, placed in the world through our tf tree: tf,
                                                      tf_static, the root from sim/model_states, or our own
                                                      FK); its built-in markers (Points3D: CoM, its ground
-                                                     projection, ZMP, the target's end effectors;
-                                                     LineStrips3D: end-effector and CoM paths, support polygon,
-                                                     the target pose's skeleton); and every plotted value as
+                                                     projection, ZMP, the measured centre of pressure, the
+                                                     target's end effectors; LineStrips3D: end-effector and
+                                                     CoM paths, support polygon, the target pose's skeleton;
+                                                     Arrows3D: the feet's forces); and every plotted value as
                                                      columns the blueprint maps to its plots (``blueprint.py``):
                                                      ``position:<group>``, ``velocity:<group>``,
                                                      ``effort:<group>`` (one value per joint of the limb group),
                                                      ``<controller>:<group>`` (reference and actual per joint,
-                                                     the latest controller_state) and ``balance:values``
-                                                     (CoM x y z, ZMP x y, is_balanced)
+                                                     the latest controller_state), ``balance:values``
+                                                     (CoM x y z, ZMP x y, is_balanced) and the IMUs'
+                                                     ``angular_velocity:<imu>``, ``linear_acceleration:<imu>``
 - ``world/<ns>/links/<link>/visual_<i>``              mesh visuals, one entity each with its world pose
+- ``world/<ns>/cameras/...``, ``world/<ns>/ranges``   the rendered sensors (``sensors.py``)
 
 The ground is the viewer's own line grid (a blueprint setting: no data, never dropped by the web server).
 
@@ -59,6 +62,9 @@ LIMB_WORDS = {
 }
 SIDES = {"left": "left", "l": "left", "right": "right", "r": "right"}
 SHAPES = {"box": "boxes", "cylinder": "cylinders", "sphere": "spheres"}  # URDF primitive -> entity name
+FORCE_COLOR = (255, 120, 30, 255)  # the feet's force arrows
+COP_COLOR = (40, 220, 240, 255)  # the measured centre of pressure
+ARROW_RADIUS = 0.008
 
 
 def frame_name(namespace: str, frame: str, world_frames: Sequence[str] = ("world", "map", "odom")) -> str:
@@ -293,6 +299,8 @@ class RobotScene:
         # The markers' current parts (name -> points or strips), drawn with every row.
         self.marker_points: dict[str, tuple[np.ndarray, list[float], list[list[int]]]] = {}
         self.marker_strips: dict[str, tuple[list[np.ndarray], float, list[int]]] = {}
+        # Force arrows (name -> origin, vector, colour): the feet's force/torque sensors.
+        self.marker_arrows: dict[str, tuple[np.ndarray, np.ndarray, list[int]]] = {}
         self.skipped_meshes: list[str] = []
 
     # -- model ---------------------------------------------------------------------------------------
@@ -461,11 +469,12 @@ class RobotScene:
                          velocity: Sequence[float], effort: Sequence[float],
                          quantities: Sequence[str] = QUANTITIES,
                          controllers: Mapping[str, tuple[Sequence[str], Sequence[float], Sequence[float]]] | None = None,
-                         balance: Sequence[float] | None = None) -> None:
+                         balance: Sequence[float] | None = None,
+                         extra: Mapping[str, Mapping[str, np.ndarray]] | None = None) -> None:
         """The robot's row for this joint_states sample, with every plotted value: positions, velocities and
         efforts per limb group (those of ``quantities``), each controller's reference and actual position per
         joint of its groups (``controllers``: name -> (joint names, reference, actual)), and the balance values
-        (CoM x y z, ZMP x y, is_balanced)."""
+        (CoM x y z, ZMP x y, is_balanced); ``extra``: more columns (kind -> part -> values: the IMUs')."""
         names = tuple(names)
         self.positions.update(zip(names, position, strict=False))
         groups = self._groups(names)
@@ -483,6 +492,8 @@ class RobotScene:
             columns[controller] = {group.part: both[indices].ravel() for group, indices in controller_groups}
         if balance is not None:
             columns["balance"] = {"values": np.asarray(balance, float)}
+        for kind, parts in (extra or {}).items():
+            columns.setdefault(kind, {}).update(parts)
         self.log_robot(sim_time, force=True, plots=columns)
 
     def refresh(self, sim_time: float, period: float) -> None:
@@ -498,20 +509,38 @@ class RobotScene:
         present, empty or not, so that every row of the robot has the same components)."""
         points = [p for p, _, _ in self.marker_points.values()]
         strips = [(strip, radius, color) for parts, radius, color in self.marker_strips.values() for strip in parts]
+        arrows = list(self.marker_arrows.values())
         return [rr.Points3D(np.concatenate(points) if points else np.zeros((0, 3)),
                             radii=[r for _, radii, _ in self.marker_points.values() for r in radii],
                             colors=[c for _, _, colors in self.marker_points.values() for c in colors]),
                 rr.LineStrips3D([strip for strip, _, _ in strips], radii=[r for _, r, _ in strips],
-                                colors=[c for _, _, c in strips])]
+                                colors=[c for _, _, c in strips]),
+                rr.Arrows3D(origins=np.array([a[0] for a in arrows], float).reshape(-1, 3),
+                            vectors=np.array([a[1] for a in arrows], float).reshape(-1, 3),
+                            radii=[ARROW_RADIUS] * len(arrows), colors=[a[2] for a in arrows])]
+
+    def update_arrow(self, name: str, origin: Sequence[float] | None, vector: Sequence[float] = (0.0, 0.0, 0.0),
+                     color: Sequence[int] = FORCE_COLOR) -> None:
+        """A force arrow drawn from the next row on (RViz's WrenchStamped display); ``origin`` None removes it."""
+        if origin is None:
+            self.marker_arrows.pop(name, None)
+            return
+        self.marker_arrows[name] = (np.asarray(origin, float), np.asarray(vector, float), list(color))
 
     def update_balance(self, com: Sequence[float], zmp: Sequence[float], is_balanced: bool,
-                       support_polygon: Sequence[Sequence[float]]) -> None:
+                       support_polygon: Sequence[Sequence[float]], cop: Sequence[float] | None = None) -> None:
         """The balance markers (drawn from the next row on): CoM, its ground projection and the ZMP
-        (yellow), the support polygon on the ground, and a point of the CoM path."""
+        (yellow), the centre of pressure the feet's force/torque sensors measured (cyan, when given), the
+        support polygon on the ground, and a point of the CoM path."""
         self.com_path.append(com)
         color = [60, 200, 90, 255] if is_balanced else [230, 60, 50, 255]
-        self.marker_points["com"] = (np.array([com, [com[0], com[1], 0.0], [zmp[0], zmp[1], 0.003]], float),
-                                     [0.03, 0.015, 0.02], [color, color, [250, 220, 40, 255]])
+        points, radii, colors = [com, [com[0], com[1], 0.0], [zmp[0], zmp[1], 0.003]], [0.03, 0.015, 0.02], \
+            [color, color, [250, 220, 40, 255]]
+        if cop is not None:
+            points.append([cop[0], cop[1], 0.004])
+            radii.append(0.018)
+            colors.append(list(COP_COLOR))
+        self.marker_points["com"] = (np.array(points, float), radii, colors)
         if len(support_polygon) >= 2:
             ring = [[p[0], p[1], max(p[2], 0.0) + 0.003] for p in support_polygon]
             self.marker_strips["support_polygon"] = ([np.array(ring + [ring[0]], float)], 0.006, color)
