@@ -1,0 +1,254 @@
+"""The simulator's physics step in CPU instructions (callgrind), against plain dartpy stepping the same robot.
+
+Wall-clock timings on this shared machine swing 2x; instruction counts do not. Each loop runs in its own
+``valgrind --tool=callgrind`` process for two step counts, so start-up (imports, URDF loading, 300 steps of
+landing on the ground) cancels out: per-step instructions = difference / difference in steps. DART's share is
+``dart::simulation::World::step`` from ``callgrind_annotate --inclusive=yes``.
+
+  (a) plain: robots/humanoid.urdf loaded with dartpy's DartLoader, a ground box, the joints' position limits
+      enforced and implicit joint springs at the simulator's gains (config/sim.yaml), a slow squat commanded by
+      moving the six leg-pitch rest positions every step. None of this project's code.
+  (b) ours: ``Simulation.step`` + ``HardwareInterface.apply_command`` with the same squat (all 22 joints
+      commanded, as the controller manager does; bench/lockstep.py's in-process loop), sensors off, and sensors
+      on (then ``Simulation.sample_sensors`` every step too, as the simulator does every control period).
+
+``overhead`` = (all instructions per step - World::step's) / World::step's: what runs outside DART's step (for
+(a) the loop and six setRestPosition calls, the floor of any Python driver). The goal of issue 28 is ours
+sensors off <= 10 %. Prints a table, then one JSON line.
+
+    python bench/sim_instructions.py [--steps 200,1200] [--jobs 1]
+    python bench/sim_instructions.py --loop ours-off --steps 1200    # one loop, no valgrind (for profilers)
+"""
+
+from __future__ import annotations
+
+import argparse
+import concurrent.futures
+import fnmatch
+import json
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+URDF = ROOT / "robots" / "humanoid.urdf"
+PHYSICS_RATE = 1000.0
+SPAWN_Z = 0.93
+SETTLE_STEPS = 300            # landing on the ground, holding zero, before the squat starts
+LOOPS = ("plain", "ours-off", "ours-on")
+LEG_PITCH = {"hip_pitch": -0.5, "knee": 1.0, "ankle_pitch": -0.5}   # bench/lockstep.py's squat direction
+WORLD_STEP = "dart::simulation::World::step"
+
+
+def squat_depth(k: int) -> float:
+    """bench/lockstep.py's slow squat (0.25 Hz, knees 0 .. 0.6 rad) at step ``k``."""
+    return 0.3 * (1.0 - math.cos(2 * math.pi * 0.25 * k / PHYSICS_RATE))
+
+
+def pitch_of(name: str) -> float:
+    part = name.split("_", 1)[1] if name.startswith(("left_", "right_")) else ""
+    return LEG_PITCH.get(part, 0.0)
+
+
+def sim_gains() -> dict[str, dict[str, float]]:
+    import yaml
+
+    return yaml.safe_load((ROOT / "config" / "sim.yaml").read_text())["simulator"]["ros__parameters"]["gains"]
+
+
+# ------------------------------------------------------------------------------------------ the loops
+def plain_loop(steps: int) -> float:
+    """(a): plain dartpy, none of this project's code. Returns the pelvis height at the end."""
+    import dartpy as dart
+
+    world = dart.simulation.World()
+    world.setTimeStep(1.0 / PHYSICS_RATE)
+    world.getConstraintSolver().setCollisionDetector(dart.collision.FCLCollisionDetector())
+    world.setGravity([0.0, 0.0, -9.81])
+    ground = dart.dynamics.Skeleton("ground_plane")
+    _, body = ground.createWeldJointAndBodyNodePair()
+    node = body.createShapeNode(dart.dynamics.BoxShape([50.0, 50.0, 0.1]))
+    node.createVisualAspect()
+    node.createCollisionAspect()
+    node.createDynamicsAspect().setFrictionCoeff(1.0)
+    offset = dart.math.Isometry3()
+    offset.set_translation([0.0, 0.0, -0.05])   # top face at z = 0
+    body.getParentJoint().setTransformFromParentBodyNode(offset)
+    world.addSkeleton(ground)
+
+    robot = dart.utils.DartLoader().parseSkeleton(str(URDF))
+    robot.setPosition(5, SPAWN_Z)                # FreeJoint: rx ry rz x y z
+    gains = sim_gains()
+    squatting = []
+    for i in range(robot.getNumJoints()):
+        joint = robot.getJoint(i)
+        if joint.getNumDofs() != 1:
+            continue
+        name = joint.getName()
+        gain = next(g for pattern, g in gains.items() if fnmatch.fnmatchcase(name, pattern))
+        joint.setLimitEnforcement(True)          # the humanoid has no continuous joint
+        joint.setSpringStiffness(0, float(gain["p"]))
+        joint.setDampingCoefficient(0, float(gain["d"]))
+        joint.setRestPosition(0, 0.0)
+        if pitch_of(name):
+            squatting.append((joint, pitch_of(name)))
+    world.addSkeleton(robot)
+    for _ in range(SETTLE_STEPS):
+        world.step()
+    for k in range(steps):
+        depth = squat_depth(k)
+        for joint, pitch in squatting:
+            joint.setRestPosition(0, pitch * depth)
+        world.step()
+    return float(robot.getBodyNode(0).getWorldTransform().translation()[2])
+
+
+def ours_loop(steps: int, sensors: bool) -> float:
+    """(b): the simulator's Simulation + HardwareInterface, as bench/lockstep.py's in-process loop."""
+    from nodes.core.params import load_params_file
+    from nodes.sim.config import DEFAULT_CONFIG, parse_gains
+    from nodes.sim.entity import EntitySpec, Pose
+    from nodes.sim.simulation import Simulation
+    from nodes.sim.world import PhysicsWorld
+
+    defaults = load_params_file(DEFAULT_CONFIG, "simulator")
+    world = PhysicsWorld(PHYSICS_RATE)
+    world.add_ground()
+    sim = Simulation(world, parse_gains(defaults["gains"]), sensors_enabled=sensors)
+    entity = sim.spawn(EntitySpec("humanoid", URDF.read_text(), pose=Pose.from_xyz_rpy(0, 0, SPAWN_Z)))
+    hw = sim.hardware["humanoid"]
+    names = list(hw.names)
+    interfaces = ["position"] * len(names)
+    pitches = [pitch_of(name) for name in names]
+    zeros = [0.0] * len(names)
+    for _ in range(SETTLE_STEPS):
+        if sensors:
+            sim.sample_sensors()
+        hw.apply_command(names, interfaces, zeros)
+        sim.step(1)
+    for k in range(steps):
+        depth = squat_depth(k)
+        if sensors:
+            sim.sample_sensors()
+        hw.apply_command(names, interfaces, [p * depth for p in pitches])
+        sim.step(1)
+    height = float(entity.world_pose().position[2])
+    sim.clear()
+    return height
+
+
+def run_loop(loop: str, steps: int) -> float:
+    if loop == "plain":
+        return plain_loop(steps)
+    return ours_loop(steps, sensors=loop == "ours-on")
+
+
+# ------------------------------------------------------------------------------------------ callgrind
+def callgrind(loop: str, steps: int, out_dir: Path) -> dict:
+    """Total instructions and World::step's inclusive instructions of one loop under callgrind."""
+    out = out_dir / f"callgrind.{loop}.{steps}.out"
+    env = dict(os.environ, PYTHONHASHSEED="0", PYTHONPATH=str(ROOT))   # the same hashes, the same run
+    started = time.perf_counter()
+    proc = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable,
+                           str(Path(__file__).resolve()), "--loop", loop, "--steps", str(steps)],
+                          capture_output=True, text=True, env=env, cwd=ROOT)
+    if proc.returncode != 0:
+        raise RuntimeError(f"callgrind of {loop} x {steps} failed:\n{proc.stderr[-3000:]}")
+    total = None
+    for line in out.read_text(errors="replace").splitlines():
+        if line.startswith(("summary:", "totals:")):
+            total = int(line.split()[1])
+    annotate = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out)],
+                              capture_output=True, text=True, check=True).stdout
+    world_step = max((int(m.group(1).replace(",", "")) for m in
+                      re.finditer(r"^\s*([\d,]+)\s.*" + re.escape(WORLD_STEP) + r"\(", annotate, re.M)),
+                     default=None)
+    if total is None or world_step is None:
+        raise RuntimeError(f"no totals or no {WORLD_STEP} in {out}")
+    height = float(proc.stdout.strip().splitlines()[-1].split()[-1])
+    return {"total": total, "world_step": world_step, "height": height,
+            "seconds": time.perf_counter() - started, "file": str(out)}
+
+
+def per_step(runs: dict[int, dict]) -> dict:
+    """Per-step instructions from the runs at two step counts (the difference cancels start-up)."""
+    low, high = min(runs), max(runs)
+    n = high - low
+    total = (runs[high]["total"] - runs[low]["total"]) / n
+    world_step = (runs[high]["world_step"] - runs[low]["world_step"]) / n
+    return {"total": total, "world_step": world_step, "outside": total - world_step,
+            "overhead_percent": 100.0 * (total - world_step) / world_step, "height": runs[high]["height"]}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--steps", default="200,1200",
+                        help="two step counts (comma-separated); with --loop, the one count to run")
+    parser.add_argument("--loop", choices=LOOPS, help="run one loop in this process (no valgrind) and exit")
+    parser.add_argument("--loops", default=",".join(LOOPS), help="which loops to measure (comma-separated)")
+    parser.add_argument("--jobs", type=int, default=1, help="callgrind processes at a time")
+    parser.add_argument("--keep", type=Path, help="keep the callgrind files in this directory")
+    args = parser.parse_args(argv)
+    if args.loop:
+        print(f"pelvis height {run_loop(args.loop, int(args.steps)):.4f}")
+        return 0
+    if shutil.which("valgrind") is None or shutil.which("callgrind_annotate") is None:
+        print("valgrind and callgrind_annotate are needed (apt-get install valgrind)", file=sys.stderr)
+        return 2
+    counts = sorted({int(s) for s in args.steps.split(",")})
+    if len(counts) != 2:
+        parser.error("--steps needs two different step counts")
+    loops = [loop for loop in args.loops.split(",") if loop]
+    load_before = os.getloadavg()[0]
+    out_dir = args.keep or Path(tempfile.mkdtemp(prefix="sim-instructions-"))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    started = time.perf_counter()
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+        futures = {(loop, n): pool.submit(callgrind, loop, n, out_dir) for loop in loops for n in counts}
+        raw = {key: future.result() for key, future in futures.items()}
+    if args.keep is None:
+        shutil.rmtree(out_dir, ignore_errors=True)
+    results = {loop: per_step({n: raw[(loop, n)] for n in counts}) for loop in loops}
+
+    from bench.common import print_table
+
+    rows = []
+    for loop, r in results.items():
+        rows.append((f"{loop}: instructions per step", f"{r['total'] / 1e6:.3f} M",
+                     f"World::step {r['world_step'] / 1e6:.3f} M, outside it {r['outside'] / 1e3:.0f} k "
+                     f"({r['overhead_percent']:.1f} % of World::step)"))
+    plain = results.get("plain")
+    for loop in ("ours-off", "ours-on"):
+        if plain and loop in results:
+            rows.append((f"{loop} / plain, per step", f"{results[loop]['total'] / plain['total']:.3f}",
+                         "1.0: no cost beyond plain dartpy"))
+    if "ours-off" in results:
+        rows.append(("ours-off: outside World::step", f"{results['ours-off']['overhead_percent']:.1f} %",
+                     "of World::step (goal <= 10 %)"))
+    rows.append(("callgrind runs", f"{time.perf_counter() - started:.0f} s",
+                 f"steps {counts[0]} and {counts[1]} after {SETTLE_STEPS} settling; pelvis at the end "
+                 + ", ".join(f"{loop} {r['height']:.3f} m" for loop, r in results.items())))
+    print_table(rows, load_before)
+    summary: dict = {"steps": counts, "settle_steps": SETTLE_STEPS, "load_average": round(load_before, 2)}
+    for loop, r in results.items():
+        key = loop.replace("-", "_")
+        summary[f"{key}_per_step"] = round(r["total"])
+        summary[f"{key}_world_step_per_step"] = round(r["world_step"])
+        summary[f"{key}_overhead_percent"] = round(r["overhead_percent"], 2)
+    for loop in ("ours-off", "ours-on"):
+        if plain and loop in results:
+            summary[f"ratio_{loop.replace('-', '_')}_to_plain"] = round(results[loop]["total"] / plain["total"], 4)
+    print(json.dumps(summary))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
