@@ -12,6 +12,7 @@ by (``seed``, sensor, step): the same run gives the same bytes.
 
 from __future__ import annotations
 
+import time
 import zlib
 from dataclasses import dataclass, field
 from typing import Any
@@ -66,6 +67,7 @@ class RendererNode(Node):
     """CPU renderer of the simulator's cameras, depth cameras, lidars and lasers (no GPU, no display)."""
 
     default_name = "renderer"
+    callbacks_on_spin_thread = True   # a new scene replaces the publishers: never while a frame is drawn
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__("renderer", **kwargs)
@@ -167,8 +169,10 @@ class RendererNode(Node):
 
     def render_frame(self, frame: Any, keys: list[str]) -> int:
         """Draw ``keys`` as ``frame`` shows them; returns the messages published."""
+        if int(frame.scene_version) > self.scene_version:
+            self._await_scene(int(frame.scene_version))
         if self.scene is None or int(frame.scene_version) != self.scene_version:
-            return 0   # a frame of another scene (a spawn in between): its links do not match ours
+            return 0   # a frame of another scene (one replaced since): its links do not match ours
         poses = np.asarray(frame.poses, dtype=np.float64)
         if poses.size != 12 * len(self.link_names):
             self.logger.warn_throttle(5.0, f"sim/render/frame: {poses.size} pose values for "
@@ -191,6 +195,16 @@ class RendererNode(Node):
                 published += 1
             sensor.drawn += 1
         return published
+
+    def _await_scene(self, version: int, timeout: float = 2.0) -> None:
+        """A frame of a newer scene than ours: the scene was published before it, so take it first (the
+        subscription's callback may still be queued), else ask for the latched one."""
+        deadline = time.monotonic() + timeout
+        while self.scene_version < version and time.monotonic() < deadline:
+            if not self.spin_once(0.05):
+                latched = self.fetch_latched(Scene, "/sim/scene", timeout=0.5)
+                if latched is not None:
+                    self._on_scene(latched)
 
     def _draw(self, sensor: _Sensor, outputs: list[str], pose: np.ndarray, stamp: dict, rng: np.random.Generator):
         spec, frame_id = sensor.spec, sensor.spec.frame_id
@@ -228,5 +242,8 @@ class RendererNode(Node):
                     published = self.render_frame(frame, keys)
                 except (RenderError, ValueError) as exc:
                     self.logger.error(f"frame at step {frame.step}: {exc}")
+                    published = 0
+                except Exception as exc:  # noqa: BLE001 - one bad frame must not end the sensors
+                    self.logger.error(f"frame at step {frame.step}: {type(exc).__name__}: {exc}")
                     published = 0
                 self.done_pub.publish(RenderDone(step=int(frame.step), published=published))
