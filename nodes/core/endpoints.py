@@ -108,7 +108,11 @@ class Publisher:
 
     @property
     def has_subscribers(self) -> bool:
-        """True when at least one subscriber matches this key (skip costly messages nobody reads)."""
+        """True when at least one subscriber matches this key or its ROS 2 wire twin (skip costly messages
+        nobody reads)."""
+        mirror = self._mirror
+        if mirror is not None and mirror.active:
+            return True
         try:
             return bool(self._pub.matching_status.matching)
         except Exception:  # noqa: BLE001 - undeclared or closed: nobody to send to

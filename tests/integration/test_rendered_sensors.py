@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 import re
 import threading
+import time
 from pathlib import Path
 
 import msgpack
@@ -189,5 +190,51 @@ def test_a_wall_in_view_moved_and_gone_and_bad_declarations(processes, router, t
     except BaseException:
         print("--- simulator:\n" + processes.output(sim)[-3000:] + "\n--- renderer:\n" + processes.output(renderer)[-3000:])
         raise
+    finally:
+        node.destroy()
+
+
+def test_images_and_scans_recorded_by_zenroid_bag_are_read_by_rosbags_and_played_back(processes, router, tmp_path):
+    """``zenroid bag record humanoid/camera/rgb humanoid/scan humanoid/joint_states``: rosbags (an independent
+    reader) decodes the Image and the LaserScan (its +inf ranges kept), and ``zenroid bag play`` publishes
+    them again."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    sim = start_sim(processes, "world:=simple_lab.world", "mode:=lockstep", "paused:=true",
+                    "entities:=[{name: humanoid, file: humanoid, z: 0.93}]")
+    renderer = processes.start("-m", "nodes.render", name="renderer")
+    node = Node("rendered_bag_test", connect=[router])
+    bag = tmp_path / "camera_bag"
+    try:
+        wait_ready(node, processes, sim)
+        wait_until(lambda: "sensors humanoid::camera" in processes.output(renderer), timeout=60,
+                   message="the renderer's scene with the sensors")
+        recorder = processes.start("-m", "nodes.tools", "bag", "record", "humanoid/camera/rgb", "humanoid/scan",
+                                   "-o", str(bag), "--quiet", name="recorder")
+        wait_until(lambda: "Recording" in processes.output(recorder), timeout=30, message="the recorder ready")
+        step(node, 1000)
+        time.sleep(0.5)           # the last frames on their way to the recorder
+        recorder.send_signal(2)   # Ctrl-C, as a person stops it
+        assert recorder.wait(30) == 0, processes.output(recorder)
+        store = get_typestore(Stores.ROS2_JAZZY)
+        images, scans = [], []
+        with AnyReader([bag], default_typestore=store) as reader:
+            for connection, _, raw in reader.messages():
+                message = reader.deserialize(raw, connection.msgtype)
+                (images if connection.msgtype == "sensor_msgs/msg/Image" else scans).append(message)
+        assert len(images) >= 25 and len(scans) >= 15, (len(images), len(scans))
+        image = images[-1]
+        assert (image.width, image.height, image.encoding, len(image.data)) == (320, 240, "rgb8", 320 * 240 * 3)
+        assert np.asarray(image.data).std() > 5   # the lab, not a blank frame
+        assert len(scans[-1].ranges) == 720 and scans[-1].header.frame_id == "laser_link"
+
+        played: list[dict] = []
+        node.create_subscription(None, "/humanoid/camera/rgb", lambda p: played.append(msgpack.unpackb(p)),
+                                 inline=True, raw=True)
+        player = processes.start("-m", "nodes.tools", "bag", "play", str(bag), "-r", "4", "--quiet", name="player")
+        assert player.wait(120) == 0, processes.output(player)
+        assert len(played) >= 0.9 * len(images)
+        assert played[-1]["data"] == bytes(image.data)
     finally:
         node.destroy()

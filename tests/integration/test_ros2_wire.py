@@ -339,6 +339,36 @@ def test_main_job_joint_states_reach_a_plain_zenoh_subscriber(main_job) -> None:
 
 
 @pytest.mark.slow
+def test_main_job_camera_images_and_scans_reach_a_plain_zenoh_subscriber_as_cdr(main_job) -> None:
+    """The renderer's streams on rmw_zenoh's keys: a subscriber there alone makes the renderer draw them (the
+    wire twin counts as a subscriber), and rosbags decodes the CDR as Jazzy's Image and LaserScan."""
+    zenoh_port, launcher, out_path = main_job
+    plain = wait_until(lambda: open_plain_session(f"tcp/127.0.0.1:{zenoh_port}"), timeout=60, interval=0.5,
+                       message="the main job's router")
+    try:
+        received: dict[str, list[zenoh.Sample]] = {"sensor_msgs/msg/Image": [], "sensor_msgs/msg/LaserScan": []}
+        subs = [plain.declare_subscriber(names.data_key(0, topic, type_name), received[type_name].append)
+                for topic, type_name in (("/humanoid/camera/rgb", "sensor_msgs/msg/Image"),
+                                         ("/humanoid/scan", "sensor_msgs/msg/LaserScan"))]
+
+        def flowing() -> bool:
+            assert launcher.poll() is None, out_path.read_text(errors="replace")
+            return all(len(samples) >= 5 for samples in received.values())
+
+        wait_until(flowing, timeout=120, interval=0.5, message="images and scans as CDR at the plain subscriber")
+        for sub in subs:
+            sub.undeclare()
+        image = JAZZY.deserialize_cdr(received["sensor_msgs/msg/Image"][-1].payload.to_bytes(), "sensor_msgs/msg/Image")
+        assert (image.width, image.height, image.encoding, image.step) == (320, 240, "rgb8", 960)
+        assert len(image.data) == 320 * 240 * 3 and image.header.frame_id == "camera_optical_frame"
+        scan = JAZZY.deserialize_cdr(received["sensor_msgs/msg/LaserScan"][-1].payload.to_bytes(),
+                                     "sensor_msgs/msg/LaserScan")
+        assert len(scan.ranges) == 720 and scan.header.frame_id == "laser_link" and scan.range_max == 10.0
+    finally:
+        plain.close()
+
+
+@pytest.mark.slow
 def test_main_job_seen_and_driven_by_ros2_clients(main_job) -> None:
     zenoh_port, launcher, out_path = main_job
     env = _CLEAN_ENV
