@@ -155,7 +155,9 @@ def run_loop(loop: str, steps: int) -> float:
 def callgrind(loop: str, steps: int, out_dir: Path) -> dict:
     """Total instructions and World::step's inclusive instructions of one loop under callgrind."""
     out = out_dir / f"callgrind.{loop}.{steps}.out"
-    env = dict(os.environ, PYTHONHASHSEED="0", PYTHONPATH=str(ROOT))   # the same hashes, the same run
+    # the same hashes, and no OpenBLAS worker threads (numpy starts them at import: their spinning, counted
+    # too, depends on the scheduler and made runs differ by 2 %)
+    env = dict(os.environ, PYTHONHASHSEED="0", PYTHONPATH=str(ROOT), OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
     started = time.perf_counter()
     proc = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable,
                            str(Path(__file__).resolve()), "--loop", loop, "--steps", str(steps)],
