@@ -26,6 +26,7 @@ from nodes.sim.outputs import SimOutputs
 from nodes.sim.render_frames import RenderFrames
 from nodes.sim.robot_files import ConfigError, fetch_robot_description, read_model_xml, resolve_robot_file
 from nodes.sim.robot_link import RobotLink
+from nodes.sim.scene import SceneError
 from nodes.sim.sdf import WorldError, WorldSpec, is_sdf, load_world, parse_model
 from nodes.sim.sdf_model import WorldModel
 from nodes.sim.services import TIME_STEP_RANGE, SimServices, gravity_problem
@@ -112,7 +113,11 @@ class SimulatorNode(Node):
         self.outputs = SimOutputs(self, self.sim, self.robots, clock_rate=clock_rate, state_rate=state_rate)
         self.render = RenderFrames(self, self.sim, self._idle, enabled=sensors,
                                    camera_pose=self.world_spec.camera_pose if self.world_spec else None)
-        self.render.refresh_scene()
+        try:
+            self.render.refresh_scene()
+        except SceneError as exc:   # a world whose meshes the renderer cannot take: as any bad world file
+            self.logger.error(f"world {world_file!r} refused: {exc}")
+            raise ValueError(f"world {world_file!r} refused: {exc}") from None
         self._startup_deadline = time.monotonic() + 30.0
         self._next_startup_try = 0.0
         self._next_drain = 0.0
@@ -146,7 +151,7 @@ class SimulatorNode(Node):
         SpawnError/UrdfError/WorldError on failure."""
         if is_sdf(spec.xml):
             status = self._spawn_sdf(spec, reference_frame)
-            self.render.refresh_scene()
+            self._publish_scene_or_undo(spec.name)
             return status
         entity = self.sim.spawn(spec, reference_frame)
         try:
@@ -155,12 +160,21 @@ class SimulatorNode(Node):
         except Exception:
             self.sim.delete(entity.name)
             raise
-        self.render.refresh_scene()
+        self._publish_scene_or_undo(entity.name)
         joints = len(entity.info.joints)
         base = "fixed" if spec.fixed else "floating"
         pos = entity.pose.position
         return (f"spawned {entity.name!r} ({joints} joints, {base} base) at "
                 f"({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}) in namespace {entity.namespace!r}")
+
+    def _publish_scene_or_undo(self, name: str) -> None:
+        """The new scene out, or, when the renderer could not be given it (a mesh over its triangle cap), the
+        entity removed again and the spawn refused with the reason."""
+        try:
+            self.render.refresh_scene()
+        except SceneError as exc:
+            self.delete_entity(name)
+            raise SpawnError(str(exc)) from None
 
     def _spawn_sdf(self, spec: EntitySpec, reference_frame: str) -> str:
         """An SDF model: its own pose composed after the spawn pose (no hardware interface: no ros2_control)."""

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import msgs
 from nodes.core import Node
 from nodes.sim.outputs import next_due
-from nodes.sim.scene import SceneError, SceneLinks, build_scene
+from nodes.sim.scene import SceneLinks, build_scene
 from nodes.sim.simulation import Simulation
 
 Scene = msgs.get_type("zenroid_msgs/msg/Scene")
@@ -64,18 +64,14 @@ class RenderFrames:
 
     # -- the scene ----------------------------------------------------------------------------------------
     def refresh_scene(self) -> None:
-        """Publish the scene again when the set of models changed (spawn, delete, a world loaded)."""
+        """Publish the scene again when the set of models changed (spawn, delete, a world loaded); raises
+        SceneError (a mesh over the renderer's triangle cap) and publishes nothing then."""
         key = tuple((name, id(model)) for name, model in self.sim.entities.items()) + (
             self.sim.world.ground is not None,)
         if key == self._scene_key:
             return
-        self._scene_key = key
-        self.version += 1
-        try:
-            scene, self.links = build_scene(self.sim.world, self.sim.entities, self.version, self.camera_pose)
-        except SceneError as exc:
-            self.node.logger.error(f"sim/scene: {exc}; the renderer and the viewer keep the previous scene")
-            return
+        scene, links = build_scene(self.sim.world, self.sim.entities, self.version + 1, self.camera_pose)
+        self._scene_key, self.version, self.links = key, self.version + 1, links
         self.scene_pub.publish(msgs.from_dict(Scene, scene))
         self._schedule()
 
