@@ -261,7 +261,7 @@ def test_param_file_still_works_with_a_warning_naming_params_file(tmp_path: Path
 
 
 SHIPPED = {
-    "humanoid.yaml": ("humanoid", {"simulator", "robot_state_publisher", "controller_manager",
+    "humanoid.yaml": ("humanoid", {"simulator", "renderer", "robot_state_publisher", "controller_manager",
                                    "spawner_joint_state_broadcaster", "spawner_joint_trajectory_controller",
                                    "joint_commander"}),
     "controller_lab.yaml": ("simple_robot", {"simulator", "robot_state_publisher", "controller_manager",
