@@ -5,8 +5,8 @@ position = target): integrated implicitly they stay stable at gains where an exp
 (FACTS). When the spring-damper torque would exceed the URDF effort limit, the joint gets exactly the
 limit as a plain force for that step instead (a saturated motor), so no torque beyond the limit is
 applied or reported. Velocity commands use DART's SERVO actuator (a velocity
-constraint bounded by the effort limit), effort commands a clamped FORCE. Velocity limits are enforced
-after each step, position limits by DART's joint limit constraint.
+constraint bounded by the effort limit), effort commands a clamped FORCE. Position and velocity limits are
+enforced by DART's joint limit constraint.
 """
 
 from __future__ import annotations
@@ -71,6 +71,7 @@ class HardwareInterface:
         self._plans: dict = {}
         for i in range(n):
             self._set_mode(i, "position")
+            self._limit_velocity(i)
         self.hold_position()
 
     # -- state ------------------------------------------------------------------------------------------
@@ -207,6 +208,19 @@ class HardwareInterface:
         self._velocity_joints = [k for k, m in enumerate(self.mode) if m == "velocity"]
         self._effort_joints = [k for k, m in enumerate(self.mode) if m == "effort"]
 
+    def _limit_velocity(self, i: int) -> None:
+        """DART's joint limit constraint holds the velocity limit (ours, narrowed by <ros2_control>; none: inf)
+        within the step, so positions integrate a velocity within it too. A continuous joint has no position
+        limits, so enforcing its limits enforces its velocity limit only."""
+        joint = self.dart_joints[i]
+        limit = float(self.max_velocity[i])
+        joint.setVelocityLowerLimit(0, -limit)
+        joint.setVelocityUpperLimit(0, limit)
+        if self.joints[i].type == "continuous":
+            joint.setPositionLowerLimit(0, -math.inf)
+            joint.setPositionUpperLimit(0, math.inf)
+        joint.setLimitEnforcement(True)
+
     # -- physics-rate servo -----------------------------------------------------------------------------
     def before_step(self) -> None:
         """Feed the current commands to DART (forces and servo commands are cleared by every step).
@@ -248,14 +262,6 @@ class HardwareInterface:
         for i in self._effort_joints:
             self.skeleton.setForce(int(self.dofs[i]), float(self.target[i]))
             self.last_effort[i] = self.target[i]
-
-    def after_step(self) -> None:
-        """Enforce the URDF velocity limits, which DART ignores."""
-        qd = self.velocities()
-        too_fast = np.abs(qd) > self.max_velocity
-        if too_fast.any():
-            for i in np.nonzero(too_fast)[0]:
-                self.skeleton.setVelocity(int(self.dofs[i]), float(np.sign(qd[i]) * self.max_velocity[i]))
 
     # -- kinematic mode ---------------------------------------------------------------------------------
     def set_kinematic(self, dt: float) -> None:

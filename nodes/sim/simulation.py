@@ -144,8 +144,6 @@ class Simulation:
                 if self.pushes:
                     self.pushes.apply(self.world.time)
                 self.world.step()
-                for hw in hardware:
-                    hw.after_step()
             self.step_count += 1
 
     def sample_sensors(self) -> None:

@@ -98,7 +98,6 @@ def test_position_servo_torque_stays_within_effort_limit(make_sim):
             saturated_force.append(abs(hw.skeleton.getForce(int(hw.dofs[i]))) / hw.max_effort[i])
             assert hw.dart_joints[i].getSpringStiffness(0) == 0.0
         sim.world.step()
-        hw.after_step()
         reported.append(np.abs(hw.efforts()) / hw.max_effort)
     reported = np.array(reported)
     assert reported.max() <= 1.0                  # never more than the limit
