@@ -56,6 +56,7 @@ from msgs import cdr  # noqa: E402
 from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES  # noqa: E402
 from msgs.registry import get_spec  # noqa: E402
 from nodes.core import graph  # noqa: E402
+from nodes.core.log import SITE_RATE  # noqa: E402
 from nodes.core.ros2 import names as ros2_names  # noqa: E402
 from nodes.core.session import DEFAULT_MAX_PAYLOAD, max_transport_message_bytes  # noqa: E402
 from nodes.sim import interfaces as _sim_interfaces  # noqa: E402,F401 - registers the simulator's service types
@@ -311,6 +312,21 @@ def bad_sdf_models() -> list[tuple[str, str]]:
     ]
 
 
+def bad_camera_urdfs() -> list[tuple[str, str]]:
+    """The shipped humanoid with one bad camera or laser declaration each (issue #27), by category."""
+    xml = (ROOT / "robots" / "humanoid.urdf").read_text()
+    edits = [
+        ("camera pixel cap", "<width>320</width><height>240</height>", "<width>40000</width><height>30000</height>"),
+        ("camera fov", "<horizontal_fov>1.047</horizontal_fov>", "<horizontal_fov>3.2</horizontal_fov>"),
+        ("camera clip", "<near>0.05</near><far>10</far>", "<near>10</near><far>0.05</far>"),
+        ("camera format", "<format>R8G8B8</format>", "<format>ZZZ</format>"),
+        ("camera rate", "<update_rate>30</update_rate>", "<update_rate>1e6</update_rate>"),
+        ("laser rays cap", "<samples>720</samples>", "<samples>10000000</samples>"),
+        ("laser range", "<min>0.1</min><max>10</max>", "<min>10</min><max>0.1</max>"),
+    ]
+    return [(category, xml.replace(good, bad, 1)) for category, good, bad in edits]
+
+
 # What the job must say on rosout about the regressions (each names the field or the sender).
 REGRESSION_LOG_LINES = {
     "gravity 1e308": r"gravity\.z = 1e\+308 m/s\^2 is outside",
@@ -332,6 +348,11 @@ REGRESSION_LOG_LINES = {
     "set_entity_state 1e9 m": r"set_entity_state 'humanoid' refused: state.pose.position: \[1000000000.0",
     "apply_link_wrench 1e12 N": r"apply_link_wrench 'humanoid::torso' refused: wrench.force",
     "apply_joint_effort 1e12": r"apply_joint_effort 'humanoid::left_knee' refused: effort",
+    "camera pixel cap": r"sensor 'camera'.*1200000000 pixels, over the cap",
+    "camera fov": r"sensor 'camera'.*<horizontal_fov> 3.2: must be in \(0, pi\)",
+    "camera format": r"sensor 'camera'.*<format> 'ZZZ' is not one of",
+    "laser rays cap": r"sensor 'laser'.*rays a scan, over the cap",
+    "render frame of the wrong size": r"sim/render/frame: 3 pose values for \d+ links: ignored",
 }
 
 
@@ -359,6 +380,16 @@ def regressions(targets: dict[str, Target]) -> list[Case]:
     add(spawn, "bad name", {"name": "../../x", "xml": mesh_urdf("m.stl")})
     for category, xml in bad_sdf_models():
         add(spawn, category, {"name": "fuzz_sdf", "xml": xml})
+    for category, xml in bad_camera_urdfs():
+        add(spawn, category, {"name": "fuzz_eyes", "xml": xml, "robot_namespace": "fuzz_eyes"})
+    # the renderer's inputs: a frame that does not fit the scene, a frame of a scene nobody published
+    frame = msgs.packer("zenroid_msgs/msg/RenderFrame")
+    for version in range(1, 6):   # one of them is the scene the renderer has
+        add("sim/render/frame", "render frame of the wrong size", frame(
+            stamp={"sec": 1, "nanosec": 0}, step=1, scene_version=version, poses=[0.0, 0.0, 0.0],
+            sensors=[f"fuzz::sensor_{version}"]))   # realtime: the renderer draws each sensor's newest frame
+    add("sim/render/frame", "render frame of another scene", frame(
+        stamp={"sec": 1, "nanosec": 0}, step=1, scene_version=10**6, poses=[], sensors=["humanoid::camera"]))
     entity_state = "sim/set_entity_state"
     add(entity_state, "entity: unknown", {"state": {"name": "no_such_model"}})
     add(entity_state, "entity: absurd pose", {"state": {"name": NS, "pose": {"position": {"x": 1e9}}}})
@@ -703,6 +734,10 @@ def run(payloads: int, seconds: float, seed: int, big: int, log_dir: Path, mode:
         while time.monotonic() < deadline and (fixed or stats.tried < payloads):
             if fixed:
                 case = fixed.pop(0)
+                if case.category in REGRESSION_LOG_LINES and case.target.kind == "service":
+                    # the refusals a regression must find on rosout come from one call site each (a spawn's,
+                    # a set_entity_state's): paced at the log's per-site rate, none is rate-limited away
+                    time.sleep(1.0 / SITE_RATE)
             else:
                 case = generator.make(order[i % len(order)])
                 i += 1

@@ -86,6 +86,7 @@ class RendererNode(Node):
         self.frames = self.create_subscription(RenderFrame, "/sim/render/frame", self._queue_frame, pulled=True,
                                                backlog=FRAME_BACKLOG)
         self._pending: list[Any] = []
+        self._next_resync = 0.0
         latched = self.fetch_latched(Scene, "/sim/scene", timeout=2.0)
         if latched is not None:
             self._on_scene(latched)
@@ -169,7 +170,7 @@ class RendererNode(Node):
 
     def render_frame(self, frame: Any, keys: list[str]) -> int:
         """Draw ``keys`` as ``frame`` shows them; returns the messages published."""
-        if int(frame.scene_version) > self.scene_version:
+        if int(frame.scene_version) != self.scene_version:
             self._await_scene(int(frame.scene_version))
         if self.scene is None or int(frame.scene_version) != self.scene_version:
             return 0   # a frame of another scene (one replaced since): its links do not match ours
@@ -197,14 +198,22 @@ class RendererNode(Node):
         return published
 
     def _await_scene(self, version: int, timeout: float = 2.0) -> None:
-        """A frame of a newer scene than ours: the scene was published before it, so take it first (the
-        subscription's callback may still be queued), else ask for the latched one."""
+        """A frame of another scene than ours. A newer one was published before the frame: take it first (the
+        subscription's callback may still be queued). Otherwise ours is not the simulator's (a scene someone
+        else published on sim/scene): ask the simulator's latched one, at most once a second."""
         deadline = time.monotonic() + timeout
         while self.scene_version < version and time.monotonic() < deadline:
             if not self.spin_once(0.05):
-                latched = self.fetch_latched(Scene, "/sim/scene", timeout=0.5)
-                if latched is not None:
-                    self._on_scene(latched)
+                break
+        if self.scene_version == version or time.monotonic() < self._next_resync:
+            return
+        self._next_resync = time.monotonic() + 1.0
+        latched = self.fetch_latched(Scene, "/sim/scene", timeout=0.5)
+        if latched is not None and int(latched.version) == version:
+            self.logger.warn(f"sim/scene: version {self.scene_version} is not the simulator's ({version}): "
+                             "taking the simulator's again")
+            self.scene_version = -1
+            self._on_scene(latched)
 
     def _draw(self, sensor: _Sensor, outputs: list[str], pose: np.ndarray, stamp: dict, rng: np.random.Generator):
         spec, frame_id = sensor.spec, sensor.spec.frame_id
