@@ -1,7 +1,7 @@
 """Soak: the main job for N minutes with its joint commander and a 100 Hz outside subscriber; lost messages,
 RSS and CPU drift per process.
 
-    python bench/soak.py [--minutes 5] [--mode realtime] [--sample 10]
+    python bench/soak.py [--minutes 5] [--mode realtime] [--sample 10] [--sensors]
 
 Starts ``python -m launch humanoid.yaml gui:=false`` (the joint commander bends the knees every 2 s) on a free
 port and, in a separate process, an outside subscriber written with zenoh + msgpack alone: it takes
@@ -10,7 +10,10 @@ through them in a loop that wakes 100 times a second (a GUI's or a logger's pace
 and the gaps in each publisher's sequence numbers (the zenroid attachment), i.e. messages lost on the way.
 Every ``--sample`` s the RSS and CPU time of each process of the job are sampled; drift compares the first
 minute after a 30 s warm-up with the last minute. Also reported: the robot stays standing, the knees keep
-bending. Prints a table, then a JSON line.
+bending. ``--sensors``: the subscriber also takes the renderer's streams (camera rgb and depth, lidar, scan), so
+the renderer draws them for the whole soak, and each one's delivered rate in the first and the last minute
+is reported; it passes with every process's RSS drift within 1 MB/min and every rate steady (the last minute
+within 10 % of the first). Prints a table, then a JSON line.
 """
 
 from __future__ import annotations
@@ -36,13 +39,16 @@ from bench.common import spawn, stop  # noqa: E402 - after the path is set
 from bench.fuzz import Job, rss_mb  # noqa: E402
 
 SUBSCRIBED = ["humanoid/joint_states", "sim/clock", "humanoid/joint_trajectory_controller/controller_state"]
+RENDERED = ["humanoid/camera/rgb", "humanoid/camera/depth", "humanoid/lidar/points", "humanoid/scan"]
+MAX_DRIFT_MB_PER_MIN = 1.0
 WARMUP_S = 30.0
 _ATTACHMENT = struct.Struct("<Q16s")   # zenroid publishers: sequence number, source id
 
 
 # ---------------------------------------------------------------------------------------------- subscriber
-def subscriber(port: int, seconds: float) -> None:
-    """The outside subscriber (its own process): prints one JSON line with what it received and lost."""
+def subscriber(port: int, seconds: float, keys: list[str]) -> None:
+    """The outside subscriber (its own process): prints one JSON line with what it received and lost (and
+    when, in the first and the last minute, for the rendered streams)."""
     import msgpack
     import zenoh
 
@@ -51,19 +57,23 @@ def subscriber(port: int, seconds: float) -> None:
     config.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
     config.insert_json5("scouting/multicast/enabled", "false")
     inbox: deque = deque()
-    stats = {key: {"received": 0, "lost": 0, "out_of_order": 0, "sources": 0} for key in SUBSCRIBED}
+    stats = {key: {"received": 0, "lost": 0, "out_of_order": 0, "sources": 0} for key in keys}
+    arrivals: dict[str, list[float]] = {key: [] for key in keys if key in RENDERED}
     last_seq: dict[tuple[str, bytes], int] = {}
     knee = {"bends": 0, "bent": False, "max_gap_s": 0.0, "last": None}
     with zenoh.open(config) as session:
         subs = [session.declare_subscriber(key, lambda s, key=key: inbox.append((key, time.monotonic(), s)))
-                for key in SUBSCRIBED]
-        end = time.monotonic() + seconds
+                for key in keys]
+        start = time.monotonic()
+        end = start + seconds
         while time.monotonic() < end:
             tick = time.monotonic()
             while inbox:
                 key, arrived, sample = inbox.popleft()
                 entry = stats[key]
                 entry["received"] += 1
+                if key in arrivals:
+                    arrivals[key].append(arrived - start)
                 att = sample.attachment.to_bytes() if sample.attachment is not None else b""
                 if len(att) == _ATTACHMENT.size:
                     seq, source = _ATTACHMENT.unpack(att)
@@ -88,20 +98,26 @@ def subscriber(port: int, seconds: float) -> None:
             time.sleep(max(0.0, 0.01 - (time.monotonic() - tick)))   # a 100 Hz loop
         for sub in subs:
             sub.undeclare()
-    print(json.dumps({"seconds": seconds, "keys": stats, "knee_bends": knee["bends"],
+    minute = min(60.0, seconds / 3)
+    rates = {key: {"first_hz": round(sum(1 for t in ts if WARMUP_S <= t < WARMUP_S + minute) / minute, 2),
+                   "last_hz": round(sum(1 for t in ts if t >= seconds - minute) / minute, 2)}
+             for key, ts in arrivals.items()}
+    print(json.dumps({"seconds": seconds, "keys": stats, "knee_bends": knee["bends"], "rendered_rates": rates,
                       "max_joint_states_gap_s": round(knee["max_gap_s"], 3)}), flush=True)
 
 
 # ---------------------------------------------------------------------------------------------- soak
-def run(minutes: float, mode: str, sample_s: float, log_dir: Path, progress=print) -> dict[str, Any]:  # noqa: ANN001
+def run(minutes: float, mode: str, sample_s: float, log_dir: Path, progress=print,  # noqa: ANN001
+        sensors: bool = False) -> dict[str, Any]:
     job = Job(log_dir, mode, commander="joint_commander")
-    report: dict[str, Any] = {"minutes": minutes, "mode": mode}
+    report: dict[str, Any] = {"minutes": minutes, "mode": mode, "sensors": sensors}
+    keys = SUBSCRIBED + (RENDERED if sensors else [])
     sub_proc = None
     try:
         job.start()
         duration = minutes * 60.0
-        sub_proc = spawn([sys.executable, str(Path(__file__).resolve()), "--subscriber", str(job.port), str(duration)],
-                         stdout=subprocess.PIPE, stderr=None, text=True)
+        sub_proc = spawn([sys.executable, str(Path(__file__).resolve()), "--subscriber", str(job.port), str(duration),
+                          ",".join(keys)], stdout=subprocess.PIPE, stderr=None, text=True)
         time.sleep(3.0)   # the spawners have activated the controllers and exit: only long-running processes
         processes = {n: p for n, p in job.processes().items() if not n.startswith("spawner")}
         started = job.started()
@@ -137,6 +153,12 @@ def run(minutes: float, mode: str, sample_s: float, log_dir: Path, progress=prin
         report["restarted"] = restarted
         report["pass"] = (report["lost_fraction"] < 0.01 and not restarted and zs and min(zs) > 0.8
                           and received["knee_bends"] >= duration / 4 * 0.8)
+        if sensors:   # issue 27: no process grows, no stream slows down
+            drift_ok = all(p["rss_drift_mb_per_min"] <= MAX_DRIFT_MB_PER_MIN for p in report["processes"].values())
+            steady = all(r["first_hz"] > 0 and r["last_hz"] >= 0.9 * r["first_hz"]
+                         for r in received["rendered_rates"].values())
+            report["rss_drift_ok"], report["rates_steady"] = drift_ok, steady
+            report["pass"] = bool(report["pass"] and drift_ok and steady)
         return report
     finally:
         if sub_proc is not None:
@@ -179,6 +201,8 @@ def table(report: dict[str, Any]) -> str:
     lines.append(f"{'outside subscriber (100 Hz loop)':<56}{'received':>10}{'lost':>7}{'out of order':>14}")
     for key, v in report["subscriber"]["keys"].items():
         lines.append(f"{key:<56}{v['received']:>10}{v['lost']:>7}{v['out_of_order']:>14}")
+    for key, rate in report["subscriber"].get("rendered_rates", {}).items():
+        lines.append(f"{key:<56}{'first minute':>14} {rate['first_hz']:>6.1f} Hz, last {rate['last_hz']:>6.1f} Hz")
     lines.append("")
     lines.append(f"knee bends seen {report['subscriber']['knee_bends']}, longest joint_states gap "
                  f"{report['subscriber']['max_joint_states_gap_s']} s, lowest pelvis z {report['lowest_pelvis_z']} m, "
@@ -191,14 +215,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--minutes", type=float, default=5.0, help="how long (default 5)")
     parser.add_argument("--mode", default="realtime", choices=["realtime", "lockstep"])
     parser.add_argument("--sample", type=float, default=10.0, help="s between RSS/CPU samples (default 10)")
-    parser.add_argument("--subscriber", nargs=2, metavar=("PORT", "SECONDS"), help=argparse.SUPPRESS)
+    parser.add_argument("--sensors", action="store_true",
+                        help="also take the camera, lidar and laser streams (the renderer draws them all along)")
+    parser.add_argument("--subscriber", nargs=3, metavar=("PORT", "SECONDS", "KEYS"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.subscriber:
-        subscriber(int(args.subscriber[0]), float(args.subscriber[1]))
+        subscriber(int(args.subscriber[0]), float(args.subscriber[1]), args.subscriber[2].split(","))
         return 0
     with tempfile.TemporaryDirectory(prefix="zenroid-soak-") as tmp:
         report = run(args.minutes, args.mode, args.sample, Path(tmp),
-                     progress=lambda s: print(s, file=sys.stderr, flush=True))
+                     progress=lambda s: print(s, file=sys.stderr, flush=True), sensors=args.sensors)
     print(table(report))
     print(json.dumps(report, default=str))
     return 0 if report.get("pass") else 1
