@@ -142,14 +142,19 @@ def robot_plots(namespace: str, layout: RobotLayout, timeline: str = SIM_TIMELIN
 
 def build_blueprint(robots: Mapping[str, RobotLayout] | None = None, timeline: str = SIM_TIMELINE,
                     ground: bool = True, plots: Sequence[str] = PLOT_TABS,
-                    eye: tuple[Sequence[float], Sequence[float]] | None = None) -> rrb.Blueprint:
+                    eye: tuple[Sequence[float], Sequence[float]] | None = None,
+                    depth_cloud: bool = False) -> rrb.Blueprint:
     """``robots``: namespace -> its plot layout; ``timeline``: the one the time panel follows; ``ground``: draw
     the ground grid; ``plots``: the tabs beside the 3-D scene (of ``PLOT_TABS``; none: the scene alone);
-    ``eye``: (position, look target) of the 3-D view's camera (the world's GUI camera), else the default."""
+    ``eye``: (position, look target) of the 3-D view's camera (the world's GUI camera), else the default;
+    ``depth_cloud``: the depth images lifted into points in the 3-D view too (RViz's DepthCloud: 76,800 points
+    for a 320 x 240 camera, which slowed a software-rendered page to a frame every 2 s; else only in the
+    camera tab)."""
     robots = robots or {}
+    hidden = [f"- {camera}/depth" for layout in robots.values() for camera, depth in layout.cameras if depth]
     position, target = eye if eye is not None else (DEFAULT_EYE, DEFAULT_TARGET)
     scene = rrb.Spatial3DView(
-        name="scene", origin="world",
+        name="scene", origin="world", contents=["$origin/**", *([] if depth_cloud else hidden)],
         # The ground: the viewer's own grid (0.5 m, z = 0), like RViz's Grid display. It is part of the
         # layout, not of the data, so the web server never drops it from a short history.
         line_grid=rrb.LineGrid3D(visible=ground, spacing=0.5, plane=rr.components.Plane3D.XY,

@@ -49,6 +49,7 @@ from .blueprint import PLOT_TABS, QUANTITY_TABS, RobotLayout, build_blueprint
 from .clouds import cloud_points, intensity_colors, scan_points
 from .images import SensorDataError, color_image, depth_millimetres, intrinsics
 from .markers import MarkerError, MarkerLayer
+from .pulls import FramePull
 from .ratelimit import RateLimiter
 from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, SceneTime, is_wall_stamp, parse_model
 from .sensors import (
@@ -120,7 +121,7 @@ class RobotView:
     latest: dict[str, LatchedStream] = field(default_factory=dict)
     body_sensors: dict[str, tuple[str, Subscription]] = field(default_factory=dict)  # key -> ("imu" | "wrench", sub)
     imus: dict[str, str] = field(default_factory=dict)  # key -> column part, once it has sent data
-    rendered: list[Subscription] = field(default_factory=list)  # the URDF's cameras, lidars, lasers
+    pulls: list[FramePull] = field(default_factory=list)  # the URDF's cameras, and its lidars and lasers together
     cameras: dict[str, RenderedSensorSpec] = field(default_factory=dict)  # camera name -> its spec
     ranges: dict[str, str] = field(default_factory=dict)  # key -> "points" | "scan"
     sensors: RenderedSensors | None = None
@@ -178,7 +179,10 @@ class Viewer(Node):
             "draw every geometry_msgs/WrenchStamped under a robot's namespace as a force arrow"))
         self.wrench_scale = p("wrench_scale", 0.001, min_value=0.0, description="m of force arrow per N")
         self.show_cameras = p("cameras", True, description="draw the cameras of the robots' URDFs (images, frusta)")
-        self.show_depth = p("depth", True, description="also their depth images (points in the 3-D view)")
+        self.show_depth = p("depth", True, description="also their depth images (in the camera tab)")
+        self.depth_cloud = p("depth_cloud", False, description=(
+            "lift the depth images into points in the 3-D view too (RViz's DepthCloud; slow in a software-"
+            "rendered page)"))
         self.show_ranges = p("ranges", True, description="draw the lidars' and lasers' points of the robots' URDFs")
         self.image_rate = p("image_rate", 2.0, min_value=0.1, max_value=30.0,
                             description="Hz of each camera's rows (image, depth, pose)")
@@ -188,6 +192,9 @@ class Viewer(Node):
                               description="JPEG quality of the camera images sent to the viewer")
         self.cloud_max_points = p("cloud_max_points", 20000, type=int, min_value=100, description=(
             "points per cloud at most (every k-th point beyond)"))
+        self.sensor_pull = p("sensor_pull", True, description=(
+            "subscribe to the rendered sensors for one frame at a time (the renderer draws only while someone "
+            "subscribes: ~40 % of a core for a 30 Hz camera); false: stay subscribed"))
 
         self.sim_now = 0.0
         self.sim_clock_seen = False
@@ -235,6 +242,7 @@ class Viewer(Node):
         for namespace in self.robot_list:
             self.add_robot(namespace)
         self.create_timer(0.1, self.drain_inbox, sim_time=False)
+        self.create_timer(0.05, self.tick_pulls, sim_time=False)
         self.create_timer(self.keyframe_period, self.keyframe, sim_time=False)
         self.discovery_stop = threading.Event()
         self.discovery = threading.Thread(target=self.discovery_loop, name="viz-discovery", daemon=True)
@@ -295,7 +303,6 @@ class Viewer(Node):
         robot = RobotView(namespace)
         robot.limits = {stream: RateLimiter(hz) for stream, hz in self.rates.items()}
         robot.limits["fk"] = RateLimiter(self.rates["tf"])
-        robot.limits["ranges"] = RateLimiter(self.cloud_rate)
         self.robots[namespace] = robot
         sub, limits, ns = self.subscribe, robot.limits, namespace
         robot.subscriptions += [
@@ -322,7 +329,9 @@ class Viewer(Node):
         """Forget a namespace taken for a robot that is not one (a world model seen in sim/model_states)."""
         robot = self.robots.pop(namespace)
         subscriptions = [*robot.subscriptions, *(s for subs in robot.controllers.values() for s in subs),
-                         *(s for _, s in robot.body_sensors.values()), *robot.rendered]
+                         *(s for _, s in robot.body_sensors.values())]
+        for pull in robot.pulls:
+            pull.close()
         for topic in (f"{namespace}/visualization_marker", f"{namespace}/visualization_marker_array"):
             if topic in self.marker_topics:
                 subscriptions.append(self.marker_topics.pop(topic))
@@ -380,14 +389,14 @@ class Viewer(Node):
         return columns
 
     def add_rendered_sensors(self, robot: RobotView, xml_text: str) -> None:
-        """Subscribe to the cameras, lidars and lasers the robot's URDF declares, on the keys the renderer
-        publishes them (gazebo_ros' names, remappings applied): the colour and depth images with their
-        CameraInfo, lidar PointCloud2s and LaserScans (a depth camera's own PointCloud2 is left out: Rerun
-        lifts the depth image into the same points through the pinhole, and 30 Hz x 2.4 MB would be the
-        biggest stream of the job)."""
-        for sub in robot.rendered:
-            sub.destroy()
-        robot.rendered, robot.cameras, robot.ranges = [], {}, {}
+        """Read the cameras, lidars and lasers the robot's URDF declares, on the keys the renderer publishes
+        them (gazebo_ros' names, remappings applied), a frame at a time (``FramePull``): each camera's colour
+        and depth images with its CameraInfo, and the robot's lidar PointCloud2s and LaserScans together. A
+        depth camera's own PointCloud2 is left out: Rerun lifts the depth image into the same points through
+        the pinhole, and at 2.4 MB a frame it would be the biggest stream of the job."""
+        for pull in robot.pulls:
+            pull.close()
+        robot.pulls, robot.cameras, robot.ranges = [], {}, {}
         if not (self.show_cameras or self.show_ranges):
             return
         try:
@@ -400,33 +409,53 @@ class Viewer(Node):
         for spec in specs:
             keys = spec.keys
             if spec.camera is not None and self.show_cameras and "image" in keys:
-                name = spec.name
-                robot.cameras[name] = spec
-                robot.limits[f"camera:{name}"] = RateLimiter(self.image_rate)
-                due = functools.partial(self.camera_arrived, robot, name)
-                robot.rendered.append(self.latch(robot, f"image:{name}", Image, f"/{keys['image']}", on_arrival=due))
-                if "camera_info" in keys:
-                    robot.rendered.append(self.latch(robot, f"info:{name}", CameraInfo, f"/{keys['camera_info']}"))
+                robot.cameras[spec.name] = spec
+                streams = [("image", Image, keys["image"])]
                 if self.show_depth and spec.camera.depth and "depth" in keys:
-                    robot.rendered.append(self.latch(robot, f"depth:{name}", Image, f"/{keys['depth']}",
-                                                     on_arrival=due))
+                    streams.append(("depth", Image, keys["depth"]))
+                self.add_pull(robot, [(f"{part}:{spec.name}", t, k, part) for part, t, k in streams] + (
+                    [(f"info:{spec.name}", CameraInfo, keys["camera_info"], "")] if "camera_info" in keys else []),
+                    # ordered: the renderer sends a frame's colour image before its depth image
+                    functools.partial(self.log_camera, robot, spec.name), self.image_rate, ordered=True)
             elif spec.ray is not None and self.show_ranges and ("points" in keys or "scan" in keys):
                 kind = "points" if "points" in keys else "scan"
-                key = keys[kind]
-                robot.ranges[key] = kind
-                robot.rendered.append(self.latch(robot, f"range:{key}", PointCloud2 if kind == "points" else LaserScan,
-                                                 f"/{key}", on_arrival=lambda r=robot: self.ranges_arrived(r)))
+                robot.ranges[keys[kind]] = kind
+        if robot.ranges:
+            self.add_pull(robot, [(f"range:{key}", PointCloud2 if kind == "points" else LaserScan, key, key)
+                                  for key, kind in robot.ranges.items()],
+                          functools.partial(self.log_ranges, robot), self.cloud_rate)
         if specs:
             self.logger.info(f"robot '{robot.namespace}': sensors {', '.join(s.name for s in specs)} "
                              f"({', '.join(k for s in specs for k in s.keys.values())})")
 
-    def camera_arrived(self, robot: RobotView, camera: str) -> None:
-        """A camera's image or depth image came (on Zenoh's thread): a row at ``image_rate``."""
-        limiter = robot.limits.get(f"camera:{camera}")
-        if limiter is None or not limiter.ready():
-            return
+    def add_pull(self, robot: RobotView, streams: list[tuple[str, Any, str, str]], on_frame: Any,
+                 rate: float, ordered: bool = False) -> None:
+        """A ``FramePull`` of these ``(slot, type, key, part)`` streams (part "": not needed for a frame)."""
+        pull = FramePull([part for *_, part in streams if part], lambda: [], on_frame, 1.0 / rate,
+                         continuous=not self.sensor_pull, ordered=ordered)
+
+        def open_subscriptions() -> list[Subscription]:
+            return [self.latch(robot, slot, msg_type, f"/{key}", on_arrival=(
+                functools.partial(self.pull_arrived, pull, part) if part else None))
+                for slot, msg_type, key, part in streams]
+
+        pull.open_subscriptions = open_subscriptions
+        robot.pulls.append(pull)
+
+    def pull_arrived(self, pull: FramePull, part: str) -> None:
+        """A part of a pulled frame came (on Zenoh's thread)."""
         with self.lock:
-            self.log_camera(robot, camera)
+            pull.arrived(part)
+
+    def tick_pulls(self) -> None:
+        """Open the pulls that are due, close those whose frame came (a deleted robot's: all)."""
+        with self.lock:
+            for robot in self.robots.values():
+                for pull in robot.pulls:
+                    if robot.present and robot.scene is not None:
+                        pull.tick()
+                    else:
+                        pull.close()
 
     def log_camera(self, robot: RobotView, camera: str) -> None:
         """The camera's newest image and depth image, its pinhole (CameraInfo's K, else the URDF's field of
@@ -471,13 +500,6 @@ class Viewer(Node):
             return
         robot.sensors.log_camera(self.stamp_or_now(first.header.stamp), camera,
                                  CameraFrame(pose, k, width, height, color, depth))
-
-    def ranges_arrived(self, robot: RobotView) -> None:
-        """A lidar cloud or a laser scan came (on Zenoh's thread): a row of all of them at ``cloud_rate``."""
-        if not robot.limits["ranges"].ready():
-            return
-        with self.lock:
-            self.log_ranges(robot)
 
     def log_ranges(self, robot: RobotView) -> None:
         """Every range sensor's newest points in the world: lidars by intensity, lasers red."""
@@ -911,7 +933,7 @@ class Viewer(Node):
         if key != self.layout_key and settled >= (LAYOUT_WAIT if incomplete else LAYOUT_SETTLE):
             self.layout_key = key
             self.recording.send_blueprint(build_blueprint(layout, self.timeline, self.show_ground, self.plots,
-                                                          eye=eye))
+                                                          eye=eye, depth_cloud=self.depth_cloud))
 
     def keyframe(self) -> None:
         """Every idle robot's model and markers again (see ``RobotScene.refresh``), and the user markers."""

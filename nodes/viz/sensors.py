@@ -3,7 +3,7 @@
 Body sensors add nothing to the page's chunk count: the IMU's angular velocity and linear acceleration are
 columns of the robot's row (``imu_columns``: ``angular_velocity:<imu>``, ``linear_acceleration:<imu>``,
 plotted in the "imu" tab) and the feet's forces are arrows among the robot's markers (``force_arrow``, as
-RViz's WrenchStamped display draws them: from the sensor frame, ``wrench_scale`` m per N).
+RViz's WrenchStamped display draws them, ``wrench_scale`` m per N, but ending at the sensor frame).
 
 Rendered sensors are entities of their own under the robot's subtree (a deleted robot clears them too):
 
@@ -65,10 +65,12 @@ def imu_columns(part: str, msg: Any) -> dict[str, dict[str, np.ndarray]]:
 
 
 def force_arrow(frame: np.ndarray, msg: Any, scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """(origin, vector) in the world of a geometry_msgs/WrenchStamped's force measured in ``frame`` (4x4)."""
+    """(origin, vector) in the world of a geometry_msgs/WrenchStamped's force measured in ``frame`` (4x4),
+    drawn pushing on the frame: the arrow ends at the frame's origin. (RViz starts it there; a foot's
+    ground reaction would then run up inside the shin, hidden, where this one rises from under the sole.)"""
     f = msg.wrench.force
-    force = finite((f.x, f.y, f.z), "wrench.force")
-    return frame[:3, 3].copy(), frame[:3, :3] @ force * scale
+    vector = frame[:3, :3] @ finite((f.x, f.y, f.z), "wrench.force") * scale
+    return frame[:3, 3] - vector, vector
 
 
 @dataclass

@@ -194,7 +194,8 @@ def test_imu_columns_and_force_arrows() -> None:
     foot[:3, 3] = [0.1, 0.2, 0.05]
     wrench = msgs.from_dict(WrenchStamped, {"wrench": {"force": {"x": 100.0, "z": 300.0}}})
     origin, vector = force_arrow(foot, wrench, 0.001)
-    assert origin.tolist() == [0.1, 0.2, 0.05] and vector == pytest.approx([0.0, 0.1, 0.3])
+    assert vector == pytest.approx([0.0, 0.1, 0.3])
+    assert origin + vector == pytest.approx([0.1, 0.2, 0.05]), "it pushes on the foot: its tip at the frame"
     bad = msgs.from_dict(Imu, {})
     bad.linear_acceleration.z = math.nan  # the codec refuses NaN on the wire: as if it had come through
     with pytest.raises(SensorDataError, match="linear_acceleration is not finite"):
@@ -287,3 +288,69 @@ def test_the_blueprint_has_an_imu_tab_and_a_camera_tab() -> None:
     assert str(depth_view.origin) == "world/humanoid/cameras/camera/depth"
     plots = build_blueprint({"humanoid": layout}, plots=["positions"]).root_container.contents[1]
     assert [tab.name for tab in plots.contents] == ["positions"], "plots:=[...] leaves the sensor tabs out"
+
+
+# -- pulls -----------------------------------------------------------------------------------------------
+class FakeSubscription:
+    def __init__(self, log: list[str], name: str) -> None:
+        self.log, self.name = log, name
+        log.append(f"+{name}")
+
+    def destroy(self) -> None:
+        self.log.append(f"-{self.name}")
+
+
+def test_a_pull_subscribes_for_one_frame_per_period() -> None:
+    """The renderer draws only while someone subscribes: the viewer takes one frame, then lets go."""
+    from nodes.viz.pulls import FramePull
+
+    now, log, frames = [0.0], [], []
+    pull = FramePull(["image", "depth"], lambda: [FakeSubscription(log, "image"), FakeSubscription(log, "depth")],
+                     lambda: frames.append(now[0]), period=0.5, ordered=True, clock=lambda: now[0])
+    pull.arrived("image")  # nothing open yet: ignored
+    pull.tick()
+    assert log == ["+image", "+depth"]
+    now[0] = 0.03
+    pull.arrived("depth")  # the depth of a frame whose image came before we subscribed
+    pull.arrived("image")
+    assert frames == [] and pull.subscriptions
+    pull.arrived("depth")
+    assert frames == [0.03], "a complete frame: colour and depth"
+    pull.arrived("image")
+    assert frames == [0.03], "one frame per pull"
+    now[0] = 0.05
+    pull.tick()
+    assert log[-2:] == ["-image", "-depth"] and not pull.subscriptions
+    now[0] = 0.3
+    pull.tick()
+    assert not pull.subscriptions, "not due before a period has passed since the last pull opened"
+    now[0] = 0.5
+    pull.tick()
+    assert pull.subscriptions and pull.pulls == 2
+    # Only part of the frame comes: after PATIENCE it is drawn anyway, and the pull closes.
+    now[0] = 0.55
+    pull.arrived("image")
+    now[0] = 1.6
+    pull.tick()
+    assert frames == [0.03, 1.6] and pull.pulls == 3, "drawn with what came, and the next pull (overdue) opened"
+    # Nothing at all (no renderer): the subscriptions stay, no churn.
+    quiet = FramePull(["scan"], lambda: [FakeSubscription(log, "scan")], lambda: None, period=0.5,
+                      clock=lambda: now[0])
+    quiet.tick()
+    now[0] = 10.0
+    quiet.tick()
+    assert log.count("+scan") == 1 and "-scan" not in log
+
+
+def test_a_continuous_pull_stays_subscribed_and_draws_at_its_rate() -> None:
+    from nodes.viz.pulls import FramePull
+
+    now, log, frames = [0.0], [], []
+    pull = FramePull(["image"], lambda: [FakeSubscription(log, "image")], lambda: frames.append(now[0]),
+                     period=0.5, continuous=True, clock=lambda: now[0])
+    pull.tick()
+    for step in range(30):  # 30 Hz for a second
+        now[0] = step / 30
+        pull.arrived("image")
+        pull.tick()
+    assert log == ["+image"] and len(frames) == 2
