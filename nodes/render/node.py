@@ -192,7 +192,9 @@ class RendererNode(Node):
             rng = np.random.default_rng([self.seed, zlib.crc32(sensor.key.encode()), int(frame.step)])
             pose = transforms[sensor.link] @ sensor.spec.pose
             for output, payload in self._draw(sensor, outputs, pose, stamp, rng):
-                sensor.publishers[output].publish_raw(sensor.packers[output](**payload))
+                # realtime: a congested subscriber loses pictures (ROS's sensor-data QoS is best effort), it
+                # never holds the renderer up; lockstep: every picture is delivered, as every frame is drawn
+                sensor.publishers[output].publish_raw(sensor.packers[output](**payload), droppable=not frame.lockstep)
                 published += 1
             sensor.drawn += 1
         return published
