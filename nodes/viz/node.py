@@ -678,7 +678,9 @@ class Viewer(Node):
 
     def stamp_or_now(self, stamp: Any) -> float:
         seconds = msgs.time_to_sec(stamp)
-        if seconds <= 0:
+        if seconds <= 0 or (is_wall_stamp(seconds) and self.sim_clock_seen):
+            # A wall-clock stamp beside a simulator (a node without use_sim_time, a state publisher's
+            # tf_static): its rows go at the current sim time, and it does not move sim time on.
             return self.sim_now
         self.sim_now = seconds  # stamps keep sim time current between the (rate-limited) clock samples
         if is_wall_stamp(seconds) and not self.sim_clock_seen:

@@ -89,6 +89,17 @@ def parse_model(xml_text: str) -> RobotModel:
     return model
 
 
+def visual_leaves(model: RobotModel) -> list[str]:
+    """The default end effectors: links with a visual below which no link has one (hands, feet and the
+    head, though sensor frames such as a camera's hang off it), else the URDF's leaf links."""
+    def drawn_below(link: str) -> bool:
+        return any(model.links[j.child].visuals or drawn_below(j.child) for j in model.children_of(link)
+                   if j.child in model.links)
+
+    leaves = [name for name, link in model.links.items() if link.visuals and not drawn_below(name)]
+    return leaves or model.leaf_links()
+
+
 def rgba8(rgba: Sequence[float]) -> list[int]:
     return [int(round(max(0.0, min(1.0, c)) * 255)) for c in rgba]
 
@@ -272,7 +283,7 @@ class RobotScene:
         unknown = [link for link in wanted if link not in model.links]
         if unknown:
             raise ValueError(f"end_effectors: unknown links {unknown} in robot '{model.name}'")
-        self.end_effectors = wanted or model.leaf_links()
+        self.end_effectors = wanted or visual_leaves(model)
         self.world = f"world/{namespace}"
         self.entity = robot_entity(namespace)
         self.root_frame = frame_name(namespace, model.root, self.world_frames)

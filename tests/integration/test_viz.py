@@ -114,7 +114,7 @@ def test_robots_appear_and_disappear_under_their_namespaces(processes, tmp_path:
     stop(processes, feeder)
     log = stop(processes, viz)
     data = load(rrd)
-    assert "robot 'humanoid2': model 'humanoid' with 23 links" in log
+    assert "robot 'humanoid2': model 'humanoid' with 27 links, 23 visuals" in log
     assert data["world/humanoid2/robot"].rows, "the second robot was drawn"
     clears = data["world/humanoid2"].column("Clear:is_recursive")
     assert clears and clears[0][1] == [True], "the deleted robot's subtree is cleared"

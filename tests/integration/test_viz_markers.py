@@ -96,9 +96,11 @@ def test_trajectory_visualizer_markers_are_received_decoded_and_drawn(processes,
     assert viz.returncode == 0, processes.output(viz)
 
     data = load(rrd)
+    for entity in data.values():  # no simulator here: rows are on the wall_time timeline, not sim_time
+        entity.rows.sort(key=lambda row: (row.get("wall_time", 0.0), row.get("log_time", 0.0)))
 
     def last(entity: str, component: str):
-        """The newest value (no simulator here: rows are on the wall_time timeline, not sim_time)."""
+        """The newest value."""
         return [row[component] for row in data[entity].rows if component in row][-1]
 
     strip = last(TRAJECTORY, "LineStrips3D:strips")[0]
