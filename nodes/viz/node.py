@@ -53,9 +53,7 @@ from .pulls import FramePull
 from .ratelimit import RateLimiter
 from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, SceneTime, is_wall_stamp, parse_model
 from .sensors import (
-    LIDAR_RADIUS,
     SCAN_COLOR,
-    SCAN_RADIUS,
     CameraFrame,
     RenderedSensors,
     camera_entity,
@@ -502,7 +500,7 @@ class Viewer(Node):
                                  CameraFrame(pose, k, width, height, color, depth))
 
     def log_ranges(self, robot: RobotView) -> None:
-        """Every range sensor's newest points in the world: lidars by intensity, lasers red."""
+        """Every range sensor's newest points in the world: lidars by intensity, lasers magenta."""
         if robot.scene is None or robot.sensors is None or not robot.present:
             return
         clouds, stamp = [], None
@@ -515,10 +513,9 @@ class Viewer(Node):
                     xyz, intensity, rgb = cloud_points(msg, self.cloud_max_points)
                     colors = intensity_colors(intensity) if intensity is not None else (
                         rgb if rgb is not None else np.full((len(xyz), 3), 200, np.uint8))
-                    radius = LIDAR_RADIUS
                 else:
                     xyz, _ = scan_points(msg)
-                    colors, radius = np.tile(np.array(SCAN_COLOR, np.uint8), (len(xyz), 1)), SCAN_RADIUS
+                    colors = np.tile(np.array(SCAN_COLOR, np.uint8), (len(xyz), 1))
             except SensorDataError as exc:
                 self.logger.warn_throttle(5.0, f"{key}: skipped: {exc}", key=f"range:{key}")
                 continue
@@ -527,7 +524,7 @@ class Viewer(Node):
                 self.logger.warn_throttle(10.0, f"{key}: frame_id '{msg.header.frame_id}' is not in tf (yet): "
                                           "not drawn", key=f"range_frame:{key}")
                 continue
-            clouds.append((to_world(pose, xyz), colors, radius))
+            clouds.append((to_world(pose, xyz), colors))
             stamp = msg.header.stamp if stamp is None else stamp
         if clouds:
             robot.sensors.log_ranges(self.stamp_or_now(stamp), clouds)

@@ -28,9 +28,9 @@ class FramePull:
     """One sensor group's subscriptions, open for a frame every ``period`` s (see the module docstring).
 
     ``open_subscriptions()`` declares them and returns them; ``arrived(part)`` is called by their callbacks
-    (under the caller's lock); ``tick()`` by a timer (also under it): it closes a pull whose frame came and
-    opens the next one when it is due. A pull with nothing yet stays open: no churn while the renderer is
-    not running."""
+    (under the caller's lock) and close the pull as soon as its frame is complete; ``tick()`` by a timer
+    (also under it) opens the next one when it is due, and closes one whose frame came only in part after
+    ``PATIENCE``. A pull with nothing yet stays open: no churn while the renderer is not running."""
 
     def __init__(self, parts: Iterable[str], open_subscriptions: Callable[[], list[Any]],
                  on_frame: Callable[[], None], period: float, continuous: bool = False, ordered: bool = False,
@@ -68,6 +68,7 @@ class FramePull:
         if not self.done and self.seen >= self.parts:
             self.done = True
             self._frame()
+            self.close()  # at once, from the callback (Zenoh allows it): every ms open is frames drawn for nobody
 
     def tick(self) -> None:
         now = self.clock()

@@ -15,7 +15,7 @@ Rendered sensors are entities of their own under the robot's subtree (a deleted 
                                          depth: 0): in the 3-D view Rerun lifts it into points through the
                                          camera's pinhole, RViz's DepthCloud
 - ``world/<ns>/ranges``                  every lidar's and laser's newest points in the world (``Points3D``:
-                                         lidars coloured by intensity, lasers red), one row for all of them
+                                         lidars coloured by intensity, lasers magenta), one row for all of them
 
 Each is logged at its own rate (``image_rate``, ``cloud_rate``), never the sensors' 10-30 Hz: a page takes
 in one chunk per entity and flush, and raw images would be tens of MB/s.
@@ -38,9 +38,10 @@ from .scene import SceneTime, group_part
 
 IMU_KINDS = ("angular_velocity", "linear_acceleration")
 IMU_SERIES = ["x", "y", "z"]
-SCAN_COLOR = (255, 60, 60)
-LIDAR_RADIUS = -1.5  # UI points: the same size on screen at any zoom, like RViz's "Points" style
-SCAN_RADIUS = -2.5
+SCAN_COLOR = (255, 0, 255)  # magenta: apart from the lidars' rainbow
+# One size for every range point (a radius per point would be 4 bytes more each, 58 kB a lidar row), in UI
+# points: the same size on screen at any zoom, like RViz's "Points" style. The laser stands out by colour.
+POINT_RADIUS = -2.0
 FRUSTUM_DEPTH = 0.25  # m from the camera to the image plane drawn in the 3-D view
 
 
@@ -122,15 +123,13 @@ class RenderedSensors:
         if frame.depth_mm is not None:
             self.recording.log(f"{entity}/depth", rr.DepthImage(frame.depth_mm, meter=1000.0))
 
-    def log_ranges(self, sim_time: float, clouds: Sequence[tuple[np.ndarray, np.ndarray, float]]) -> None:
-        """One row with every range sensor's points: (world xyz (N, 3), colours (N, 3) uint8, radius)."""
+    def log_ranges(self, sim_time: float, clouds: Sequence[tuple[np.ndarray, np.ndarray]]) -> None:
+        """One row with every range sensor's points: (world xyz (N, 3), colours (N, 3) uint8) each."""
         self.set_time(sim_time)
-        positions = [xyz for xyz, _, _ in clouds]
         self.recording.log(ranges_entity(self.namespace), rr.Points3D(
-            np.concatenate(positions) if positions else np.zeros((0, 3), np.float32),
-            colors=np.concatenate([c for _, c, _ in clouds]) if clouds else np.zeros((0, 3), np.uint8),
-            radii=np.concatenate([np.full(len(xyz), r, np.float32) for xyz, _, r in clouds]) if clouds
-            else np.zeros(0, np.float32)))
+            np.concatenate([xyz for xyz, _ in clouds]) if clouds else np.zeros((0, 3), np.float32),
+            colors=np.concatenate([c for _, c in clouds]) if clouds else np.zeros((0, 3), np.uint8),
+            radii=[POINT_RADIUS]))
 
 
 def to_world(pose: np.ndarray, xyz: np.ndarray) -> np.ndarray:

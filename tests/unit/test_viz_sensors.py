@@ -252,8 +252,8 @@ def test_camera_and_range_rows(tmp_path: Path) -> None:
         sensors = RenderedSensors(recording, "humanoid", jpeg_quality=75)
         sensors.log_camera(2.0, "camera", CameraFrame(pose, k, 320, 240, (rgb, "RGB"), depth))
         lidar = to_world(pose, np.array([[1, 0, 0]], np.float32))
-        sensors.log_ranges(2.1, [(lidar, np.array([[0, 0, 255]], np.uint8), -1.5),
-                                 (np.zeros((2, 3), np.float32), np.full((2, 3), 255, np.uint8), -2.5)])
+        sensors.log_ranges(2.1, [(lidar, np.array([[0, 0, 255]], np.uint8)),
+                                 (np.zeros((2, 3), np.float32), np.full((2, 3), 255, np.uint8))])
 
     data = record(tmp_path, body)
     camera = data[camera_entity("humanoid", "camera")].rows[0]
@@ -266,7 +266,8 @@ def test_camera_and_range_rows(tmp_path: Path) -> None:
     assert depth_row["DepthImage:meter"] == [1000.0] and depth_row["sim_time"] == 2.0
     ranges = data[ranges_entity("humanoid")].rows[0]
     assert ranges["Points3D:positions"][0] == pytest.approx([1.1, 0.0, 1.4])
-    assert len(ranges["Points3D:positions"]) == 3 and ranges["Points3D:radii"] == pytest.approx([-1.5, -2.5, -2.5])
+    assert len(ranges["Points3D:positions"]) == 3 and ranges["Points3D:radii"] == [-2.0], "one radius for all"
+    assert ranges["Points3D:colors"] == [0x0000FFFF, 0xFFFFFFFF, 0xFFFFFFFF]
 
 
 def test_the_blueprint_has_an_imu_tab_and_a_camera_tab() -> None:
@@ -316,11 +317,12 @@ def test_a_pull_subscribes_for_one_frame_per_period() -> None:
     assert frames == [] and pull.subscriptions
     pull.arrived("depth")
     assert frames == [0.03], "a complete frame: colour and depth"
+    assert log[-2:] == ["-image", "-depth"] and not pull.subscriptions, "closed at once"
     pull.arrived("image")
     assert frames == [0.03], "one frame per pull"
     now[0] = 0.05
     pull.tick()
-    assert log[-2:] == ["-image", "-depth"] and not pull.subscriptions
+    assert not pull.subscriptions
     now[0] = 0.3
     pull.tick()
     assert not pull.subscriptions, "not due before a period has passed since the last pull opened"
