@@ -46,20 +46,18 @@ from nodes.urdf.sensors import SensorDeclarationError
 from nodes.urdf.xml_safety import parse_xml
 
 from .blueprint import PLOT_TABS, QUANTITY_TABS, RobotLayout, build_blueprint
-from .clouds import cloud_points, intensity_colors, scan_points
-from .images import SensorDataError, color_image, depth_millimetres, intrinsics
+from .images import SensorDataError
 from .markers import MarkerError, MarkerLayer
 from .pulls import FramePull
 from .ratelimit import RateLimiter
 from .scene import SIM_TIMELINE, WALL_TIMELINE, RobotScene, SceneTime, is_wall_stamp, parse_model
 from .sensors import (
-    SCAN_COLOR,
-    CameraFrame,
     RenderedSensors,
     camera_entity,
-    fallback_k,
+    camera_frame,
     force_arrow,
     imu_columns,
+    range_points,
     sensor_part,
     to_world,
 )
@@ -465,39 +463,22 @@ class Viewer(Node):
         first = color_msg or depth_msg
         if first is None:
             return
-        key = f"{robot.namespace}/{spec.keys.get('image', camera)}"
-        try:
-            color = color_image(color_msg) if color_msg is not None else None
-        except SensorDataError as exc:
-            self.logger.warn_throttle(5.0, f"{key}: image skipped: {exc}", key=f"image:{key}")
-            color = None
-        depth_key = spec.keys.get("depth", key)
-        try:
-            depth = depth_millimetres(depth_msg) if depth_msg is not None else None
-        except SensorDataError as exc:
-            self.logger.warn_throttle(5.0, f"{depth_key}: depth image skipped: {exc}", key=f"image:{depth_key}")
-            depth = None
-        if color is None and depth is None:
+        frame, problems = camera_frame(color_msg, depth_msg, self.latest(robot, f"info:{camera}"),
+                                       spec.camera.horizontal_fov if spec.camera else 1.047)
+        for output, problem in problems:
+            key = spec.keys.get(output, camera)
+            self.logger.warn_throttle(5.0, f"{key}: {problem}", key=f"camera:{key}")
+        if frame is None:
             return
-        height, width = (color[0] if color is not None else depth).shape[:2]
-        info = self.latest(robot, f"info:{camera}")
-        k = None
-        if info is not None:
-            try:
-                k = intrinsics(info, width, height)[0]
-            except SensorDataError as exc:
-                self.logger.warn_throttle(5.0, f"{spec.keys.get('camera_info', key)}: {exc}: the frustum comes "
-                                          "from the URDF's field of view", key=f"info:{key}")
-        if k is None:
-            k = fallback_k(width, height, spec.camera.horizontal_fov if spec.camera else 1.047)
         frame_id = first.header.frame_id or spec.frame_id
         pose = robot.scene.frame_pose(frame_id)
         if pose is None:
+            key = spec.keys.get("image", camera)
             self.logger.warn_throttle(10.0, f"{key}: frame_id '{frame_id}' is not in tf (yet): not drawn",
                                       key=f"camera_frame:{key}")
             return
-        robot.sensors.log_camera(self.stamp_or_now(first.header.stamp), camera,
-                                 CameraFrame(pose, k, width, height, color, depth))
+        frame.pose = pose
+        robot.sensors.log_camera(self.stamp_or_now(first.header.stamp), camera, frame)
 
     def log_ranges(self, robot: RobotView) -> None:
         """Every range sensor's newest points in the world: lidars by intensity, lasers magenta."""
@@ -509,13 +490,7 @@ class Viewer(Node):
             if msg is None:
                 continue
             try:
-                if kind == "points":
-                    xyz, intensity, rgb = cloud_points(msg, self.cloud_max_points)
-                    colors = intensity_colors(intensity) if intensity is not None else (
-                        rgb if rgb is not None else np.full((len(xyz), 3), 200, np.uint8))
-                else:
-                    xyz, _ = scan_points(msg)
-                    colors = np.tile(np.array(SCAN_COLOR, np.uint8), (len(xyz), 1))
+                xyz, colors = range_points(kind, msg, self.cloud_max_points)
             except SensorDataError as exc:
                 self.logger.warn_throttle(5.0, f"{key}: skipped: {exc}", key=f"range:{key}")
                 continue

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -33,7 +33,8 @@ import rerun as rr
 
 from nodes.kinematics import matrix_to_quaternion
 
-from .images import SensorDataError
+from .clouds import cloud_points, intensity_colors, scan_points
+from .images import SensorDataError, color_image, depth_millimetres, intrinsics
 from .scene import SceneTime, group_part
 
 IMU_KINDS = ("angular_velocity", "linear_acceleration")
@@ -76,14 +77,55 @@ def force_arrow(frame: np.ndarray, msg: Any, scale: float) -> tuple[np.ndarray, 
 
 @dataclass
 class CameraFrame:
-    """What one camera row draws: the optical frame in the world, K and resolution, the pixels."""
+    """What one camera row draws: K and resolution, the pixels, the optical frame in the world."""
 
-    pose: np.ndarray  # 4x4
     k: np.ndarray  # 3x3
     width: int
     height: int
     color: tuple[np.ndarray, str] | None = None  # (pixels, "RGB" | "L")
     depth_mm: np.ndarray | None = None  # (H, W) uint16
+    pose: np.ndarray = field(default_factory=lambda: np.eye(4))
+
+
+def camera_frame(color_msg: Any, depth_msg: Any, info_msg: Any, horizontal_fov: float
+                 ) -> tuple[CameraFrame | None, list[tuple[str, str]]]:
+    """The pixels of a camera's newest colour and depth images (either may be None) and its pinhole:
+    CameraInfo's K, else the URDF's field of view; with the problems met, as (``"image"``, ``"depth"`` or
+    ``"camera_info"``, reason). None when neither image can be drawn."""
+    problems: list[tuple[str, str]] = []
+    color = depth = None
+    try:
+        color = color_image(color_msg) if color_msg is not None else None
+    except SensorDataError as exc:
+        problems.append(("image", f"image skipped: {exc}"))
+    try:
+        depth = depth_millimetres(depth_msg) if depth_msg is not None else None
+    except SensorDataError as exc:
+        problems.append(("depth", f"depth image skipped: {exc}"))
+    if color is None and depth is None:
+        return None, problems
+    height, width = (color[0] if color is not None else depth).shape[:2]
+    k = None
+    if info_msg is not None:
+        try:
+            k = intrinsics(info_msg, width, height)[0]
+        except SensorDataError as exc:
+            problems.append(("camera_info", f"{exc}: the frustum comes from the URDF's field of view"))
+    if k is None:
+        k = fallback_k(width, height, horizontal_fov)
+    return CameraFrame(k, width, height, color, depth), problems
+
+
+def range_points(kind: str, msg: Any, max_points: int) -> tuple[np.ndarray, np.ndarray]:
+    """(xyz (N, 3) in the sensor frame, colours (N, 3) uint8) of a lidar's PointCloud2 (``kind`` "points":
+    by intensity, else its packed colours, else grey) or a LaserScan ("scan": magenta)."""
+    if kind == "points":
+        xyz, intensity, rgb = cloud_points(msg, max_points)
+        if intensity is not None:
+            return xyz, intensity_colors(intensity)
+        return xyz, rgb if rgb is not None else np.full((len(xyz), 3), 200, np.uint8)
+    xyz, _ = scan_points(msg)
+    return xyz, np.tile(np.array(SCAN_COLOR, np.uint8), (len(xyz), 1))
 
 
 def camera_entity(namespace: str, camera: str) -> str:

@@ -220,9 +220,9 @@ def test_bad_sensor_input_is_reported_and_the_viewer_keeps_running(processes, ro
         bad_scene = {**SCENE, "version": 4, "shapes": [*SCENE["shapes"], box(9, [1, 1, 1], (1, 0, 0, 1))]}
         wait_until(lambda: "world: scene version 3" in processes.output(viz), 30, message="the first scene")
         feed.scene.publish(msgs.from_dict(T["zenroid_msgs/msg/Scene"], bad_scene))
-        reasons = ["humanoid/camera/rgb: image skipped: step is 100 bytes, shorter than a row of 320 rgb8 pixels",
-                   "humanoid/lidar/points: skipped: fields has no 'z'",
-                   "humanoid/scan: skipped: intensities has 1 entries for 720 ranges",
+        reasons = ["]: humanoid/camera/rgb: image skipped: step is 100 bytes, shorter than a row of 320 rgb8 pixels",
+                   "]: humanoid/lidar/points: skipped: fields has no 'z'",
+                   "]: humanoid/scan: skipped: intensities has 1 entries for 720 ranges",
                    "sim/scene: shapes[4]: link 9 is not one of the 4 links: skipped",
                    "dropped a message on 'sim/link_states': gazebo_msgs/msg/LinkStates: pose[0].position.x"]
         for reason in reasons:

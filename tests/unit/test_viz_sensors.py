@@ -20,9 +20,11 @@ from nodes.viz.sensors import (
     CameraFrame,
     RenderedSensors,
     camera_entity,
+    camera_frame,
     fallback_k,
     force_arrow,
     imu_columns,
+    range_points,
     ranges_entity,
     sensor_part,
     to_world,
@@ -116,6 +118,19 @@ def test_camera_info_gives_the_pinhole_or_the_reason() -> None:
     assert fallback_k(320, 240, 1.047)[0, 0] == pytest.approx(320 / (2 * math.tan(1.047 / 2)))
 
 
+def test_a_camera_frame_draws_what_it_can_and_names_the_rest() -> None:
+    info = msgs.from_dict(CameraInfo, {"width": 640, "height": 480, "k": [500.0, 0, 320, 0, 500.0, 240, 0, 0, 1]})
+    good = image(np.zeros((240, 320), np.float32), "32FC1")
+    bad = msgs.from_dict(Image, {**msgs.to_dict(image(np.zeros((240, 320, 3), np.uint8), "rgb8")), "step": 10})
+    frame, problems = camera_frame(bad, good, info, 1.047)
+    assert frame is not None and frame.color is None and frame.depth_mm.shape == (240, 320)
+    assert [p[0] for p in problems] == ["image", "camera_info"]
+    assert "image skipped: step is 10 bytes" in problems[0][1]
+    assert "but the image is 320 x 240: the frustum comes from the URDF's field of view" in problems[1][1]
+    assert frame.k[0, 0] == pytest.approx(fallback_k(320, 240, 1.047)[0, 0])
+    assert camera_frame(bad, None, None, 1.047)[0] is None
+
+
 # -- clouds and scans ------------------------------------------------------------------------------------
 def test_a_lidar_cloud_gives_its_finite_points_and_intensities() -> None:
     xyz = np.array([[1, 0, 0], [np.nan, 0, 0], [0, 2, 0.5]], np.float32)
@@ -164,6 +179,13 @@ def test_malformed_clouds_are_refused_with_the_field_and_reason(changes: dict, r
     with pytest.raises(SensorDataError) as info:
         cloud_points(msg)
     assert reason in str(info.value)
+
+
+def test_range_points_colour_lidars_by_intensity_and_lasers_magenta() -> None:
+    xyz, colors = range_points("points", lidar_cloud(np.ones((2, 3), np.float32), np.array([0, 1], np.float32)), 0)
+    assert colors.tolist() == [[0, 0, 255], [255, 0, 0]]
+    xyz, colors = range_points("scan", scan([1.0, 1.0, 1.0]), 0)
+    assert len(xyz) == 3 and colors.tolist() == [[255, 0, 255]] * 3
 
 
 def test_a_scan_gives_points_of_its_returns_only() -> None:
@@ -250,7 +272,7 @@ def test_camera_and_range_rows(tmp_path: Path) -> None:
 
     def body(recording: rr.RecordingStream) -> None:
         sensors = RenderedSensors(recording, "humanoid", jpeg_quality=75)
-        sensors.log_camera(2.0, "camera", CameraFrame(pose, k, 320, 240, (rgb, "RGB"), depth))
+        sensors.log_camera(2.0, "camera", CameraFrame(k, 320, 240, (rgb, "RGB"), depth, pose))
         lidar = to_world(pose, np.array([[1, 0, 0]], np.float32))
         sensors.log_ranges(2.1, [(lidar, np.array([[0, 0, 255]], np.uint8)),
                                  (np.zeros((2, 3), np.float32), np.full((2, 3), 255, np.uint8))])
