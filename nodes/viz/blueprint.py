@@ -11,7 +11,9 @@ The time panel follows the newest data (``play_state="following"``), so a viewer
 present, not the start.
 
 The sensors get two tabs: "imu" (angular velocity and linear acceleration of each IMU, columns of the robot
-entity like the joints) and "camera" (each camera's image and depth image in 2-D views). The 3-D view starts
+entity like the joints) and "camera" (each camera's image and depth image in 2-D views: both are rows of
+the camera's one entity, and each view activates only its visualizer, as the 3-D view does for the frustum and
+the image, so the depth image is not also lifted into points there). The 3-D view starts
 where the world file's ``<gui><camera><pose>`` puts Gazebo's camera, when it has one.
 """
 
@@ -50,6 +52,12 @@ class RobotLayout:
     def key(self) -> tuple:
         return (tuple(self.groups), tuple((c, tuple(g)) for c, g in sorted(self.controllers.items())),
                 self.has_balance, tuple(self.imus), tuple(self.cameras))
+
+
+def image_visualizers() -> list:
+    """A camera's colour image: JPEG (EncodedImage) or raw (Image, when it could not be compressed). Fresh
+    each time: a visualizer's id names it in the layout."""
+    return [rr.EncodedImage.from_fields().visualizer(), rr.Image.from_fields().visualizer()]
 
 
 def title(group: str) -> str:
@@ -132,10 +140,10 @@ def robot_plots(namespace: str, layout: RobotLayout, timeline: str = SIM_TIMELIN
         views = []
         for camera, depth in layout.cameras:
             label = camera.rsplit("/", 1)[-1]
-            # The image alone ("$origin": not the depth image below it), then the depth image.
-            views.append(rrb.Spatial2DView(name=f"{prefix}{label}", origin=camera, contents=["$origin"]))
+            views.append(rrb.Spatial2DView(name=f"{prefix}{label}", origin=camera, overrides={camera: image_visualizers()}))
             if depth:
-                views.append(rrb.Spatial2DView(name=f"{prefix}{label} depth", origin=f"{camera}/depth"))
+                views.append(rrb.Spatial2DView(name=f"{prefix}{label} depth", origin=camera,
+                                               overrides={camera: [rr.DepthImage.from_fields().visualizer()]}))
         tabs.append(grid(views, "camera"))
     return rrb.Tabs(*tabs, active_tab=0, name=namespace)
 
@@ -151,10 +159,12 @@ def build_blueprint(robots: Mapping[str, RobotLayout] | None = None, timeline: s
     for a 320 x 240 camera, which slowed a software-rendered page to a frame every 2 s; else only in the
     camera tab)."""
     robots = robots or {}
-    hidden = [f"- {camera}/depth" for layout in robots.values() for camera, depth in layout.cameras if depth]
+    # Each camera's frustum and image; its depth image too with depth_cloud (the default set of visualizers).
+    frusta = {} if depth_cloud else {camera: [rr.Pinhole.from_fields().visualizer(), *image_visualizers()]
+                                     for layout in robots.values() for camera, _ in layout.cameras}
     position, target = eye if eye is not None else (DEFAULT_EYE, DEFAULT_TARGET)
     scene = rrb.Spatial3DView(
-        name="scene", origin="world", contents=["$origin/**", *([] if depth_cloud else hidden)],
+        name="scene", origin="world", overrides=frusta or None,
         # The ground: the viewer's own grid (0.5 m, z = 0), like RViz's Grid display. It is part of the
         # layout, not of the data, so the web server never drops it from a short history.
         line_grid=rrb.LineGrid3D(visible=ground, spacing=0.5, plane=rr.components.Plane3D.XY,

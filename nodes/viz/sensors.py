@@ -10,10 +10,10 @@ Rendered sensors are entities of their own under the robot's subtree (a deleted 
 - ``world/<ns>/cameras/<camera>``        ``Transform3D`` (the optical frame in the world) + ``Pinhole``
                                          (CameraInfo's K: the frustum; Rerun's default camera axes are RDF,
                                          ROS's optical frame) + the colour image, JPEG-compressed
-                                         (``EncodedImage``, ~13 kB instead of 230 kB for 320 x 240)
-- ``world/<ns>/cameras/<camera>/depth``  the depth image (``DepthImage``, uint16 mm, ``meter`` 1000; no
-                                         depth: 0): in the 3-D view Rerun lifts it into points through the
-                                         camera's pinhole, RViz's DepthCloud
+                                         (``EncodedImage``, ~13 kB instead of 230 kB for 320 x 240) + the
+                                         depth image (``DepthImage``, uint16 mm, ``meter`` 1000; no depth: 0),
+                                         all in one row: one chunk per flush for the page, not two. The
+                                         layout's views pick what each draws (``blueprint.py``)
 - ``world/<ns>/ranges``                  every lidar's and laser's newest points in the world (``Points3D``:
                                          lidars coloured by intensity, lasers magenta), one row for all of them
 
@@ -152,7 +152,7 @@ class RenderedSensors:
         self.set_time = SceneTime(recording)
 
     def log_camera(self, sim_time: float, camera: str, frame: CameraFrame) -> None:
-        """One row of the camera (pose, pinhole, compressed image) and one of its depth image."""
+        """One row of the camera: pose, pinhole, compressed image, depth image."""
         self.set_time(sim_time)
         entity = camera_entity(self.namespace, camera)
         parts: list = [rr.Transform3D(translation=frame.pose[:3, 3], quaternion=matrix_to_quaternion(frame.pose[:3, :3])),
@@ -161,9 +161,9 @@ class RenderedSensors:
         if frame.color is not None:
             pixels, model = frame.color
             parts.append(rr.Image(pixels, color_model=model).compress(jpeg_quality=self.jpeg_quality))
-        self.recording.log(entity, *parts)
         if frame.depth_mm is not None:
-            self.recording.log(f"{entity}/depth", rr.DepthImage(frame.depth_mm, meter=1000.0))
+            parts.append(rr.DepthImage(frame.depth_mm, meter=1000.0))
+        self.recording.log(entity, *parts)
 
     def log_ranges(self, sim_time: float, clouds: Sequence[tuple[np.ndarray, np.ndarray]]) -> None:
         """One row with every range sensor's points: (world xyz (N, 3), colours (N, 3) uint8) each."""

@@ -74,6 +74,6 @@ def test_main_job_viewer_records_world_body_and_rendered_sensors(tmp_path: Path,
     camera = data[CAMERA].rows
     assert len(camera) >= 3 and camera[-1]["EncodedImage:media_type"] == ["image/jpeg"]
     assert camera[-1]["Pinhole:resolution"] == [[320.0, 240.0]]
-    assert data[f"{CAMERA}/depth"].rows[-1]["DepthImage:meter"] == [1000.0]
+    assert camera[-1]["DepthImage:meter"] == [1000.0], "the depth image in the camera's row"
     ranges = data[RANGES].rows
     assert len(ranges) >= 3 and len(ranges[-1]["Points3D:positions"]) > 2000, "the lidar sees the walls"

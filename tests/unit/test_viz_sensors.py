@@ -284,8 +284,8 @@ def test_camera_and_range_rows(tmp_path: Path) -> None:
     assert camera["EncodedImage:media_type"] == ["image/jpeg"]
     jpeg = bytes(camera["EncodedImage:blob"][0])
     assert jpeg[:2] == b"\xff\xd8" and len(jpeg) < 320 * 240 * 3 / 20, f"{len(jpeg)} bytes: not compressed"
-    depth_row = data[camera_entity("humanoid", "camera") + "/depth"].rows[0]
-    assert depth_row["DepthImage:meter"] == [1000.0] and depth_row["sim_time"] == 2.0
+    assert camera["DepthImage:meter"] == [1000.0] and camera["sim_time"] == 2.0, "the depth image in the same row"
+    assert set(data) - {"__properties"} == {camera_entity("humanoid", "camera"), ranges_entity("humanoid")}
     ranges = data[ranges_entity("humanoid")].rows[0]
     assert ranges["Points3D:positions"][0] == pytest.approx([1.1, 0.0, 1.4])
     assert len(ranges["Points3D:positions"]) == 3 and ranges["Points3D:radii"] == [-2.0], "one radius for all"
@@ -308,7 +308,18 @@ def test_the_blueprint_has_an_imu_tab_and_a_camera_tab() -> None:
     assert visualizer.mappings[0].source_component == "angular_velocity:imu_sensor_broadcaster_imu"
     image_view, depth_view = tabs["camera"].contents
     assert isinstance(image_view, rrb.Spatial2DView) and str(image_view.origin) == "world/humanoid/cameras/camera"
-    assert str(depth_view.origin) == "world/humanoid/cameras/camera/depth"
+    assert str(depth_view.origin) == "world/humanoid/cameras/camera"
+
+    def active(view: Any) -> list[str]:  # the visualizers a view runs on the camera's entity
+        [(entity, visualizers)] = view.visualizer_overrides.items()
+        assert str(entity) == "world/humanoid/cameras/camera"
+        return [v.visualizer_type for v in visualizers]
+
+    assert active(image_view) == ["EncodedImage", "Image"] and active(depth_view) == ["DepthImage"]
+    scene = build_blueprint({"humanoid": layout}).root_container.contents[0]
+    assert active(scene) == ["Cameras", "EncodedImage", "Image"], "the frustum and image, no depth points"
+    lifted = build_blueprint({"humanoid": layout}, depth_cloud=True).root_container.contents[0]
+    assert not lifted.visualizer_overrides, "depth_cloud: Rerun's own choice, the depth lifted into points"
     plots = build_blueprint({"humanoid": layout}, plots=["positions"]).root_container.contents[1]
     assert [tab.name for tab in plots.contents] == ["positions"], "plots:=[...] leaves the sensor tabs out"
 
