@@ -55,9 +55,10 @@ class RobotLayout:
 
 
 def image_visualizers() -> list:
-    """A camera's colour image: JPEG (EncodedImage) or raw (Image, when it could not be compressed). Fresh
-    each time: a visualizer's id names it in the layout."""
-    return [rr.EncodedImage.from_fields().visualizer(), rr.Image.from_fields().visualizer()]
+    """A camera's colour image: always JPEG (``color_image`` gives u8 RGB or L, which Rerun compresses). Only
+    visualizers with data on the entity: one without (a raw Image's) marks the view with an error. Fresh each
+    time: a visualizer's id names it in the layout."""
+    return [rr.EncodedImage.from_fields().visualizer()]
 
 
 def title(group: str) -> str:

@@ -315,9 +315,9 @@ def test_the_blueprint_has_an_imu_tab_and_a_camera_tab() -> None:
         assert str(entity) == "world/humanoid/cameras/camera"
         return [v.visualizer_type for v in visualizers]
 
-    assert active(image_view) == ["EncodedImage", "Image"] and active(depth_view) == ["DepthImage"]
+    assert active(image_view) == ["EncodedImage"] and active(depth_view) == ["DepthImage"]
     scene = build_blueprint({"humanoid": layout}).root_container.contents[0]
-    assert active(scene) == ["Cameras", "EncodedImage", "Image"], "the frustum and image, no depth points"
+    assert active(scene) == ["Cameras", "EncodedImage"], "the frustum and image, no depth points"
     lifted = build_blueprint({"humanoid": layout}, depth_cloud=True).root_container.contents[0]
     assert not lifted.visualizer_overrides, "depth_cloud: Rerun's own choice, the depth lifted into points"
     plots = build_blueprint({"humanoid": layout}, plots=["positions"]).root_container.contents[1]
