@@ -17,8 +17,8 @@ Rendered sensors are entities of their own under the robot's subtree (a deleted 
 - ``world/<ns>/ranges``                  every lidar's and laser's newest points in the world (``Points3D``:
                                          lidars coloured by intensity, lasers magenta), one row for all of them
 
-Each is logged at its own rate (``image_rate``, ``cloud_rate``), never the sensors' 10-30 Hz: a page takes
-in one chunk per entity and flush, and raw images would be tens of MB/s.
+Each is logged at its own rate (``image_rate``, ``cloud_rate``: 1 Hz), never the sensors' 10-30 Hz: a page
+takes in one chunk per entity and flush, and raw images would be tens of MB/s.
 """
 
 from __future__ import annotations

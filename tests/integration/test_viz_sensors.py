@@ -158,7 +158,7 @@ def test_world_body_and_rendered_sensors_are_recorded(processes, router: str, tm
         wait_until(lambda: "world: scene version 3, 2 models drawn" in processes.output(viz), 30,
                    message="the world in the viewer")
         wait_until(lambda: "23 visuals" in processes.output(viz), 40, message="the robot model in the viewer")
-        time.sleep(6.0)
+        time.sleep(7.0)
     log = stop(processes, viz)
     assert viz.returncode == 0, log
     assert "humanoid/camera/points" in log and "sensors camera, lidar, laser" in log
@@ -183,15 +183,15 @@ def test_world_body_and_rendered_sensors_are_recorded(processes, router: str, tm
     for origin, vector in zip(robot.rows[-1]["Arrows3D:origins"], arrows, strict=True):
         assert origin[2] + vector[2] == pytest.approx(0.05, abs=0.05), "the tip at a foot, near the ground"
 
-    # Rendered sensors: a frame at a time (about image_rate, 2 Hz), compressed, in the head's frame.
+    # Rendered sensors: a frame at a time (about image_rate, 1 Hz), compressed, in the head's frame.
     camera = data[CAMERA].rows
-    assert 4 <= len(camera) <= 20, len(camera)
+    assert 3 <= len(camera) <= 12, len(camera)
     assert camera[-1]["EncodedImage:media_type"] == ["image/jpeg"]
     assert camera[-1]["Pinhole:image_from_camera"][0][0] == pytest.approx(277.2)
     assert camera[-1]["Transform3D:translation"][0][2] > 1.2, "the head camera, above the pelvis"
     assert camera[-1]["DepthImage:meter"] == [1000.0], "the depth image in the camera's row"
     ranges = data[RANGES].rows
-    assert 4 <= len(ranges) <= 20, len(ranges)
+    assert 3 <= len(ranges) <= 12, len(ranges)
     assert len(ranges[-1]["Points3D:positions"]) == 900 + 700, "the lidar ring and the laser's returns (no inf)"
 
 
