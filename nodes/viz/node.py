@@ -27,7 +27,7 @@ import rerun as rr
 
 import msgs
 from msgs.control_msgs import JointTrajectoryControllerState as ControllerState
-from msgs.gazebo_msgs import LinkStates, ModelStates
+from msgs.gazebo_msgs import ContactsState, LinkStates, ModelStates
 from msgs.geometry_msgs import WrenchStamped
 from msgs.humanoid_msgs import HumanoidState
 from msgs.rosgraph_msgs import Clock
@@ -55,6 +55,7 @@ from .sensors import (
     RenderedSensors,
     camera_entity,
     camera_frame,
+    contact_points,
     force_arrow,
     imu_columns,
     range_points,
@@ -69,9 +70,11 @@ MARKER_TYPES = {"visualization_msgs/msg/Marker": Marker, "visualization_msgs/msg
 GLOBAL_MARKER_TOPICS = {"visualization_marker": Marker, "visualization_marker_array": MarkerArray,
                         "visualization/trajectory": Marker}
 # Body sensors found in the graph under a robot's namespace, and the main job's keys (subscribed at once).
-BODY_SENSOR_TYPES = {"sensor_msgs/msg/Imu": "imu", "geometry_msgs/msg/WrenchStamped": "wrench"}
+BODY_SENSOR_TYPES = {"sensor_msgs/msg/Imu": "imu", "geometry_msgs/msg/WrenchStamped": "wrench",
+                     "gazebo_msgs/msg/ContactsState": "contacts"}
 DEFAULT_BODY_SENSORS = {"imu": ["imu_sensor_broadcaster/imu"],
-                        "wrench": ["left_foot_ft_broadcaster/wrench", "right_foot_ft_broadcaster/wrench"]}
+                        "wrench": ["left_foot_ft_broadcaster/wrench", "right_foot_ft_broadcaster/wrench"],
+                        "contacts": ["left_foot/contacts", "right_foot/contacts"]}
 
 DISCOVERY_PERIOD = 2.0
 LATEST_FRESH = 1.0  # s a controller_state or humanoid_state stays in the plot rows after it stops coming
@@ -351,12 +354,14 @@ class Viewer(Node):
         the newest message is kept, decoded when a row takes it (they come at 1 kHz)."""
         key = key.strip("/")
         if key in robot.body_sensors or (kind == "imu" and not self.show_imu) or \
-                (kind == "wrench" and not self.show_wrenches):
+                (kind in ("wrench", "contacts") and not self.show_wrenches):
             return
         if kind == "imu":
             part = sensor_part(robot.namespace, key)
             robot.body_sensors[key] = (kind, self.latch(robot, f"imu:{key}", Imu, f"/{key}", on_arrival=(
                 lambda r=robot, k=key, p=part: r.imus.setdefault(k, p))))
+        elif kind == "contacts":
+            robot.body_sensors[key] = (kind, self.latch(robot, f"contacts:{key}", ContactsState, f"/{key}"))
         else:
             robot.body_sensors[key] = (kind, self.latch(robot, f"wrench:{key}", WrenchStamped, f"/{key}"))
 
@@ -372,6 +377,11 @@ class Viewer(Node):
                         for kind, parts in imu_columns(sensor_part(robot.namespace, key), msg).items():
                             columns.setdefault(kind, {}).update(parts)
                     continue
+                if sensor == "contacts":
+                    if scene is not None:
+                        frame = None if msg is None else scene.frame_pose(msg.header.frame_id)
+                        scene.update_contacts(key, contact_points(frame, msg) if frame is not None else None)
+                    continue
                 frame = None if msg is None or scene is None else scene.frame_pose(msg.header.frame_id)
                 if msg is not None and frame is None:
                     self.logger.warn_throttle(10.0, f"{key}: frame_id '{msg.header.frame_id}' is not in tf (yet): "
@@ -383,6 +393,8 @@ class Viewer(Node):
                 self.logger.warn_throttle(5.0, f"{key}: {exc}: skipped", key=f"sensor:{key}")
                 if scene is not None and sensor == "wrench":
                     scene.update_arrow(key, None)
+                if scene is not None and sensor == "contacts":
+                    scene.update_contacts(key, None)
         return columns
 
     def add_rendered_sensors(self, robot: RobotView, xml_text: str) -> None:

@@ -65,6 +65,8 @@ SHAPES = {"box": "boxes", "cylinder": "cylinders", "sphere": "spheres"}  # URDF 
 FORCE_COLOR = (255, 120, 30, 255)  # the feet's force arrows
 COP_COLOR = (40, 220, 240, 255)  # the measured centre of pressure
 ARROW_RADIUS = 0.008
+CONTACT_COLOR = (230, 40, 200, 255)  # contact points of a contact sensor (gazebo_ros' bumper)
+CONTACT_RADIUS = 0.008
 
 
 def frame_name(namespace: str, frame: str, world_frames: Sequence[str] = ("world", "map", "odom")) -> str:
@@ -537,6 +539,14 @@ class RobotScene:
             self.marker_arrows.pop(name, None)
             return
         self.marker_arrows[name] = (np.asarray(origin, float), np.asarray(vector, float), list(color))
+
+    def update_contacts(self, name: str, points: np.ndarray | None) -> None:
+        """A contact sensor's contact points (world frame) drawn from the next row on; None removes them."""
+        if points is None or not len(points):
+            self.marker_points.pop(f"contacts:{name}", None)
+            return
+        self.marker_points[f"contacts:{name}"] = (np.asarray(points, float).reshape(-1, 3), [CONTACT_RADIUS] * len(points),
+                                                   [list(CONTACT_COLOR)] * len(points))
 
     def update_balance(self, com: Sequence[float], zmp: Sequence[float], is_balanced: bool,
                        support_polygon: Sequence[Sequence[float]], cop: Sequence[float] | None = None) -> None:

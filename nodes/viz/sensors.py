@@ -87,6 +87,16 @@ class CameraFrame:
     pose: np.ndarray = field(default_factory=lambda: np.eye(4))
 
 
+def contact_points(frame: np.ndarray, msg: Any) -> np.ndarray:
+    """The world positions of a gazebo_msgs/ContactsState's contacts (given in the frame at ``frame``);
+    SensorDataError naming the field for a non-finite one."""
+    rows = [(p.x, p.y, p.z) for state in msg.states for p in state.contact_positions]
+    if not rows:
+        return np.zeros((0, 3))
+    points = finite([v for row in rows for v in row], "states[].contact_positions").reshape(-1, 3)
+    return points @ frame[:3, :3].T + frame[:3, 3]
+
+
 def camera_frame(color_msg: Any, depth_msg: Any, info_msg: Any, horizontal_fov: float
                  ) -> tuple[CameraFrame | None, list[tuple[str, str]]]:
     """The pixels of a camera's newest colour and depth images (either may be None) and its pinhole:

@@ -69,6 +69,11 @@ def test_main_job_viewer_records_world_body_and_rendered_sensors(tmp_path: Path,
     last = next(r for r in reversed(robot.rows) if len(r.get("Arrows3D:vectors") or []) == 2)
     carried = sum(v[2] for v in last["Arrows3D:vectors"]) / 0.001  # wrench_scale: 1 mm per N
     assert carried == pytest.approx(weight, rel=0.25), (carried, weight)
+    # and the foot contact sensors' points (the bumper plugins' ContactsState) on the floor under the soles
+    magenta = (230 << 24) | (40 << 16) | (200 << 8) | 255   # scene.CONTACT_COLOR, packed as Rerun stores it
+    contacts = [p for r in robot.rows[-20:] for p, c in zip(r.get("Points3D:positions") or [], r.get("Points3D:colors")
+                                                             or []) if c == magenta]
+    assert contacts and all(abs(p[2]) < 0.01 and abs(p[0]) < 0.3 for p in contacts), contacts[:4]
 
     # Rendered sensors: the head camera (JPEG), its depth image, the lidar and laser points.
     camera = data[CAMERA].rows

@@ -21,6 +21,7 @@ from nodes.viz.sensors import (
     RenderedSensors,
     camera_entity,
     camera_frame,
+    contact_points,
     fallback_k,
     force_arrow,
     imu_columns,
@@ -37,6 +38,7 @@ PointCloud2 = msgs.get_type("sensor_msgs/msg/PointCloud2")
 LaserScan = msgs.get_type("sensor_msgs/msg/LaserScan")
 Imu = msgs.get_type("sensor_msgs/msg/Imu")
 WrenchStamped = msgs.get_type("geometry_msgs/msg/WrenchStamped")
+ContactsState = msgs.get_type("gazebo_msgs/msg/ContactsState")
 FLOAT32, UINT16 = 7, 4
 LIDAR = np.dtype({"names": ["x", "y", "z", "intensity", "ring"], "formats": ["<f4", "<f4", "<f4", "<f4", "<u2"],
                   "offsets": [0, 4, 8, 12, 16], "itemsize": 20})  # the renderer's (Velodyne's) layout
@@ -222,6 +224,21 @@ def test_imu_columns_and_force_arrows() -> None:
     bad.linear_acceleration.z = math.nan  # the codec refuses NaN on the wire: as if it had come through
     with pytest.raises(SensorDataError, match="linear_acceleration is not finite"):
         imu_columns("imu", bad)
+
+
+def test_contact_points_of_a_bumper_in_the_world() -> None:
+    contacts = msgs.from_dict(ContactsState, {"header": {"frame_id": "world"}, "states": [
+        {"contact_positions": [{"x": 0.1, "y": 0.2, "z": 0.0}, {"x": 0.3, "y": 0.2, "z": 0.0}]},
+        {"contact_positions": [{"x": -0.1, "y": 0.0, "z": 0.0}]}]})
+    assert contact_points(np.eye(4), contacts).tolist() == [[0.1, 0.2, 0.0], [0.3, 0.2, 0.0], [-0.1, 0.0, 0.0]]
+    lifted = np.eye(4)
+    lifted[2, 3] = 1.0   # positions given in a link one metre up
+    assert contact_points(lifted, contacts)[:, 2].tolist() == [1.0, 1.0, 1.0]
+    assert contact_points(np.eye(4), msgs.from_dict(ContactsState, {})).shape == (0, 3)
+    bad = msgs.from_dict(ContactsState, {"states": [{"contact_positions": [{"x": 1.0}]}]})
+    bad.states[0].contact_positions[0].x = math.inf   # as if it had come through
+    with pytest.raises(SensorDataError, match="contact_positions is not finite"):
+        contact_points(np.eye(4), bad)
 
 
 LEG = """<robot name="leg">
