@@ -39,6 +39,7 @@ class PhysicsWorld:
         self.set_gravity(gravity)
         self.ground: dart.dynamics.Skeleton | None = None
         self._static_bodies: list = []   # bodies of static models and the ground (never collide with each other)
+        self._static_names: set[str] = set()
         self.ground_size = 0.0
         self.ground_friction = 1.0
 
@@ -125,9 +126,16 @@ class PhysicsWorld:
             for other in self._static_bodies:
                 collision_filter.addBodyNodePairToBlackList(body, other)
         self._static_bodies.extend(bodies)
+        self._static_names.add(skeleton.getName())
 
-    def _forget_static(self, skeleton) -> None:
+    def is_static(self, name: str) -> bool:
+        """The skeleton of this name never moves now (a static model, the ground, a model asleep)."""
+        return name in self._static_names
+
+    def unmark_static(self, skeleton) -> None:
+        """The skeleton moves again: its contacts with the static ones are checked again."""
         name = skeleton.getName()
+        self._static_names.discard(name)
         gone = [b for b in self._static_bodies if b.getSkeleton().getName() == name]
         if not gone:
             return
@@ -140,7 +148,7 @@ class PhysicsWorld:
     def remove_skeleton(self, skeleton) -> None:
         """Remove a skeleton and forget the last step's contacts, which point into its collision objects
         (reading them after the removal is a use-after-free: measured as a crash)."""
-        self._forget_static(skeleton)
+        self.unmark_static(skeleton)
         self.world.removeSkeleton(skeleton)
         self.world.getConstraintSolver().clearLastCollisionResult()
 
