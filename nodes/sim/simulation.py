@@ -132,18 +132,22 @@ class Simulation:
     def step(self, count: int = 1) -> None:
         """``count`` physics steps with the current commands (kinematic: joints set, no dynamics)."""
         dt = self.world.time_step
-        hardware = list(self.hardware.values())
-        for _ in range(count):
-            if self.kinematic:
+        hardware = self.hardware.values()
+        if self.mode == "kinematic":
+            for _ in range(count):
                 for hw in hardware:
                     hw.set_kinematic(dt)
                 self.world.world.setTime(self.world.time + dt)
-            else:
-                for hw in hardware:
-                    hw.before_step()
-                if self.pushes:
-                    self.pushes.apply(self.world.time)
-                self.world.step()
+                self.step_count += 1
+            return
+        # looked up once: this loop runs at the physics rate, and its Python is part of every step's cost
+        world_step, pushes = self.world.step, self.pushes
+        for _ in range(count):
+            for hw in hardware:
+                hw.before_step(dt)
+            if pushes.wrenches or pushes.efforts:   # bool(pushes) without the call
+                pushes.apply(self.world.time)
+            world_step()
             self.step_count += 1
 
     def sample_sensors(self) -> None:

@@ -94,7 +94,7 @@ def test_position_servo_torque_stays_within_effort_limit(make_sim):
     reported, saturated_force = [], []
     for _ in range(1500):
         hw.before_step()
-        for i in np.nonzero(hw._saturated)[0]:   # a saturated joint gets exactly the limit, no spring
+        for i in np.nonzero(hw.saturated())[0]:   # a saturated joint gets exactly the limit, no spring
             saturated_force.append(abs(hw.skeleton.getForce(int(hw.dofs[i]))) / hw.max_effort[i])
             assert hw.dart_joints[i].getSpringStiffness(0) == 0.0
         sim.world.step()
