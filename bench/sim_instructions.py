@@ -1,23 +1,32 @@
 """The simulator's physics step in CPU instructions (callgrind), against plain dartpy stepping the same robot.
 
 Wall-clock timings on this shared machine swing 2x; instruction counts do not. Each loop runs in its own
-``valgrind --tool=callgrind`` process for two step counts, so start-up (imports, URDF loading, 300 steps of
-landing on the ground) cancels out: per-step instructions = difference / difference in steps. DART's share is
-``dart::simulation::World::step`` from ``callgrind_annotate --inclusive=yes``.
+``valgrind --tool=callgrind`` process; callgrind dumps its counts when the loop calls ``getppid`` (the marker,
+``--dump-before=getppid``), once after start-up (imports, URDF loading, 300 steps of landing on the ground) and
+once after the measured steps, so the second dump holds exactly those steps: per-step instructions = its total /
+steps (the same as running two step counts and taking the difference, in one run). DART's share is
+``dart::simulation::World::step`` from ``callgrind_annotate --inclusive=yes`` on that dump.
 
-  (a) plain: robots/humanoid.urdf loaded with dartpy's DartLoader, a ground box, the joints' position limits
-      enforced and implicit joint springs at the simulator's gains (config/sim.yaml), a slow squat commanded by
-      moving the six leg-pitch rest positions every step. None of this project's code.
+  (a) plain: robots/humanoid.urdf loaded with dartpy's DartLoader, a ground box, the joints' limits enforced
+      and implicit joint springs at the simulator's gains (config/sim.yaml), a slow squat commanded by moving
+      the six leg-pitch rest positions every step. None of this project's code.
+      plain-force: the same, the rest positions left at 0 and the squat given as joint forces kp * target in
+      one ``setForces`` call (DART's spring force is linear in the rest position: the same physics, to
+      rounding). ``setRestPosition`` bumps the skeleton's version, and DART's collision group then re-registers
+      the skeleton's collision objects in the next step: World::step itself costs ~0.23 M more a step.
   (b) ours: ``Simulation.step`` + ``HardwareInterface.apply_command`` with the same squat (all 22 joints
       commanded, as the controller manager does; bench/lockstep.py's in-process loop), sensors off, and sensors
       on (then ``Simulation.sample_sensors`` every step too, as the simulator does every control period).
 
+Every loop takes its commands from a table built before the first marker: what is counted is the stepping, not
+the bench making up a squat.
+
 ``overhead`` = (all instructions per step - World::step's) / World::step's: what runs outside DART's step (for
-(a) the loop and six setRestPosition calls, the floor of any Python driver). The goal of issue 28 is ours
+the plain loops: the loop and the dartpy calls, the floor of any Python driver). The goal of issue 28 is ours
 sensors off <= 10 %. Prints a table, then one JSON line.
 
-    python bench/sim_instructions.py [--steps 200,1200] [--jobs 1]
-    python bench/sim_instructions.py --loop ours-off --steps 1200    # one loop, no valgrind (for profilers)
+    python bench/sim_instructions.py [--steps 1000] [--jobs 2] [--loops plain,ours-off] [--keep DIR]
+    python bench/sim_instructions.py --loop ours-off --steps 1000    # one loop, no valgrind (for profilers)
 """
 
 from __future__ import annotations
@@ -43,7 +52,7 @@ URDF = ROOT / "robots" / "humanoid.urdf"
 PHYSICS_RATE = 1000.0
 SPAWN_Z = 0.93
 SETTLE_STEPS = 300            # landing on the ground, holding zero, before the squat starts
-LOOPS = ("plain", "ours-off", "ours-on")
+LOOPS = ("plain", "plain-force", "ours-off", "ours-on")
 LEG_PITCH = {"hip_pitch": -0.5, "knee": 1.0, "ankle_pitch": -0.5}   # bench/lockstep.py's squat direction
 WORLD_STEP = "dart::simulation::World::step"
 
@@ -65,9 +74,15 @@ def sim_gains() -> dict[str, dict[str, float]]:
 
 
 # ------------------------------------------------------------------------------------------ the loops
-def plain_loop(steps: int) -> float:
+def mark() -> None:
+    """Where callgrind dumps its counts (--dump-before=getppid): nothing else in the loops calls getppid."""
+    os.getppid()
+
+
+def plain_loop(steps: int, as_force: bool = False) -> float:
     """(a): plain dartpy, none of this project's code. Returns the pelvis height at the end."""
     import dartpy as dart
+    import numpy as np
 
     world = dart.simulation.World()
     world.setTimeStep(1.0 / PHYSICS_RATE)
@@ -88,6 +103,7 @@ def plain_loop(steps: int) -> float:
     robot.setPosition(5, SPAWN_Z)                # FreeJoint: rx ry rz x y z
     gains = sim_gains()
     squatting = []
+    force_per_depth = np.zeros(robot.getNumDofs())   # kp * pitch per DOF: the squat as joint forces
     for i in range(robot.getNumJoints()):
         joint = robot.getJoint(i)
         if joint.getNumDofs() != 1:
@@ -100,14 +116,24 @@ def plain_loop(steps: int) -> float:
         joint.setRestPosition(0, 0.0)
         if pitch_of(name):
             squatting.append((joint, pitch_of(name)))
+            force_per_depth[joint.getIndexInSkeleton(0)] = float(gain["p"]) * pitch_of(name)
     world.addSkeleton(robot)
+    depths = [squat_depth(k) for k in range(steps)]
+    forces = [force_per_depth * depth for depth in depths]
     for _ in range(SETTLE_STEPS):
         world.step()
-    for k in range(steps):
-        depth = squat_depth(k)
-        for joint, pitch in squatting:
-            joint.setRestPosition(0, pitch * depth)
-        world.step()
+    mark()
+    set_forces, world_step = robot.setForces, world.step
+    if as_force:
+        for force in forces:
+            set_forces(force)
+            world_step()
+    else:
+        for depth in depths:
+            for joint, pitch in squatting:
+                joint.setRestPosition(0, pitch * depth)
+            world_step()
+    mark()
     return float(robot.getBodyNode(0).getWorldTransform().translation()[2])
 
 
@@ -128,97 +154,93 @@ def ours_loop(steps: int, sensors: bool) -> float:
     names = list(hw.names)
     interfaces = ["position"] * len(names)
     pitches = [pitch_of(name) for name in names]
+    commands = [[p * squat_depth(k) for p in pitches] for k in range(steps)]
     zeros = [0.0] * len(names)
     for _ in range(SETTLE_STEPS):
         if sensors:
             sim.sample_sensors()
         hw.apply_command(names, interfaces, zeros)
         sim.step(1)
-    for k in range(steps):
-        depth = squat_depth(k)
-        if sensors:
-            sim.sample_sensors()
-        hw.apply_command(names, interfaces, [p * depth for p in pitches])
-        sim.step(1)
+    apply_command, step, sample_sensors = hw.apply_command, sim.step, sim.sample_sensors
+    mark()
+    if sensors:
+        for command in commands:
+            sample_sensors()
+            apply_command(names, interfaces, command)
+            step(1)
+    else:
+        for command in commands:
+            apply_command(names, interfaces, command)
+            step(1)
+    mark()
     height = float(entity.world_pose().position[2])
     sim.clear()
     return height
 
 
 def run_loop(loop: str, steps: int) -> float:
-    if loop == "plain":
-        return plain_loop(steps)
+    if loop.startswith("plain"):
+        return plain_loop(steps, as_force=loop == "plain-force")
     return ours_loop(steps, sensors=loop == "ours-on")
 
 
 # ------------------------------------------------------------------------------------------ callgrind
 def callgrind(loop: str, steps: int, out_dir: Path) -> dict:
-    """Total instructions and World::step's inclusive instructions of one loop under callgrind."""
-    out = out_dir / f"callgrind.{loop}.{steps}.out"
+    """Instructions per step, in all and in World::step (inclusive), of one loop under callgrind."""
+    out = out_dir / f"callgrind.{loop}.out"
     # the same hashes, and no OpenBLAS worker threads (numpy starts them at import: their spinning, counted
     # too, depends on the scheduler and made runs differ by 2 %)
     env = dict(os.environ, PYTHONHASHSEED="0", PYTHONPATH=str(ROOT), OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1")
     started = time.perf_counter()
-    proc = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable,
-                           str(Path(__file__).resolve()), "--loop", loop, "--steps", str(steps)],
+    proc = subprocess.run(["valgrind", "--tool=callgrind", "--dump-before=getppid", f"--callgrind-out-file={out}",
+                           sys.executable, str(Path(__file__).resolve()), "--loop", loop, "--steps", str(steps)],
                           capture_output=True, text=True, env=env, cwd=ROOT)
     if proc.returncode != 0:
-        raise RuntimeError(f"callgrind of {loop} x {steps} failed:\n{proc.stderr[-3000:]}")
+        raise RuntimeError(f"callgrind of {loop} failed:\n{proc.stderr[-3000:]}")
+    measured = out.with_name(out.name + ".2")     # dump 1: start-up; dump 2: the measured steps
+    if not measured.exists() or out.with_name(out.name + ".3").exists():
+        raise RuntimeError(f"{loop}: expected exactly two marker dumps next to {out}")
     total = None
-    for line in out.read_text(errors="replace").splitlines():
+    for line in measured.read_text(errors="replace").splitlines():
         if line.startswith(("summary:", "totals:")):
             total = int(line.split()[1])
-    annotate = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(out)],
+    annotate = subprocess.run(["callgrind_annotate", "--inclusive=yes", "--threshold=100", str(measured)],
                               capture_output=True, text=True, check=True).stdout
     world_step = max((int(m.group(1).replace(",", "")) for m in
                       re.finditer(r"^\s*([\d,]+)\s.*" + re.escape(WORLD_STEP) + r"\(", annotate, re.M)),
                      default=None)
     if total is None or world_step is None:
-        raise RuntimeError(f"no totals or no {WORLD_STEP} in {out}")
+        raise RuntimeError(f"no totals or no {WORLD_STEP} in {measured}")
     height = float(proc.stdout.strip().splitlines()[-1].split()[-1])
-    return {"total": total, "world_step": world_step, "height": height,
-            "seconds": time.perf_counter() - started, "file": str(out)}
-
-
-def per_step(runs: dict[int, dict]) -> dict:
-    """Per-step instructions from the runs at two step counts (the difference cancels start-up)."""
-    low, high = min(runs), max(runs)
-    n = high - low
-    total = (runs[high]["total"] - runs[low]["total"]) / n
-    world_step = (runs[high]["world_step"] - runs[low]["world_step"]) / n
-    return {"total": total, "world_step": world_step, "outside": total - world_step,
-            "overhead_percent": 100.0 * (total - world_step) / world_step, "height": runs[high]["height"]}
+    return {"total": total / steps, "world_step": world_step / steps, "outside": (total - world_step) / steps,
+            "overhead_percent": 100.0 * (total - world_step) / world_step, "height": height,
+            "seconds": time.perf_counter() - started}
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--steps", default="200,1200",
-                        help="two step counts (comma-separated); with --loop, the one count to run")
+    parser.add_argument("--steps", type=int, default=1000, help="measured steps per loop (after 300 settling)")
     parser.add_argument("--loop", choices=LOOPS, help="run one loop in this process (no valgrind) and exit")
     parser.add_argument("--loops", default=",".join(LOOPS), help="which loops to measure (comma-separated)")
-    parser.add_argument("--jobs", type=int, default=1, help="callgrind processes at a time")
+    parser.add_argument("--jobs", type=int, default=2, help="callgrind processes at a time")
     parser.add_argument("--keep", type=Path, help="keep the callgrind files in this directory")
     args = parser.parse_args(argv)
     if args.loop:
-        print(f"pelvis height {run_loop(args.loop, int(args.steps)):.4f}")
+        print(f"pelvis height {run_loop(args.loop, args.steps):.4f}")
         return 0
     if shutil.which("valgrind") is None or shutil.which("callgrind_annotate") is None:
         print("valgrind and callgrind_annotate are needed (apt-get install valgrind)", file=sys.stderr)
         return 2
-    counts = sorted({int(s) for s in args.steps.split(",")})
-    if len(counts) != 2:
-        parser.error("--steps needs two different step counts")
     loops = [loop for loop in args.loops.split(",") if loop]
     load_before = os.getloadavg()[0]
     out_dir = args.keep or Path(tempfile.mkdtemp(prefix="sim-instructions-"))
     out_dir.mkdir(parents=True, exist_ok=True)
     started = time.perf_counter()
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        futures = {(loop, n): pool.submit(callgrind, loop, n, out_dir) for loop in loops for n in counts}
-        raw = {key: future.result() for key, future in futures.items()}
+        futures = {loop: pool.submit(callgrind, loop, args.steps, out_dir) for loop in loops}
+        results = {loop: future.result() for loop, future in futures.items()}
     if args.keep is None:
         shutil.rmtree(out_dir, ignore_errors=True)
-    results = {loop: per_step({n: raw[(loop, n)] for n in counts}) for loop in loops}
 
     from bench.common import print_table
 
@@ -227,27 +249,29 @@ def main(argv: list[str] | None = None) -> int:
         rows.append((f"{loop}: instructions per step", f"{r['total'] / 1e6:.3f} M",
                      f"World::step {r['world_step'] / 1e6:.3f} M, outside it {r['outside'] / 1e3:.0f} k "
                      f"({r['overhead_percent']:.1f} % of World::step)"))
-    plain = results.get("plain")
     for loop in ("ours-off", "ours-on"):
-        if plain and loop in results:
-            rows.append((f"{loop} / plain, per step", f"{results[loop]['total'] / plain['total']:.3f}",
-                         "1.0: no cost beyond plain dartpy"))
+        for base in ("plain", "plain-force"):
+            if base in results and loop in results:
+                rows.append((f"{loop} / {base}, per step", f"{results[loop]['total'] / results[base]['total']:.3f}",
+                             "1.0: no cost beyond plain dartpy"))
     if "ours-off" in results:
         rows.append(("ours-off: outside World::step", f"{results['ours-off']['overhead_percent']:.1f} %",
                      "of World::step (goal <= 10 %)"))
     rows.append(("callgrind runs", f"{time.perf_counter() - started:.0f} s",
-                 f"steps {counts[0]} and {counts[1]} after {SETTLE_STEPS} settling; pelvis at the end "
+                 f"{args.steps} steps after {SETTLE_STEPS} settling; pelvis at the end "
                  + ", ".join(f"{loop} {r['height']:.3f} m" for loop, r in results.items())))
     print_table(rows, load_before)
-    summary: dict = {"steps": counts, "settle_steps": SETTLE_STEPS, "load_average": round(load_before, 2)}
+    summary: dict = {"steps": args.steps, "settle_steps": SETTLE_STEPS, "load_average": round(load_before, 2)}
     for loop, r in results.items():
         key = loop.replace("-", "_")
         summary[f"{key}_per_step"] = round(r["total"])
         summary[f"{key}_world_step_per_step"] = round(r["world_step"])
         summary[f"{key}_overhead_percent"] = round(r["overhead_percent"], 2)
     for loop in ("ours-off", "ours-on"):
-        if plain and loop in results:
-            summary[f"ratio_{loop.replace('-', '_')}_to_plain"] = round(results[loop]["total"] / plain["total"], 4)
+        for base in ("plain", "plain-force"):
+            if base in results and loop in results:
+                key = f"ratio_{loop.replace('-', '_')}_to_{base.replace('-', '_')}"
+                summary[key] = round(results[loop]["total"] / results[base]["total"], 4)
     print(json.dumps(summary))
     return 0
 
