@@ -8,9 +8,13 @@ Each run:
       manager with JSB + JTC on 22 joints, robot state publisher, joint commander) while a separate
       process that imports only zenoh and msgpack counts simulated time on ``sim/clock`` and watches the
       pelvis height on ``sim/model_states``.
-``ratio`` = (b) / (a). Prints a table, then one JSON line with ``fullstack_steps_per_s``,
-``inprocess_steps_per_s`` and ``ratio`` (medians over the runs); each run also records what the launcher
-did with ``exclusive_cpu`` ("CPU 1", "not reserved: why" when another lockstep launch holds the CPU, "off").
+  (a') plain dartpy: bench/sim_instructions.py's loop (a), the same humanoid, ground and gains stepped by
+      dartpy alone (the squat as moving rest positions, none of this project's code): what the robot costs
+      DART itself. (a) and (a') are measured before and after (b), alternating (a, a', b, a', a).
+``ratio`` = (b) / (a), ``ratio_to_plain`` = (b) / (a'), ``inprocess_to_plain`` = (a) / (a'). Prints a table,
+then one JSON line with ``fullstack_steps_per_s``, ``inprocess_steps_per_s``, ``plain_steps_per_s`` and the
+ratios (medians over the runs); each run also records what the launcher did with ``exclusive_cpu`` ("CPU 1",
+"not reserved: why" when another lockstep launch holds the CPU, "off").
 
 ``--world NAME`` (repeatable) runs the full stack in each world in turn within every run (same ceiling, same
 machine state), e.g. ``--world empty.world --world simple_lab.world``: the table and the JSON then add each
@@ -147,6 +151,37 @@ def inprocess_steps_per_s(steps: int, physics_rate: float) -> tuple[float, float
     return steps / elapsed, height
 
 
+def plain_steps_per_s(steps: int) -> float:
+    """Steps per wall second of bench/sim_instructions.py's plain-dartpy loop (a'): the same humanoid squatting,
+    none of this project's code (its squat assumes the default 1000 Hz physics rate)."""
+    from bench.sim_instructions import PlainHumanoid, squat_depth
+
+    plain = PlainHumanoid()
+    plain.settle()
+    depths = [squat_depth(k) for k in range(steps)]
+    start = time.perf_counter()
+    plain.squat(depths)
+    return steps / (time.perf_counter() - start)
+
+
+def ceilings(args: argparse.Namespace, after: bool = False) -> dict[str, float]:
+    """(a) and (a') once each, in-process first (after the full stack: plain first, so the two bracket it
+    alike); the in-process pelvis height at the end too."""
+    out: dict[str, float] = {}
+    for kind in (("plain", "inprocess") if after else ("inprocess", "plain")):
+        if kind == "plain":
+            out["plain"] = plain_steps_per_s(args.inprocess_steps)
+        else:
+            out["inprocess"], out["height"] = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
+    return out
+
+
+def bracket(before: dict[str, float], after: dict[str, float]) -> tuple[float, float]:
+    """The (a) and (a') ceilings of a run: the means of their measurements before and after the full stack."""
+    return (statistics.mean([before["inprocess"], after["inprocess"]]),
+            statistics.mean([before["plain"], after["plain"]]))
+
+
 def process_tree_cpu(pid: int) -> dict[int, tuple[str, float]]:
     """CPU seconds used so far by each process under ``pid``: pid -> (its node name, seconds)."""
     import psutil
@@ -251,17 +286,19 @@ def main(argv: list[str] | None = None) -> int:
     load_before = os.getloadavg()[0]
     rows = []
     for run in range(args.runs):
-        ceiling, height = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
+        before = ceilings(args)
         full = fullstack(args.seconds, args.physics_rate, args.launch, tuple(args.launch_args))
-        ceiling_after, _ = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
-        ceiling = statistics.mean([ceiling, ceiling_after])   # bracket the full-stack run
+        ceiling, plain = bracket(before, ceilings(args, after=True))   # bracket the full-stack run
         rows.append({"inprocess": ceiling, "fullstack": full["steps_per_s"], "ratio": full["steps_per_s"] / ceiling,
-                     "pelvis_min": full["pelvis_min"], "cpu": full["cpu_percent"], "inprocess_height": height,
-                     "exclusive_cpu": full["exclusive_cpu"]})
-        print(f"run {run + 1}: in-process {ceiling:,.0f} steps/s, full stack {full['steps_per_s']:,.0f} steps/s, "
-              f"ratio {full['steps_per_s'] / ceiling:.2f}, pelvis min {full['pelvis_min']:.3f} m", file=sys.stderr)
+                     "pelvis_min": full["pelvis_min"], "cpu": full["cpu_percent"], "inprocess_height": before["height"],
+                     "exclusive_cpu": full["exclusive_cpu"], "plain": plain,
+                     "ratio_to_plain": full["steps_per_s"] / plain, "inprocess_to_plain": ceiling / plain})
+        print(f"run {run + 1}: in-process {ceiling:,.0f} steps/s, plain dartpy {plain:,.0f}, full stack "
+              f"{full['steps_per_s']:,.0f} steps/s, ratio {full['steps_per_s'] / ceiling:.2f} (to plain "
+              f"{full['steps_per_s'] / plain:.2f}), pelvis min {full['pelvis_min']:.3f} m", file=sys.stderr)
 
-    med = {k: statistics.median(r[k] for r in rows) for k in ("inprocess", "fullstack", "ratio")}
+    med = {k: statistics.median(r[k] for r in rows)
+           for k in ("inprocess", "fullstack", "ratio", "plain", "ratio_to_plain", "inprocess_to_plain")}
     pelvis_min = min(r["pelvis_min"] for r in rows)
     cpu_keys = sorted({k for r in rows for k in r["cpu"]})
     cpu = {k: statistics.median(r["cpu"].get(k, 0.0) for r in rows) for k in cpu_keys}
@@ -270,6 +307,11 @@ def main(argv: list[str] | None = None) -> int:
         ("(b) humanoid.yaml mode:=lockstep (sim/clock, outside probe)", f"{med['fullstack']:,.0f} steps/s",
          f"{med['fullstack'] / args.physics_rate:.2f}x real time"),
         ("ratio (b)/(a)", f"{med['ratio']:.2f}", "goal >= 0.5, stretch 0.7"),
+        ("(a') plain dartpy, the same humanoid (sim_instructions (a))", f"{med['plain']:,.0f} steps/s",
+         "DART alone: no project code"),
+        ("ratio (b)/(a'): full stack / plain dartpy", f"{med['ratio_to_plain']:.2f}", ""),
+        ("ratio (a)/(a'): in-process simulator / plain dartpy", f"{med['inprocess_to_plain']:.2f}",
+         "1.0: the simulator's own Python costs nothing"),
         ("pelvis height, lowest seen", f"{pelvis_min:.3f} m", "standing: > 0.75 m"),
         ("exclusive_cpu (the launcher's choice)", ", ".join(sorted({r["exclusive_cpu"] for r in rows})),
          "a CPU of its own for the physics thread"),
@@ -280,6 +322,8 @@ def main(argv: list[str] | None = None) -> int:
         "fullstack_steps_per_s": round(med["fullstack"], 1), "inprocess_steps_per_s": round(med["inprocess"], 1),
         "ratio": round(med["ratio"], 4), "runs": [{k: (round(v, 3) if isinstance(v, float) else v)
                                                    for k, v in r.items()} for r in rows],
+        "plain_steps_per_s": round(med["plain"], 1), "ratio_to_plain": round(med["ratio_to_plain"], 4),
+        "inprocess_to_plain": round(med["inprocess_to_plain"], 4),
         "pelvis_min": round(pelvis_min, 4), "cpu_percent": cpu, "load_average": round(load_before, 2),
     }))
     return 0
@@ -289,23 +333,29 @@ def compare_sensors(args: argparse.Namespace) -> int:
     """The full stack with the sensors on and off, alternating within every run, against the same ceiling."""
     load_before = os.getloadavg()[0]
     rows: dict[str, list[float]] = {"on": [], "off": []}
+    to_plain: dict[str, list[float]] = {"on": [], "off": []}
     for run in range(args.runs):
-        ceiling, _ = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
+        before = ceilings(args)
         order = ("on", "off") if run % 2 == 0 else ("off", "on")
         fulls = {state: fullstack(args.seconds, args.physics_rate, args.launch,
                                   (*args.launch_args, f"sensors:={'true' if state == 'on' else 'false'}"))
                  for state in order}
-        ceiling = statistics.mean([ceiling, inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)[0]])
+        ceiling, plain = bracket(before, ceilings(args, after=True))
         for state, full in fulls.items():
             rows[state].append(full["steps_per_s"] / ceiling)
+            to_plain[state].append(full["steps_per_s"] / plain)
             print(f"run {run + 1} sensors {state}: full stack {full['steps_per_s']:,.0f} steps/s, ratio "
-                  f"{full['steps_per_s'] / ceiling:.3f}", file=sys.stderr)
+                  f"{full['steps_per_s'] / ceiling:.3f} (to plain dartpy {full['steps_per_s'] / plain:.3f})",
+                  file=sys.stderr)
     ratio = {state: statistics.median(values) for state, values in rows.items()}
-    print_table([(f"ratio (b)/(a), sensors {state}", f"{value:.3f}", f"{args.runs} runs, median")
-                 for state, value in ratio.items()] +
+    plain_ratio = {state: statistics.median(values) for state, values in to_plain.items()}
+    print_table([(f"ratio (b)/(a), sensors {state}", f"{value:.3f}", f"{args.runs} runs, median; to plain dartpy "
+                  f"(a') {plain_ratio[state]:.3f}") for state, value in ratio.items()] +
                 [("sensors on / off", f"{ratio['on'] / ratio['off']:.3f}", "1.0: they cost nothing")], load_before)
     print(json.dumps({"ratio_sensors_on": round(ratio["on"], 4), "ratio_sensors_off": round(ratio["off"], 4),
-                      "runs": rows, "load_average": round(load_before, 2)}))
+                      "runs": rows, "load_average": round(load_before, 2),
+                      "ratio_to_plain_sensors_on": round(plain_ratio["on"], 4),
+                      "ratio_to_plain_sensors_off": round(plain_ratio["off"], 4), "runs_to_plain": to_plain}))
     return 0
 
 
@@ -314,14 +364,15 @@ def compare_worlds(args: argparse.Namespace) -> int:
     load_before = os.getloadavg()[0]
     rows: dict[str, list[dict]] = {world: [] for world in args.world}
     for run in range(args.runs):
-        ceiling, _ = inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)
+        before = ceilings(args)
         fulls = {world: fullstack(args.seconds, args.physics_rate, args.launch,
                                   (*args.launch_args, f"world:={world}")) for world in args.world}
-        ceiling = statistics.mean([ceiling, inprocess_steps_per_s(args.inprocess_steps, args.physics_rate)[0]])
+        ceiling, plain = bracket(before, ceilings(args, after=True))
         for world, full in fulls.items():
             rows[world].append({"inprocess": ceiling, "fullstack": full["steps_per_s"],
                                 "ratio": full["steps_per_s"] / ceiling, "pelvis_min": full["pelvis_min"],
-                                "load_ms": full["world_load_ms"], "exclusive_cpu": full["exclusive_cpu"]})
+                                "load_ms": full["world_load_ms"], "exclusive_cpu": full["exclusive_cpu"],
+                                "plain": plain, "ratio_to_plain": full["steps_per_s"] / plain})
             print(f"run {run + 1} {world}: full stack {full['steps_per_s']:,.0f} steps/s, ratio "
                   f"{full['steps_per_s'] / ceiling:.3f}, world loaded in {full['world_load_ms']} ms", file=sys.stderr)
     summary = {}
@@ -329,6 +380,7 @@ def compare_worlds(args: argparse.Namespace) -> int:
         loads = [r["load_ms"] for r in runs if r["load_ms"] is not None]
         summary[world] = {"fullstack_steps_per_s": round(statistics.median(r["fullstack"] for r in runs), 1),
                           "ratio": round(statistics.median(r["ratio"] for r in runs), 4),
+                          "ratio_to_plain": round(statistics.median(r["ratio_to_plain"] for r in runs), 4),
                           "pelvis_min": round(min(r["pelvis_min"] for r in runs), 4),
                           "load_ms": round(statistics.median(loads), 1) if loads else None}
     first, last = args.world[0], args.world[-1]

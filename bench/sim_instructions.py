@@ -79,62 +79,86 @@ def mark() -> None:
     os.getppid()
 
 
-def plain_loop(steps: int, as_force: bool = False) -> float:
-    """(a): plain dartpy, none of this project's code. Returns the pelvis height at the end."""
-    import dartpy as dart
-    import numpy as np
+class PlainHumanoid:
+    """(a): the humanoid in plain dartpy, none of this project's code: a world with a ground box, the URDF from
+    DartLoader, limits enforced, implicit joint springs at the simulator's gains (config/sim.yaml)."""
 
-    world = dart.simulation.World()
-    world.setTimeStep(1.0 / PHYSICS_RATE)
-    world.getConstraintSolver().setCollisionDetector(dart.collision.FCLCollisionDetector())
-    world.setGravity([0.0, 0.0, -9.81])
-    ground = dart.dynamics.Skeleton("ground_plane")
-    _, body = ground.createWeldJointAndBodyNodePair()
-    node = body.createShapeNode(dart.dynamics.BoxShape([50.0, 50.0, 0.1]))
-    node.createVisualAspect()
-    node.createCollisionAspect()
-    node.createDynamicsAspect().setFrictionCoeff(1.0)
-    offset = dart.math.Isometry3()
-    offset.set_translation([0.0, 0.0, -0.05])   # top face at z = 0
-    body.getParentJoint().setTransformFromParentBodyNode(offset)
-    world.addSkeleton(ground)
+    def __init__(self) -> None:
+        import dartpy as dart
+        import numpy as np
 
-    robot = dart.utils.DartLoader().parseSkeleton(str(URDF))
-    robot.setPosition(5, SPAWN_Z)                # FreeJoint: rx ry rz x y z
-    gains = sim_gains()
-    squatting = []
-    force_per_depth = np.zeros(robot.getNumDofs())   # kp * pitch per DOF: the squat as joint forces
-    for i in range(robot.getNumJoints()):
-        joint = robot.getJoint(i)
-        if joint.getNumDofs() != 1:
-            continue
-        name = joint.getName()
-        gain = next(g for pattern, g in gains.items() if fnmatch.fnmatchcase(name, pattern))
-        joint.setLimitEnforcement(True)          # the humanoid has no continuous joint
-        joint.setSpringStiffness(0, float(gain["p"]))
-        joint.setDampingCoefficient(0, float(gain["d"]))
-        joint.setRestPosition(0, 0.0)
-        if pitch_of(name):
-            squatting.append((joint, pitch_of(name)))
-            force_per_depth[joint.getIndexInSkeleton(0)] = float(gain["p"]) * pitch_of(name)
-    world.addSkeleton(robot)
-    depths = [squat_depth(k) for k in range(steps)]
-    forces = [force_per_depth * depth for depth in depths]
-    for _ in range(SETTLE_STEPS):
-        world.step()
-    mark()
-    set_forces, world_step = robot.setForces, world.step
-    if as_force:
-        for force in forces:
-            set_forces(force)
-            world_step()
-    else:
+        world = dart.simulation.World()
+        world.setTimeStep(1.0 / PHYSICS_RATE)
+        world.getConstraintSolver().setCollisionDetector(dart.collision.FCLCollisionDetector())
+        world.setGravity([0.0, 0.0, -9.81])
+        ground = dart.dynamics.Skeleton("ground_plane")
+        _, body = ground.createWeldJointAndBodyNodePair()
+        node = body.createShapeNode(dart.dynamics.BoxShape([50.0, 50.0, 0.1]))
+        node.createVisualAspect()
+        node.createCollisionAspect()
+        node.createDynamicsAspect().setFrictionCoeff(1.0)
+        offset = dart.math.Isometry3()
+        offset.set_translation([0.0, 0.0, -0.05])   # top face at z = 0
+        body.getParentJoint().setTransformFromParentBodyNode(offset)
+        world.addSkeleton(ground)
+
+        robot = dart.utils.DartLoader().parseSkeleton(str(URDF))
+        robot.setPosition(5, SPAWN_Z)                # FreeJoint: rx ry rz x y z
+        gains = sim_gains()
+        self.squatting = []                          # (joint, pitch): the leg joints the squat moves
+        self.force_per_depth = np.zeros(robot.getNumDofs())   # kp * pitch per DOF: the squat as joint forces
+        for i in range(robot.getNumJoints()):
+            joint = robot.getJoint(i)
+            if joint.getNumDofs() != 1:
+                continue
+            name = joint.getName()
+            gain = next(g for pattern, g in gains.items() if fnmatch.fnmatchcase(name, pattern))
+            joint.setLimitEnforcement(True)          # the humanoid has no continuous joint
+            joint.setSpringStiffness(0, float(gain["p"]))
+            joint.setDampingCoefficient(0, float(gain["d"]))
+            joint.setRestPosition(0, 0.0)
+            if pitch_of(name):
+                self.squatting.append((joint, pitch_of(name)))
+                self.force_per_depth[joint.getIndexInSkeleton(0)] = float(gain["p"]) * pitch_of(name)
+        world.addSkeleton(robot)
+        self.world, self.robot = world, robot
+
+    def settle(self, steps: int = SETTLE_STEPS) -> None:
+        for _ in range(steps):
+            self.world.step()
+
+    def squat(self, depths: list[float]) -> None:
+        """One step per depth, the squat commanded by moving the rest positions (a controller's way)."""
+        world_step, squatting = self.world.step, self.squatting
         for depth in depths:
             for joint, pitch in squatting:
                 joint.setRestPosition(0, pitch * depth)
             world_step()
+
+    def squat_by_force(self, forces: list) -> None:
+        """One step per force vector (``force_per_depth * depth``), the rest positions left at 0."""
+        set_forces, world_step = self.robot.setForces, self.world.step
+        for force in forces:
+            set_forces(force)
+            world_step()
+
+    def pelvis_height(self) -> float:
+        return float(self.robot.getBodyNode(0).getWorldTransform().translation()[2])
+
+
+def plain_loop(steps: int, as_force: bool = False) -> float:
+    """(a) under the markers. Returns the pelvis height at the end."""
+    plain = PlainHumanoid()
+    depths = [squat_depth(k) for k in range(steps)]
+    forces = [plain.force_per_depth * depth for depth in depths]
+    plain.settle()
     mark()
-    return float(robot.getBodyNode(0).getWorldTransform().translation()[2])
+    if as_force:
+        plain.squat_by_force(forces)
+    else:
+        plain.squat(depths)
+    mark()
+    return plain.pelvis_height()
 
 
 def ours_loop(steps: int, sensors: bool) -> float:
