@@ -65,6 +65,7 @@ class _Plan:
         self.modes = modes
         self.epoch = -1                 # the mode epoch at which every entry's interface was its joint's mode
 
+
 class HardwareInterface:
     """Joints of one entity in URDF order, their active command interface and current command."""
 
