@@ -188,6 +188,7 @@ class EntityServices:
         if target.model is None:
             raise EntityError(f"state.name: {GROUND_NAME} is the built-in ground: it does not move")
         world_pose = Pose.from_matrix(matrix)
+        self.sim.wake(target.model.name)   # asleep at rest, it would not move on from its new state
         if target.body is None:
             target.model.set_world_pose(world_pose)
             target.model.set_world_twist(linear, angular)

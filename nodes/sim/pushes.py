@@ -5,6 +5,7 @@ every step, so the active ones are applied again before each step until they exp
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,17 +76,22 @@ class Pushes:
         self.wrenches.clear()
         self.efforts.clear()
 
-    def apply(self, now: float) -> None:
-        """Add the wrenches and efforts active at sim time ``now``; drop the expired ones."""
+    def apply(self, now: float, wake: Callable[[str], None] | None = None) -> None:
+        """Add the wrenches and efforts active at sim time ``now``; drop the expired ones. ``wake(model)`` is
+        called for every model pushed now (a model asleep at rest takes part in the physics again)."""
         if any(w.end <= now for w in self.wrenches):
             self.wrenches = [w for w in self.wrenches if w.end > now]
         if any(e.end <= now for e in self.efforts):
             self.efforts = [e for e in self.efforts if e.end > now]
         for wrench in self.wrenches:
             if wrench.start <= now:
+                if wake is not None:
+                    wake(wrench.model)
                 wrench.body.addExtForce(wrench.force, wrench.offset, False, True)
                 wrench.body.addExtTorque(wrench.torque, False)
         for effort in self.efforts:
             if effort.start <= now:
+                if wake is not None:
+                    wake(effort.model)
                 joint = effort.dart_joint
                 joint.setForce(0, joint.getForce(0) + effort.effort)

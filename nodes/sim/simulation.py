@@ -16,6 +16,7 @@ from nodes.sim.humanoid_state import BalanceState, FootWrench, balance_state, ro
 from nodes.sim.interfaces import MODES
 from nodes.sim.model import Model
 from nodes.sim.pushes import Pushes
+from nodes.sim.rest import RestKeeper
 from nodes.sim.sdf import WorldSpec
 from nodes.sim.sdf_model import WorldModel
 from nodes.sim.sensors import SensorSuite
@@ -43,6 +44,7 @@ class Simulation:
         self.sensors_enabled = sensors_enabled
         self.step_count = 0                                  # physics steps since start / reset_simulation
         self.pushes = Pushes()                               # apply_link_wrench / apply_joint_effort
+        self.rest = RestKeeper(world)                        # world models at rest sleep until touched
         self._com_velocity: dict[str, tuple[float, np.ndarray]] = {}  # namespace -> (time, CoM velocity)
         self._recent_contacts: dict[str, list[tuple[float, list]]] = {}  # namespace -> [(time, contacts)]
 
@@ -81,6 +83,7 @@ class Simulation:
         except ValueError as exc:
             raise SpawnError(str(exc)) from None
         self.world.world.addSkeleton(entity.skeleton)
+        self.rest.changed()
         self.entities[entity.name] = entity
         self.hardware[entity.namespace] = hardware
         self.sensors[entity.namespace] = sensors
@@ -93,6 +96,9 @@ class Simulation:
         self.world.world.addSkeleton(model.skeleton)
         if model.static:
             self.world.mark_static(model.skeleton)
+        else:
+            self.rest.track(model.name, model.skeleton)
+        self.rest.changed()
         self.entities[model.name] = model
         return model
 
@@ -115,6 +121,8 @@ class Simulation:
         if entity is None:
             return False
         self.pushes.drop_model(name)
+        self.rest.forget(name)
+        self.rest.changed()
         self.hardware.pop(entity.namespace, None)
         self.sensors.pop(entity.namespace, None)
         self._com_velocity.pop(entity.namespace, None)
@@ -141,14 +149,16 @@ class Simulation:
                 self.step_count += 1
             return
         # looked up once: this loop runs at the physics rate, and its Python is part of every step's cost
-        world_step, pushes = self.world.step, self.pushes
+        world_step, pushes, rest = self.world.step, self.pushes, self.rest
         for _ in range(count):
             for hw in hardware:
                 hw.before_step(dt)
             if pushes.wrenches or pushes.efforts:   # bool(pushes) without the call
-                pushes.apply(self.world.time)
+                pushes.apply(self.world.time, rest.wake)
             world_step()
             self.step_count += 1
+            if rest.models:
+                rest.after_step()
 
     def sample_sensors(self) -> None:
         """Every sensor that is due at the current sim time takes its reading (once per control period)."""
@@ -157,6 +167,10 @@ class Simulation:
         t, gravity = self.world.time, self.world.gravity
         for suite in self.sensors.values():
             suite.sample(t, gravity)
+
+    def wake(self, name: str) -> None:
+        """A request moves or pushes this model (``name`` or ``name::link``): if it sleeps, it wakes."""
+        self.rest.wake(name.split("::")[0])
 
     def hold_all(self) -> None:
         for hw in self.hardware.values():
@@ -167,6 +181,7 @@ class Simulation:
         self._com_velocity.clear()
         self._recent_contacts.clear()
         self.pushes.clear()
+        self.rest.wake_all()
         for entity in self.entities.values():
             entity.reset()
         for suite in self.sensors.values():
