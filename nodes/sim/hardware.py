@@ -98,6 +98,10 @@ class HardwareInterface:
         self._kp_all = self._per_dof(self.kp, 0.0)
         self._kd_all = self._per_dof(self.kd, 0.0)
         self._effort_all = self._per_dof(self.max_effort, math.inf)
+        # velocity limits per DOF (inf: none, the floating base): DART's joint limit constraint is not hard
+        # (a saturating jump went 5 % over), so what it leaves over is cut after the step
+        self._velocity_all = self._per_dof(np.where(self.max_velocity > 0, self.max_velocity, math.inf), math.inf)
+        self._velocity_limited = bool(np.isfinite(self._velocity_all).any())
         self._target = np.zeros(ndof)                 # command per DOF, in its joint's active interface's unit
         self._position = np.zeros(ndof, dtype=bool)   # DOFs of position-mode joints
         self._effort_mode = np.zeros(ndof, dtype=bool)
@@ -352,6 +356,16 @@ class HardwareInterface:
             skeleton.setForces(self._saturate(torque))
         for dof in self._velocity_dofs:
             skeleton.setCommand(dof, self._target[dof])
+
+    def after_step(self) -> None:
+        """The velocity limits, exactly: a velocity DART's constraint let over its limit is cut to it (one
+        read and one compare a step; the cut itself only when something is over)."""
+        if not self._velocity_limited:
+            return
+        velocities = self.skeleton.getVelocities()
+        limit = self._velocity_all
+        if _count_nonzero(np.abs(velocities) <= limit) != self._ndof:   # NaN compares False: cut as well
+            self.skeleton.setVelocities(_clip(velocities, -limit, limit))
 
     def _saturate(self, torque: np.ndarray) -> np.ndarray:
         """The forces of a step in which a position joint is, or was, at its effort limit: the saturated ones

@@ -12,7 +12,7 @@ import numpy as np
 from nodes.sim.config import Gains
 from nodes.sim.entity import Entity, EntitySpec, Pose, SpawnError
 from nodes.sim.hardware import HardwareInterface
-from nodes.sim.humanoid_state import BalanceState, FootWrench, balance_state, robot_contacts
+from nodes.sim.humanoid_state import BalanceState, FootWrench, balance_state
 from nodes.sim.interfaces import MODES
 from nodes.sim.model import Model
 from nodes.sim.pushes import Pushes
@@ -156,6 +156,8 @@ class Simulation:
             if pushes.wrenches or pushes.efforts:   # bool(pushes) without the call
                 pushes.apply(self.world.time, rest.wake)
             world_step()
+            for hw in hardware:
+                hw.after_step()
             self.step_count += 1
             if rest.models:
                 rest.after_step()
@@ -221,8 +223,11 @@ class Simulation:
 
     def balance(self, namespace: str) -> BalanceState:
         skeleton = self.hardware[namespace].skeleton
+        sensors = self.sensors[namespace]
         now = self.world.time
-        contacts = [] if self.kinematic else robot_contacts(self.world.contacts(), skeleton.getName())
+        # one walk over the step's contacts, shared with the contact sensors sampled at this same time
+        touching = None if self.kinematic else sensors.contacts(now)
+        contacts = touching.points if touching is not None else []
         # The support polygon spans the contacts of the last SUPPORT_WINDOW s: a box foot flat on the ground
         # is sometimes reported by the collision detector as touching along one edge only for a step,
         # which alone would shrink the polygon to a line under a robot that stands still.
@@ -240,21 +245,9 @@ class Simulation:
             acceleration = (velocity - previous[1]) / (now - previous[0])
         else:
             acceleration = np.asarray(skeleton.getCOMLinearAcceleration())
-        feet = [FootWrench(*wrench) for wrench in self.sensors[namespace].force_torque(self._links_in_contact(skeleton))]
+        # the foot sensors carry load where their links touch another model
+        loaded = touching.links if touching is not None else set()
+        feet = [FootWrench(*wrench) for wrench in sensors.force_torque(loaded)]
         weight = skeleton.getMass() * abs(self.world.gravity[2])
         return balance_state(np.asarray(skeleton.getCOM()), acceleration, self.world.gravity[2], contacts, feet,
                              weight)
-
-    def _links_in_contact(self, skeleton) -> set[str]:
-        """Links of ``skeleton`` touching something else in the last step (where foot sensors carry load)."""
-        if self.kinematic or not self.sensors:
-            return set()
-        name = skeleton.getName()
-        links = set()
-        for contact in self.world.contacts():
-            first = contact.collisionObject1.getShapeFrame()
-            second = contact.collisionObject2.getShapeFrame()
-            for mine, other in ((first, second), (second, first)):
-                if mine.getSkeleton().getName() == name and other.getSkeleton().getName() != name:
-                    links.add(mine.getBodyNodePtr().getName())
-        return links

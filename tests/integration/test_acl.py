@@ -35,7 +35,7 @@ from tests.integration.test_launch_scenarios import Scenario
 from tests.support import compose as replay
 
 SECURE_DIR = ROOT / "config" / "zenoh" / "secure"
-IDENTITIES = ["simulator", "controller_manager", "robot_state_publisher", "joint_commander", "viewer", "operator",
+IDENTITIES = ["simulator", "renderer", "controller_manager", "robot_state_publisher", "joint_commander", "viewer", "operator",
               "guest"]
 
 

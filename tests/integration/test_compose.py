@@ -29,6 +29,7 @@ ENDPOINT = "tcp/zenohd:7447"
 PLACEMENT = {
     "zenohd": "router",
     "simulator": "sim",
+    "renderer": "sim",
     "controller_manager": "control",
     "spawner_joint_state_broadcaster": "control",
     "spawner_joint_trajectory_controller": "control",
