@@ -37,6 +37,7 @@ try:   # numpy's C functions themselves: the public ones wrap them in Python (ca
     from numpy._core.umath import clip as _clip
 except ImportError:   # another numpy layout
     _count_nonzero, _clip = np.count_nonzero, np.clip
+_absolute, _less_equal = np.absolute, np.less_equal   # ufuncs: C already, and they take out=
 
 
 def _magnitude(bounds: tuple[float, float]) -> float:
@@ -98,10 +99,11 @@ class HardwareInterface:
         self._kp_all = self._per_dof(self.kp, 0.0)
         self._kd_all = self._per_dof(self.kd, 0.0)
         self._effort_all = self._per_dof(self.max_effort, math.inf)
-        # velocity limits per DOF (inf: none, the floating base): DART's joint limit constraint is not hard
-        # (a saturating jump went 5 % over), so what it leaves over is cut after the step
+        # velocity limits per DOF (inf: none, the floating base); see before_step
         self._velocity_all = self._per_dof(np.where(self.max_velocity > 0, self.max_velocity, math.inf), math.inf)
         self._velocity_limited = bool(np.isfinite(self._velocity_all).any())
+        self._speed = np.zeros(ndof)                  # scratch arrays of the step's velocity check
+        self._within = np.zeros(ndof, dtype=bool)
         self._target = np.zeros(ndof)                 # command per DOF, in its joint's active interface's unit
         self._position = np.zeros(ndof, dtype=bool)   # DOFs of position-mode joints
         self._effort_mode = np.zeros(ndof, dtype=bool)
@@ -140,7 +142,12 @@ class HardwareInterface:
         return np.asarray(self.skeleton.getPositions())[self.dofs]
 
     def velocities(self) -> np.ndarray:
-        return np.asarray(self.skeleton.getVelocities())[self.dofs]
+        """Within the velocity limits (a velocity over one is cut at the start of the next step)."""
+        velocities = np.asarray(self.skeleton.getVelocities())[self.dofs]
+        if self._velocity_limited:
+            limit = self._velocity_all[self.dofs]
+            velocities = np.minimum(np.maximum(velocities, -limit), limit)
+        return velocities
 
     def efforts(self) -> np.ndarray:
         """Per joint, of the last step: the position servo's torque (within the limit), the commanded torque
@@ -345,7 +352,14 @@ class HardwareInterface:
         if self._stale:
             self._force = self._gain * self._target
             self._stale = False
-        torque = self._kp * (self._target - skeleton.getPositions()) - self._lead * skeleton.getVelocities()
+        velocities = skeleton.getVelocities()
+        # the velocity limits, exactly: what DART's joint limit constraint let over (it is not hard: a
+        # saturating jump went 5 % over) is cut before the step, as ``velocities()`` reports it
+        if self._velocity_limited and _count_nonzero(
+                _less_equal(_absolute(velocities, out=self._speed), self._velocity_all, out=self._within)) != self._ndof:
+            velocities = _clip(velocities, -self._velocity_all, self._velocity_all)
+            skeleton.setVelocities(velocities)
+        torque = self._kp * (self._target - skeleton.getPositions()) - self._lead * velocities
         if self._has_effort:   # reported as applied: the commanded torque (their gains are 0, so torque is too)
             torque = torque + self._effort_mode * self._target
         self._torque, self._torque_limit = torque, self._limit
@@ -356,16 +370,6 @@ class HardwareInterface:
             skeleton.setForces(self._saturate(torque))
         for dof in self._velocity_dofs:
             skeleton.setCommand(dof, self._target[dof])
-
-    def after_step(self) -> None:
-        """The velocity limits, exactly: a velocity DART's constraint let over its limit is cut to it (one
-        read and one compare a step; the cut itself only when something is over)."""
-        if not self._velocity_limited:
-            return
-        velocities = self.skeleton.getVelocities()
-        limit = self._velocity_all
-        if _count_nonzero(np.abs(velocities) <= limit) != self._ndof:   # NaN compares False: cut as well
-            self.skeleton.setVelocities(_clip(velocities, -limit, limit))
 
     def _saturate(self, torque: np.ndarray) -> np.ndarray:
         """The forces of a step in which a position joint is, or was, at its effort limit: the saturated ones
