@@ -156,8 +156,6 @@ class Simulation:
             if pushes.wrenches or pushes.efforts:   # bool(pushes) without the call
                 pushes.apply(self.world.time, rest.wake)
             world_step()
-            for hw in hardware:
-                hw.after_step()
             self.step_count += 1
             if rest.models:
                 rest.after_step()
