@@ -13,7 +13,7 @@ edge it tips over); otherwise whether the model-based ZMP is inside. ``source`` 
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,9 +40,9 @@ class FootWrench:
     """A foot sensor's reading in the world frame: the wrench the foot passes to the leg (≈ the ground's
     reaction) about the sensor point."""
 
-    point: np.ndarray    # sensor (joint origin) position
-    force: np.ndarray
-    torque: np.ndarray
+    point: Sequence[float]    # sensor (joint origin) position
+    force: Sequence[float]
+    torque: Sequence[float]
 
 
 def center_of_pressure(feet: list[FootWrench], ground_z: float) -> tuple[tuple[float, float] | None, float]:
@@ -105,27 +105,14 @@ def inside_polygon(point: tuple[float, float], polygon: list[tuple[float, float]
     return True
 
 
-def robot_contacts(contacts, skeleton_name: str) -> list[tuple[np.ndarray, float]]:
-    """(point, vertical force magnitude) of every contact between the robot and anything else."""
-    result = []
-    for contact in contacts:
-        first = contact.collisionObject1.getShapeFrame().getSkeleton().getName()
-        second = contact.collisionObject2.getShapeFrame().getSkeleton().getName()
-        if (first == skeleton_name) == (second == skeleton_name):
-            continue  # not this robot's, or a self-contact
-        force = np.asarray(contact.force)
-        result.append((np.asarray(contact.point, dtype=float), float(abs(force[2]))))
-    return result
-
-
 def balance_state(com: np.ndarray, com_acceleration: np.ndarray, gravity_z: float,
-                  contacts: list[tuple[np.ndarray, float]], feet: list[FootWrench] | None = None,
+                  contacts: Sequence[Sequence[float]], feet: list[FootWrench] | None = None,
                   weight: float = 0.0) -> BalanceState:
-    """Compute the balance quantities from the CoM and this robot's contacts (world frame), with the measured
-    centre of pressure when foot sensors are given (``weight``: the robot's, N)."""
+    """Compute the balance quantities from the CoM and the points where this robot touches other models (world
+    frame), with the measured centre of pressure when foot sensors are given (``weight``: the robot's, N)."""
     com = np.asarray(com, dtype=float)
-    hull = convex_hull((float(p[0]), float(p[1])) for p, _ in contacts)
-    ground_z = float(np.mean([p[2] for p, _ in contacts])) if contacts else 0.0
+    hull = convex_hull((float(p[0]), float(p[1])) for p in contacts)
+    ground_z = float(np.mean([p[2] for p in contacts])) if contacts else 0.0
     polygon = [(x, y, ground_z) for x, y in hull]
     height = com[2] - ground_z
     denominator = float(com_acceleration[2]) - gravity_z

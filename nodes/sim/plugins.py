@@ -87,26 +87,35 @@ class SensorPlugins:
     @staticmethod
     def _contact_states(sensor: ContactSensor, frame: str) -> list[Any]:
         """One ContactState per body the link touches, in ``frame`` (the world, or a link of the robot)."""
-        to_frame = np.eye(4)
+        to_frame = None     # the world's: the values as the sensor has them
         if frame != "world":
             body = sensor.body.getSkeleton().getBodyNode(frame)
             if body is not None:
                 to_frame = np.linalg.inv(body.getWorldTransform().matrix())
-        rotation, offset = to_frame[:3, :3], to_frame[:3, 3]
         mine = f"{sensor.entity}::{sensor.body.getName()}::collision"
         by_other: dict[str, list] = {}
         for contact in sensor.contacts:
             by_other.setdefault(contact.other, []).append(contact)
         states = []
+        zero = _vector3(x=0.0, y=0.0, z=0.0)
         for other, contacts in by_other.items():
-            forces = [rotation @ np.asarray(c.force) for c in contacts]
-            total = np.sum(forces, axis=0)
-            zero = _vector3(x=0.0, y=0.0, z=0.0)
+            if to_frame is None:
+                forces = [contact.force for contact in contacts]
+                positions = [contact.position for contact in contacts]
+                normals = [contact.normal for contact in contacts]
+            else:
+                rotation, offset = to_frame[:3, :3], to_frame[:3, 3]
+                forces = [rotation @ np.asarray(c.force) for c in contacts]
+                positions = [rotation @ np.asarray(c.position) + offset for c in contacts]
+                normals = [rotation @ np.asarray(c.normal) for c in contacts]
+            total = [0.0, 0.0, 0.0]
+            for force in forces:   # in contact order
+                total = [total[0] + float(force[0]), total[1] + float(force[1]), total[2] + float(force[2])]
             states.append(_contact_state(
                 info=f"{mine} touches {other}", collision1_name=mine, collision2_name=f"{other}::collision",
                 wrenches=[_wrench(force=_vector(f), torque=zero) for f in forces],
                 total_wrench=_wrench(force=_vector(total), torque=zero),
-                contact_positions=[_vector(rotation @ np.asarray(c.position) + offset) for c in contacts],
-                contact_normals=[_vector(rotation @ np.asarray(c.normal)) for c in contacts],
+                contact_positions=[_vector(p) for p in positions],
+                contact_normals=[_vector(n) for n in normals],
                 depths=[float(c.depth) for c in contacts]))
         return states
