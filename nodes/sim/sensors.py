@@ -44,18 +44,30 @@ _sqrt = math.sqrt
 # Samples of noise drawn at a time per sensor: one generator call for 250 samples instead of 250 (a call costs
 # ~7 k instructions, a value ~70).
 NOISE_BLOCK = 250
+_FOLD = 1000   # force/torque readings kept before they are added up
 
 Vector = tuple[float, float, float]
 
 
-def _probe(body: dart.dynamics.BodyNode, name: str, pose: np.ndarray | None = None) -> dart.dynamics.SimpleFrame:
-    """A frame fixed on ``body`` (at ``pose`` in the link frame), read in place of the body: its world transform
-    and velocity are DART's for that point of the body (exactly the body's at the identity), and dartpy reads a
-    SimpleFrame's for ~5 k instructions where the same Frame methods on a BodyNode cost 20-38 k."""
-    relative = dart.math.Isometry3()
-    if pose is not None:
-        relative.set_matrix(np.asarray(pose, dtype=float))
-    return dart.dynamics.SimpleFrame(body, name, relative)
+class _Probes:
+    """Frames fixed on links (SimpleFrames), read in place of the links: a probe's world transform and velocity
+    are DART's for that point of the link (exactly the link's at the identity), and dartpy reads a SimpleFrame's
+    for ~5 k instructions where the same Frame methods on a BodyNode cost 20-38 k. One per link and pose, shared
+    by the sensors there: DART tells every frame on a link that it moved, ~1 k instructions a step each."""
+
+    def __init__(self) -> None:
+        self._frames: dict[tuple, dart.dynamics.SimpleFrame] = {}
+
+    def on(self, body: dart.dynamics.BodyNode, pose: np.ndarray | None = None) -> dart.dynamics.SimpleFrame:
+        pose = np.eye(4) if pose is None else np.asarray(pose, dtype=float)
+        key = (body.getName(), pose.tobytes())
+        frame = self._frames.get(key)
+        if frame is None:
+            relative = dart.math.Isometry3()
+            relative.set_matrix(pose)
+            frame = self._frames[key] = dart.dynamics.SimpleFrame(body, f"{body.getName()}_probe_{len(self._frames)}",
+                                                                  relative)
+        return frame
 
 
 def _child_transform_is_identity(joint: dart.dynamics.Joint) -> bool:
@@ -110,9 +122,11 @@ class _NoiseModel:
 class _Sensor:
     channels: tuple[str, ...] = ()
 
-    def __init__(self, spec: SensorSpec, skeleton: dart.dynamics.Skeleton, seed: int, entity: str) -> None:
+    def __init__(self, spec: SensorSpec, skeleton: dart.dynamics.Skeleton, seed: int, entity: str,
+                 probes: _Probes | None = None) -> None:
         self.spec = spec
         self.name = spec.name
+        self.probes = probes if probes is not None else _Probes()
         self.entity = entity
         self.body = skeleton.getBodyNode(spec.link)
         if self.body is None:
@@ -149,10 +163,10 @@ class _Sensor:
 class ImuSensor(_Sensor):
     channels = IMU_INTERFACES
 
-    def __init__(self, *args) -> None:
-        super().__init__(*args)
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
         self.offset = np.array(self.spec.pose[:3, 3])
-        self.frame = _probe(self.body, f"{self.name}_frame", self.spec.pose)   # the sensor frame on the link
+        self.frame = self.probes.on(self.body, self.spec.pose)   # the sensor frame on the link
         if any(i < 4 for i in self.noise.indices):
             raise ValueError(f"sensor '{self.name}': noise on the orientation is not simulated")
         self._velocity: Vector | None = None   # world velocity of the sensor point at the last sample
@@ -197,9 +211,10 @@ class ImuSensor(_Sensor):
 class ForceTorqueSensor(_Sensor):
     channels = FORCE_TORQUE_INTERFACES
 
-    def __init__(self, spec: SensorSpec, skeleton: dart.dynamics.Skeleton, seed: int, entity: str) -> None:
-        super().__init__(spec, skeleton, seed, entity)
-        self.joint = skeleton.getJoint(spec.joint)
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        spec = self.spec
+        self.joint = self.body.getSkeleton().getJoint(spec.joint)
         if self.joint is None:
             raise ValueError(f"sensor '{spec.name}': joint '{spec.joint}' was not loaded by DART")
         self.parent = self.joint.getParentBodyNode()
@@ -207,8 +222,12 @@ class ForceTorqueSensor(_Sensor):
         # the joint's wrench is minus the child's body force: read in the child frame, as ``sign * -F``
         self._direct = spec.frame == "child" and _child_transform_is_identity(self.joint)
         self._flip = -self.sign
-        self.frame = _probe(self.body, f"{self.name}_frame")   # the child link's world transform
-        self._sum, self._count = [0.0] * 6, 0   # readings since the last world_wrench
+        self.frame = self.probes.on(self.body)   # the child link's world transform
+        self._plain = self._direct and not self.noisy
+        # the readings since the last world_wrench: kept, and added up there (as they came) at its rate, 100 Hz;
+        # folded into a sum every _FOLD readings if nobody asks
+        self._readings: list[list[float]] = []
+        self._sum, self._folded = [0.0] * 6, 0
 
     def measure(self, t: float, gravity: Sequence[float], noise: list[float]) -> list[float]:
         n0, n1, n2, n3, n4, n5 = noise
@@ -230,15 +249,31 @@ class ForceTorqueSensor(_Sensor):
                 s * float(torque[0]) + n3, s * float(torque[1]) + n4, s * float(torque[2]) + n5]
 
     def sample(self, t: float, gravity: Sequence[float]) -> None:
-        self.values = b = self.measure(t, gravity, self.noise.next() if self.noisy else self._quiet)
+        if self._plain:   # measure's first case without noise, inline: this runs at 1 kHz
+            mx, my, mz, fx, fy, fz = self.body.getBodyForce().tolist()
+            k = self._flip
+            values = [k * fx, k * fy, k * fz, k * mx, k * my, k * mz]
+        else:
+            values = self.measure(t, gravity, self.noise.next() if self.noisy else self._quiet)
+        self.values = values
         self.stamp = t
+        readings = self._readings
+        readings.append(values)
+        if len(readings) == _FOLD:
+            self._sum = self._added(readings)
+            self._folded += len(readings)
+            readings.clear()
+
+    def _added(self, readings: list[list[float]]) -> list[float]:
+        """``_sum`` plus ``readings``, one after another."""
         a = self._sum
-        self._sum = [a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3], a[4] + b[4], a[5] + b[5]]
-        self._count += 1
+        for b in readings:
+            a = [a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3], a[4] + b[4], a[5] + b[5]]
+        return a
 
     def reset(self) -> None:
         super().reset()
-        self._sum, self._count = [0.0] * 6, 0
+        self._readings, self._sum, self._folded = [], [0.0] * 6, 0
 
     def world_wrench(self) -> tuple[Vector, Vector, Vector]:
         """The mean of the readings since the last call (noise included; the last reading when there was none)
@@ -251,9 +286,9 @@ class ForceTorqueSensor(_Sensor):
             rotation = (transform.rotation() @ self.spec.pose[:3, :3]).tolist()
         else:
             rotation = transform.rotation().tolist()
-        count = self._count
-        mean = [v / count for v in self._sum] if count else self.values
-        self._sum, self._count = [0.0] * 6, 0
+        count = self._folded + len(self._readings)
+        mean = [v / count for v in self._added(self._readings)] if count else self.values
+        self._readings, self._sum, self._folded = [], [0.0] * 6, 0
         s = self.sign
         fx, fy, fz, mx, my, mz = (s * v for v in mean)
         (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation
@@ -299,6 +334,11 @@ class ContactScan:
 
     def __init__(self, skeleton: dart.dynamics.Skeleton, contacts_of: Callable[[], Sequence]) -> None:
         self.contacts_of = contacts_of
+        # The DART world, when ``contacts_of`` is a PhysicsWorld's ``contacts``: the count of its last collision
+        # result (7.5 k instructions) tells a cleared result from the walked one, where the list of contacts
+        # costs 3 k per contact more to build and free.
+        world = getattr(getattr(contacts_of, "__self__", None), "world", None)
+        self._world = world if isinstance(world, dart.simulation.World) else None
         model = skeleton.getName()
         self.shapes: dict[object, str] = {}     # the robot's shape nodes -> their link
         self.names: dict[str, str] = {}         # link -> "model::link"
@@ -318,10 +358,16 @@ class ContactScan:
     def at(self, t: float) -> RobotContacts:
         """The robot's contacts at sim time ``t`` (walked once per time and contact count: a removed model
         clears the world's contacts, which changes the count unless there were none)."""
-        contacts = self.contacts_of()
-        key = (t, len(contacts))
-        if key == self._key:
-            return self._last
+        if self._world is not None:
+            key = (t, self._world.getLastCollisionResult().getNumContacts())   # (the result comes as a copy)
+            if key == self._key:
+                return self._last
+            contacts = self.contacts_of()
+        else:
+            contacts = self.contacts_of()
+            key = (t, len(contacts))
+            if key == self._key:
+                return self._last
         shapes, sensed = self.shapes, self.sensed
         points: list[list[float]] = []
         links: set[str] = set()
@@ -385,8 +431,8 @@ class ContactSensor(_Sensor):
 
     channels = ()
 
-    def __init__(self, *args) -> None:
-        super().__init__(*args)
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
         self.link = self.body.getName()
         self.contacts: list[ContactPoint] = []
         self.scan: ContactScan | None = None    # the suite's
@@ -395,7 +441,7 @@ class ContactSensor(_Sensor):
         # the joint the link hangs from, if it has a parent link (a root joint transmits nothing measured here)
         self._joint = joint if joint is not None and joint.getParentBodyNode() is not None else None
         self._direct = self._joint is not None and _child_transform_is_identity(self._joint)
-        self.frame = _probe(self.body, f"{self.name}_frame")
+        self.frame = self.probes.on(self.body)
 
     def reset(self) -> None:
         super().reset()
@@ -434,7 +480,7 @@ class ContactSensor(_Sensor):
         fx, fy, fz = self._contact_force(t, gravity)
         contacts = []
         if found:
-            depths = [max(depth, 0.0) for _, _, depth, _ in found]
+            depths = [0.0 if 0.0 > depth else depth for _, _, depth, _ in found]   # max(depth, 0.0)
             total = sum(depths)
             shares = [d / total for d in depths] if total > 0 else [1.0 / len(found)] * len(found)
             for (position, normal, depth, other), share in zip(found, shares, strict=True):
@@ -451,7 +497,8 @@ class SensorSuite:
 
     def __init__(self, specs: list[SensorSpec], skeleton: dart.dynamics.Skeleton, entity: str, seed: int = 0,
                  contacts: Callable[[], Sequence] = list) -> None:
-        self.sensors: list[_Sensor] = [_MODELS[spec.type](spec, skeleton, seed, entity) for spec in specs]
+        probes = _Probes()
+        self.sensors: list[_Sensor] = [_MODELS[spec.type](spec, skeleton, seed, entity, probes) for spec in specs]
         self.contact_scan = ContactScan(skeleton, contacts)
         for sensor in self.sensors:
             if isinstance(sensor, ContactSensor):

@@ -164,7 +164,8 @@ class Simulation:
         """Every sensor that is due at the current sim time takes its reading (once per control period)."""
         if not self.sensors:
             return
-        t, gravity = self.world.time, self.world.gravity
+        world = self.world.world   # DART's, read directly: this runs every control period
+        t, gravity = world.getTime(), world.getGravity().tolist()
         for suite in self.sensors.values():
             suite.sample(t, gravity)
 
