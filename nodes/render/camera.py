@@ -26,12 +26,13 @@ channel, after the luminance (0.299 r + 0.587 g + 0.114 b).
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from nodes.render.geometry import RenderError, dot, rotate
-from nodes.render.raycast import RayScene
+from nodes.render.raycast import RayScene, View
 from nodes.urdf.rendered_sensors import CameraSpec
 
 LIGHT_DIRECTION = np.array([-0.5, 0.1, -0.9]) / np.linalg.norm([-0.5, 0.1, -0.9])   # where sunlight travels
@@ -111,7 +112,11 @@ def render_camera(scene: RayScene, spec: CameraSpec, sensor_pose: np.ndarray,
     pose = np.asarray(sensor_pose, dtype=np.float64)
     directions = rotate(rays.sensor, pose[:3, :3].astype(np.float32))
     # the far clip plane is a depth: along a slanted ray it is at far / axial
-    hits = scene.cast(pose[:3, 3], directions, layer="visual", max_distance=np.float32(spec.far) / rays.axial)
+    # what it can see: a cone about its axis as wide as the image's half diagonal
+    half_diagonal = math.atan(math.hypot(math.tan(spec.horizontal_fov / 2), spec.height / (2 * spec.focal)))
+    view = View(origin=pose[:3, 3], rotation=pose[:3, :3], far=float(spec.far), half_angle=half_diagonal)
+    hits = scene.cast(pose[:3, 3], directions, layer="visual", max_distance=np.float32(spec.far) / rays.axial,
+                      view=view)
     depth = hits.distance * rays.axial                                   # +inf stays +inf
     depth[depth > spec.far] = np.inf
     too_near = depth < spec.near

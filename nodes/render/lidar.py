@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from nodes.render.geometry import dot, rotate
-from nodes.render.raycast import RayScene
+from nodes.render.raycast import RayScene, View
 from nodes.urdf.rendered_sensors import RayAxis, RaySpec
 
 LUMINANCE = np.array([0.299, 0.587, 0.114], dtype=np.float32)
@@ -69,8 +69,11 @@ def render_ray(scene: RayScene, spec: RaySpec, sensor_pose: np.ndarray,
     shape = beams.shape[:2]
     pose = np.asarray(sensor_pose, dtype=np.float64)
     world = rotate(beams.reshape(-1, 3), pose[:3, :3])
+    vertical = spec.vertical.angles()
+    view = View(origin=pose[:3, 3], rotation=pose[:3, :3], far=float(spec.range_max),
+                elevation=(float(vertical.min()), float(vertical.max())))   # a band: the rings' elevations
     hits = scene.cast(pose[:3, 3], world, layer="visual" if spec.visual else "collision",
-                      max_distance=np.float32(spec.range_max))
+                      max_distance=np.float32(spec.range_max), view=view)
     ranges = hits.distance.copy()
     ranges[ranges > spec.range_max] = np.inf
     too_near = ranges < spec.range_min

@@ -365,3 +365,35 @@ def test_mesh_bytes_are_checked() -> None:
         hits = scene.cast(np.zeros((1, 3)), np.array([[1.0, 0, 0]]))
         assert (hits.distance[0] == pytest.approx(1.0, abs=1e-5) and hits.shape[0] == 0) if seen else \
             (hits.distance[0] == np.inf and hits.shape[0] == -1)
+
+
+# ------------------------------------------------------------------------------------------------ culling
+def test_moving_links_out_of_view_are_left_out_and_the_pictures_do_not_change() -> None:
+    """A camera, a lidar and a laser among 40 moving boxes around them: each cast leaves out the boxes its
+    field of view cannot reach, and every image, depth and range is bit-identical to an uncut cast's."""
+    rng = np.random.default_rng(7)
+    boxes = [Shape("box", tuple(rng.uniform(0.1, 0.6, 3)), np.eye(4), tuple(rng.uniform(0.2, 1.0, 3)) + (1.0,),
+                   name=f"box{i}") for i in range(40)]
+    poses = np.array([pose(*rng.uniform(-4, 4, 3), yaw=rng.uniform(-3, 3)) for _ in boxes])
+    camera = CameraSpec(horizontal_fov=1.2, width=80, height=60, near=0.05, far=20.0, depth=True)
+    lidar = RaySpec(horizontal=RayAxis(180, 1.0, -math.pi, math.pi), vertical=RayAxis(8, 1.0, -0.26, 0.26),
+                    range_min=0.1, range_max=30.0, visual=True)
+    laser = RaySpec(horizontal=RayAxis(90, 1.0, -1.5, 1.5), range_min=0.1, range_max=5.0)
+    for trial in range(5):
+        sensor = pose(*rng.uniform(-1, 1, 3), yaw=rng.uniform(-3, 3), pitch=rng.uniform(-0.5, 0.5))
+        cut = RayScene([b.name for b in boxes], list(enumerate(boxes)), threads=1)
+        whole = RayScene([b.name for b in boxes], list(enumerate(boxes)), threads=1)
+        cut.update(poses)
+        whole.update(poses)
+        picture = render_camera(cut, camera, sensor)
+        kept = cut.dynamic_triangles_cast("visual")
+
+        def uncut(*args, view=None, _cast=whole.cast, **kwargs):   # the same casts with every box in
+            return _cast(*args, **kwargs)
+
+        whole.cast = uncut
+        reference = render_camera(whole, camera, sensor)
+        assert np.array_equal(picture.color, reference.color) and np.array_equal(picture.depth, reference.depth)
+        assert kept < whole.triangles("visual")[1], (trial, kept)   # some of the 40 were behind or beside it
+        for spec in (lidar, laser):
+            assert np.array_equal(render_ray(cut, spec, sensor).ranges, render_ray(whole, spec, sensor).ranges)
