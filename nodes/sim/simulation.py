@@ -237,16 +237,17 @@ class Simulation:
         # The ZMP needs the CoM acceleration averaged since the last sample, not DART's value of the last
         # step alone: when the set of contact points changes, one step's contact impulse swings that value
         # (and the ZMP by tens of cm) for a millisecond, though nothing tips.
-        velocity = np.asarray(skeleton.getCOMLinearVelocity())
+        velocity = skeleton.getCOMLinearVelocity().tolist()
         previous = self._com_velocity.get(namespace)
         self._com_velocity[namespace] = (now, velocity)
         if previous is not None and 0.0 < now - previous[0] <= 0.05:
-            acceleration = (velocity - previous[1]) / (now - previous[0])
+            dt = now - previous[0]
+            acceleration = [(v - p) / dt for v, p in zip(velocity, previous[1], strict=True)]
         else:
-            acceleration = np.asarray(skeleton.getCOMLinearAcceleration())
+            acceleration = skeleton.getCOMLinearAcceleration().tolist()
         # the foot sensors carry load where their links touch another model
         loaded = touching.links if touching is not None else set()
         feet = [FootWrench(*wrench) for wrench in sensors.force_torque(loaded)]
-        weight = skeleton.getMass() * abs(self.world.gravity[2])
-        return balance_state(np.asarray(skeleton.getCOM()), acceleration, self.world.gravity[2], contacts, feet,
-                             weight)
+        gravity_z = self.world.gravity[2]
+        return balance_state(skeleton.getCOM().tolist(), acceleration, gravity_z, contacts, feet,
+                             skeleton.getMass() * abs(gravity_z))

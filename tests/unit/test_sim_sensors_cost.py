@@ -316,3 +316,93 @@ def test_one_frame_per_link_and_the_shared_walk_sees_a_cleared_result():
         assert suite.contacts(t).points == [] and suite.contacts(t).links == set()
     finally:
         sim.clear()
+
+
+def reference_balance_state(com, com_acceleration, gravity_z: float, contacts, feet, weight: float):
+    """The first balance_state: numpy for the ZMP, the mean contact height and the polygon's edges."""
+    from nodes.sim.humanoid_state import COP_MARGIN, COP_MIN_LOAD, center_of_pressure
+
+    def inside(point, polygon, tolerance=1e-6):
+        if len(polygon) < 3:
+            return False
+        px, py = point
+        for (ax, ay), (bx, by) in zip(polygon, polygon[1:] + polygon[:1], strict=True):
+            edge = np.hypot(bx - ax, by - ay)
+            if edge != 0 and ((bx - ax) * (py - ay) - (by - ay) * (px - ax)) / edge < -tolerance:
+                return False
+        return True
+
+    def hull_of(points):
+        unique = sorted(set(points))
+        if len(unique) <= 2:
+            return unique
+
+        def cross(o, a, b):
+            return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+        lower, upper = [], []
+        for p in unique:
+            while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+                lower.pop()
+            lower.append(p)
+        for p in reversed(unique):
+            while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+                upper.pop()
+            upper.append(p)
+        return lower[:-1] + upper[:-1]
+
+    com = np.asarray(com, dtype=float)
+    hull = hull_of((float(p[0]), float(p[1])) for p in contacts)
+    ground_z = float(np.mean([p[2] for p in contacts])) if contacts else 0.0
+    denominator = float(com_acceleration[2]) - gravity_z
+    zmp = com[:2] - (com[2] - ground_z) * np.asarray(com_acceleration[:2]) / denominator \
+        if abs(denominator) > 1e-6 else com[:2].copy()
+    zmp = (float(zmp[0]), float(zmp[1]))
+    cop, load = center_of_pressure(feet, ground_z) if feet else (None, 0.0)
+    if cop is not None and contacts and load >= COP_MIN_LOAD * weight:
+        return hull, ground_z, zmp, cop, inside(cop, hull, -COP_MARGIN), "cop"
+    return hull, ground_z, zmp, cop, inside(zmp, hull), "zmp"
+
+
+def test_balance_matches_the_first_balance_state(monkeypatch):
+    """The plain-float balance_state against the numpy one, on the inputs of a squat with a push."""
+    import nodes.sim.simulation as simulation
+
+    calls = []
+    plain = simulation.balance_state
+
+    def recorded(*args):
+        result = plain(*args)
+        calls.append((args, result))
+        return result
+
+    monkeypatch.setattr(simulation, "balance_state", recorded)
+    sim = make_sim()
+    sim.spawn(EntitySpec("humanoid", HUMANOID, pose=Pose.from_xyz_rpy(0, 0, 0.93)))
+    hw = sim.hardware["humanoid"]
+    torso = sim.entities["humanoid"].skeleton.getBodyNode("torso")
+    knees = ["left_knee", "right_knee", "left_hip_pitch", "right_hip_pitch", "left_ankle_pitch", "right_ankle_pitch"]
+    try:
+        for k in range(2000):
+            sim.sample_sensors()
+            if k % 10 == 0:
+                sim.balance("humanoid")
+            depth = 0.3 * (1.0 - math.cos(2 * math.pi * k / 1000.0))
+            hw.apply_command(knees, ["position"] * 6, [depth, depth, -depth / 2, -depth / 2, -depth / 2, -depth / 2])
+            if 1200 <= k < 1300:
+                torso.addExtForce(np.array([400.0, 0.0, 0.0]), np.zeros(3), False, False)
+            sim.step(1)
+    finally:
+        sim.clear()
+    sources = set()
+    for (com, acceleration, gravity_z, contacts, feet, weight), state in calls:
+        hull, ground_z, zmp, cop, balanced, source = reference_balance_state(
+            com, acceleration, gravity_z, contacts, feet, weight)
+        assert [(x, y) for x, y, _ in state.support_polygon] == hull
+        assert all(z == pytest.approx(ground_z, abs=1e-15) for _, _, z in state.support_polygon)
+        assert state.zmp == zmp and state.source == source and state.is_balanced == balanced
+        assert (state.cop is None) == (cop is None)
+        if cop is not None:
+            assert state.cop == pytest.approx(cop, abs=1e-12)
+        sources.add((source, balanced))
+    assert len(calls) == 200 and ("cop", True) in sources and ("cop", False) in sources
