@@ -89,8 +89,12 @@ def test_headless_launch_records_model_frames_plots_and_markers(processes, tmp_p
     assert len(cmd_actual) > 10 and len(cmd_actual[-1][1]) == 12
     assert len(robot.column("balance:values")[-1][1]) == 6
     # A row per sample, nothing else in between: the viewer gets one chunk per flush.
-    times = [r["sim_time"] for r in robot.rows if r.get("position:left_leg") is None]
-    assert len(times) <= 3, f"rows without plotted values (only before the first sample): {times}"
+    # (Until the first joint_states sample, humanoid_state alone can draw the feet's force arrows: those rows
+    # are allowed, however many arrive first on a loaded machine.)
+    plotted = [r.get("position:left_leg") is not None for r in robot.rows]
+    first = plotted.index(True)
+    stray = [r["sim_time"] for r in robot.rows[first:] if r.get("position:left_leg") is None]
+    assert not stray, f"rows without plotted values after the first sample: {stray}"
 
     # Markers: paths as line strips that grow, support polygon on the ground, the trajectory target.
     first_paths = strips(next(r for r in robot.rows if strips(r, EE_PATH)), EE_PATH)
