@@ -256,8 +256,10 @@ def run(args: argparse.Namespace) -> int:
 
         description["zenoh"] = ("external (ZENOH_CONNECT / ZENOH_CONFIG)" if external_router_configured()
                                 else f"embedded router on {loopback_endpoint(port)}")
-        description["commands"] = {n.name: n.command(sys.executable, Path("<generated params>") if n.params else None)
-                                   for n in plan.nodes}
+        description["commands"] = {
+            n.name: n.command(sys.executable, Path("<generated params>") if n.params else None,
+                              {c.name: Path("<generated params>") if c.params else None for c in n.composed})
+            for n in plan.nodes}
         print(yaml.safe_dump(description, sort_keys=False), end="")
         return 0
     try:

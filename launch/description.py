@@ -9,6 +9,8 @@ Format (docs/launch.md, Format)::
       - group: {namespace: ns, actions: [...]}
       - on_exit: {node: spawner, log: "...", shutdown: false}
       - on_shutdown: {log: "..."}
+      - node_container: {name: c, composable_node: [{pkg: nodes.sim, plugin: nodes.sim.node::SimulatorNode,
+                                                      name: simulator, param: [{name: mode, value: lockstep}]}]}
 """
 
 from __future__ import annotations
@@ -29,6 +31,15 @@ NODE_KEYS = (
     "respawn", "respawn_delay", "respawn_max", "required", "output", "wait_for", "wait_timeout",
     "health_timeout", "exclusive_cpu", *CONDITION_KEYS,
 )
+# node_container / composable_node: launch_ros's YAML front end spells them so (pkg, exec, name, namespace,
+# composable_node: [{pkg, plugin, name, namespace, param: [{name, value}], remap: [{from, to}], extra_arg}]).
+# The container also takes our process keys (respawn, required, exclusive_cpu, ...): it is the process.
+CONTAINER_KEYS = (
+    "pkg", "exec", "name", "namespace", "composable_node", "env", "respawn", "respawn_delay", "respawn_max",
+    "required", "output", "wait_for", "wait_timeout", "health_timeout", "exclusive_cpu", *CONDITION_KEYS,
+)
+COMPOSABLE_KEYS = ("pkg", "plugin", "name", "namespace", "param", "params", "params_file", "remap", "extra_arg")
+ACTION_KINDS = ("arg", "node", "node_container", "include", "group", "on_exit", "on_shutdown")
 ARG_KEYS = ("name", "default", "description", "choices")
 INCLUDE_KEYS = ("file", "args", *CONDITION_KEYS)
 GROUP_KEYS = ("namespace", "actions", *CONDITION_KEYS)
@@ -73,6 +84,24 @@ class NodeDecl(Action):
 
     def line_source(self, key: str) -> Source:
         return Source(self.source.file, self.fields.line_of(key))
+
+
+@dataclass
+class ComposableDecl:
+    """One ``composable_node`` of a container, raw (unsubstituted) as ``NodeDecl``."""
+
+    source: Source
+    fields: LocatedDict = field(default_factory=LocatedDict)
+
+    def line_source(self, key: str) -> Source:
+        return Source(self.source.file, self.fields.line_of(key))
+
+
+@dataclass
+class ContainerDecl(NodeDecl):
+    """A ``node_container``: one process (``fields``: its keys) running ``composables`` in it."""
+
+    composables: list[ComposableDecl] = field(default_factory=list)
 
 
 @dataclass
@@ -187,20 +216,77 @@ def _parse_node(body: LocatedDict, file: Path, source: Source) -> NodeDecl:
     return NodeDecl(source=source, fields=body, **_conditions(body, file))
 
 
+def _check_name_value_list(value: Any, what: str, source: Source, allowed: tuple[tuple[str, ...], ...]) -> None:
+    """launch_ros's list of small mappings (``param: [{name: x, value: 1}]``, ``remap: [{from: a, to: b}]``):
+    each item has exactly one of the ``allowed`` key sets."""
+    if not isinstance(value, LocatedList):
+        raise LaunchError(f"{what} must be a list of mappings "
+                          f"({' or '.join('{' + ', '.join(keys) + '}' for keys in allowed)})", source)
+    for i, item in enumerate(value):
+        at = Source(source.file, value.line_of(i))
+        if not isinstance(item, LocatedDict) or tuple(sorted(item)) not in {tuple(sorted(k)) for k in allowed}:
+            raise LaunchError(f"{what} item must be a mapping "
+                              f"{' or '.join('{' + ', '.join(keys) + '}' for keys in allowed)}, got {_kind(item)}"
+                              f"{': ' + ', '.join(map(str, item)) if isinstance(item, dict) else ''}", at)
+
+
+def _parse_composable(item: Any, file: Path, source: Source) -> ComposableDecl:
+    body = _require_mapping(item, "each composable_node", source)
+    _check_keys(body, COMPOSABLE_KEYS, "composable_node", file)
+    at = lambda key: Source(file, body.line_of(key))  # noqa: E731 - tiny local helper
+    for key, needs in (("plugin", "a 'plugin' (python.module::NodeClass)"), ("name", "a 'name'")):
+        if key not in body:
+            raise LaunchError(f"composable_node needs {needs}", source)
+    if "param" in body:
+        _check_name_value_list(body["param"], "composable_node 'param'", at("param"), (("name", "value"), ("from",)))
+    if "params" in body:
+        _require_mapping(body["params"], "composable_node 'params'", at("params"))
+    if "params_file" in body and not isinstance(body["params_file"], (LocatedList, str)):
+        raise LaunchError(f"composable_node 'params_file' must be a list or a string, not {_kind(body['params_file'])}",
+                          at("params_file"))
+    remap = body.get("remap")
+    if isinstance(remap, LocatedList) and any(isinstance(r, LocatedDict) for r in remap):
+        _check_name_value_list(remap, "composable_node 'remap'", at("remap"), (("from", "to"),))
+    elif "remap" in body and not isinstance(remap, (LocatedDict, LocatedList)):
+        raise LaunchError("composable_node 'remap' must be a list of {from, to}, a mapping {from: to} or a list "
+                          "of 'from:=to'", at("remap"))
+    if "extra_arg" in body:
+        _check_name_value_list(body["extra_arg"], "composable_node 'extra_arg'", at("extra_arg"), (("name", "value"),))
+    return ComposableDecl(source=source, fields=body)
+
+
+def _parse_container(body: LocatedDict, file: Path, source: Source) -> ContainerDecl:
+    _check_keys(body, CONTAINER_KEYS, "node_container", file)
+    at = lambda key: Source(file, body.line_of(key))  # noqa: E731 - tiny local helper
+    if "name" not in body:
+        raise LaunchError("node_container needs a 'name'", source)
+    nodes = body.get("composable_node")
+    if not isinstance(nodes, LocatedList) or not nodes:
+        raise LaunchError("node_container needs 'composable_node': a non-empty list of composable nodes",
+                          at("composable_node") if "composable_node" in body else source)
+    if "env" in body:
+        _require_mapping(body["env"], "node_container 'env'", at("env"))
+    if "wait_for" in body and not isinstance(body["wait_for"], (LocatedList, str)):
+        raise LaunchError(f"node_container 'wait_for' must be a list or a string, not {_kind(body['wait_for'])}",
+                          at("wait_for"))
+    composables = [_parse_composable(item, file, Source(file, nodes.line_of(i))) for i, item in enumerate(nodes)]
+    return ContainerDecl(source=source, fields=body, composables=composables, **_conditions(body, file))
+
+
 def _parse_action(item: Any, file: Path, line: int) -> Action:
     source = Source(file, line)
     if not isinstance(item, LocatedDict) or len(item) != 1:
-        raise LaunchError("each launch action must be a mapping with one key "
-                          "(arg, node, include, group, on_exit, on_shutdown)", source)
+        raise LaunchError(f"each launch action must be a mapping with one key ({', '.join(ACTION_KINDS)})", source)
     (kind, body), = item.items()
     source = Source(file, item.line_of(kind))
-    if kind not in ("arg", "node", "include", "group", "on_exit", "on_shutdown"):
-        raise LaunchError(f"unknown action '{kind}' (allowed: arg, node, include, group, on_exit, on_shutdown)",
-                          source)
+    if kind not in ACTION_KINDS:
+        raise LaunchError(f"unknown action '{kind}' (allowed: {', '.join(ACTION_KINDS)})", source)
     body = _require_mapping(body, f"'{kind}'", source)
     at = lambda key: Source(file, body.line_of(key))  # noqa: E731 - tiny local helper
     if kind == "node":
         return _parse_node(body, file, source)
+    if kind == "node_container":
+        return _parse_container(body, file, source)
     allowed, required, needs = _ACTION_KEYS[kind]
     _check_keys(body, allowed, kind, file)
     if required and required not in body:

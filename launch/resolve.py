@@ -4,6 +4,7 @@ expanded, conditions applied, every value checked. Nothing is started here."""
 from __future__ import annotations
 
 import importlib.util
+import json
 import re
 import shlex
 import shutil
@@ -18,6 +19,8 @@ import yaml
 from launch.description import (
     Action,
     ArgDecl,
+    ComposableDecl,
+    ContainerDecl,
     GroupDecl,
     IncludeDecl,
     LaunchDescription,
@@ -42,9 +45,55 @@ DEFAULT_WAIT_TIMEOUT = 60.0
 DEFAULT_HEALTH_TIMEOUT = 6.0
 
 
+CONTAINER_MODULE = "nodes.core.container"   # our component_container (python -m)
+# launch_ros's container spellings we run as our container: (pkg, exec)
+CONTAINER_PACKAGES = ("zenroid", "rclcpp_components")
+CONTAINER_EXECUTABLES = ("component_container",)
+
+
+@dataclass
+class ComposedNodeSpec:
+    """One node loaded into a container process, fully resolved."""
+
+    name: str
+    namespace: str
+    plugin: str            # python.module::NodeClass
+    params: dict[str, Any]
+    param_files: list[str]
+    remaps: list[tuple[str, str]]
+    source: str
+
+    @property
+    def full_name(self) -> str:
+        return f"{self.namespace}/{self.name}" if self.namespace else self.name
+
+    def node_argv(self, generated_params: Path | None) -> list[str]:
+        """The node's own command line, as ``python -m MODULE`` would get it."""
+        argv = ["--name", self.name]
+        if self.namespace:
+            argv += ["--ns", self.namespace]
+        for param_file in self.param_files:
+            argv += ["--params-file", param_file]
+        if generated_params is not None:
+            argv += ["--params-file", str(generated_params)]
+        for src, dst in self.remaps:
+            argv += ["--remap", f"{src}:={dst}"]
+        return argv
+
+    def describe(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"name": self.name, "namespace": self.namespace, "plugin": self.plugin}
+        for key in ("params", "param_files"):
+            if getattr(self, key):
+                out[key] = getattr(self, key)
+        if self.remaps:
+            out["remap"] = [f"{a}:={b}" for a, b in self.remaps]
+        out["source"] = self.source
+        return out
+
+
 @dataclass
 class NodeSpec:
-    """One process to run, fully resolved."""
+    """One process to run, fully resolved (a node, a program, or a container of composed nodes)."""
 
     name: str
     namespace: str
@@ -65,16 +114,26 @@ class NodeSpec:
     source: str
     health_timeout: float = DEFAULT_HEALTH_TIMEOUT
     exclusive_cpu: bool = False   # a CPU of its own for its stepping thread, the other processes off it
+    composed: list[ComposedNodeSpec] = field(default_factory=list)   # a node_container's nodes
 
     @property
     def full_name(self) -> str:
         return f"{self.namespace}/{self.name}" if self.namespace else self.name
 
-    def command(self, python: str, generated_params: Path | None) -> list[str]:
-        """The argv of this node (no shell): ``python -m MODULE`` with the shared node CLI, or the program."""
+    def command(self, python: str, generated_params: Path | None,
+                composed_params: Mapping[str, Path | None] | None = None) -> list[str]:
+        """The argv of this node (no shell): ``python -m MODULE`` with the shared node CLI, or the program; a
+        container gets one ``--composable`` JSON per node (``composed_params``: each one's generated file)."""
         if self.executable is not None:
             return [self.executable, *self.args]
         argv = [python, "-m", str(self.module), "--name", self.name]
+        if self.composed:
+            if self.namespace:
+                argv += ["--ns", self.namespace]
+            for node in self.composed:
+                generated = (composed_params or {}).get(node.name)
+                argv += ["--composable", json.dumps({"plugin": node.plugin, "argv": node.node_argv(generated)})]
+            return argv
         if self.namespace:
             argv += ["--ns", self.namespace]
         for param_file in self.param_files:
@@ -103,6 +162,8 @@ class NodeSpec:
             out["output"] = self.output
         if self.exclusive_cpu:
             out["exclusive_cpu"] = True
+        if self.composed:
+            out["composable_node"] = [node.describe() for node in self.composed]
         out["source"] = self.source
         return out
 
@@ -243,6 +304,8 @@ class _Resolver:
                 self.declare(action, scope)
             elif not self.condition(action, scope):
                 continue
+            elif isinstance(action, ContainerDecl):
+                self.add_container(action, scope)
             elif isinstance(action, NodeDecl):
                 self.add_node(action, scope)
             elif isinstance(action, GroupDecl):
@@ -343,6 +406,15 @@ class _Resolver:
                 raise LaunchError(f"node '{name}': parameter file not found: {entry}", at("params_file"))
             param_files.append(str(path.resolve()))
         remaps = self.remaps(f.get("remap"), scope, decl)
+        spec = NodeSpec(name=name, namespace=namespace, module=module, executable=executable, args=args,
+                        params=params, param_files=param_files, remaps=remaps, source=str(decl.source),
+                        **self.process_options(decl, scope))
+        self.add_spec(spec, decl)
+
+    def process_options(self, decl: NodeDecl, scope: _Scope) -> dict[str, Any]:
+        """What the launcher does with a process (a node's or a container's): env, respawn, readiness, CPU."""
+        f = decl.fields
+        at = decl.line_source
         env = {}
         for key, value in (f.get("env") or {}).items():
             env[str(key)] = self.text(value, scope, _line(f["env"], key, at("env")), f"env '{key}'")
@@ -364,20 +436,106 @@ class _Resolver:
         # true/false, or a comparison such as "$(var mode) == lockstep" (as in 'if')
         exclusive_cpu = evaluate_condition(self.text(f.get("exclusive_cpu", False), scope, at("exclusive_cpu"),
                                                      "exclusive_cpu"), "node 'exclusive_cpu'", at("exclusive_cpu"))
-        spec = NodeSpec(name=name, namespace=namespace, module=module, executable=executable, args=args,
-                        params=params, param_files=param_files, remaps=remaps, env=env, respawn=respawn,
-                        respawn_delay=respawn_delay, respawn_max=respawn_max, required=required, output=output,
-                        wait_for=wait_for, wait_timeout=wait_timeout, source=str(decl.source),
-                        health_timeout=health_timeout, exclusive_cpu=exclusive_cpu)
+        return dict(env=env, respawn=respawn, respawn_delay=respawn_delay, respawn_max=respawn_max, required=required,
+                    output=output, wait_for=wait_for, wait_timeout=wait_timeout, health_timeout=health_timeout,
+                    exclusive_cpu=exclusive_cpu)
+
+    def add_spec(self, spec: NodeSpec, decl: NodeDecl) -> None:
+        """Add a resolved process; every node name (composed ones too) is unique in a launch."""
+        taken = {other.name: other.source for other in self.plan.nodes}
+        taken.update({node.name: node.source for other in self.plan.nodes for node in other.composed})
+        for name, source in [(spec.name, str(decl.source)), *((n.name, n.source) for n in spec.composed)]:
+            if name in taken:
+                raise LaunchError(f"duplicate node name '{name}' (also at {taken[name]})", _source_from(source))
+            taken[name] = source
         for other in self.plan.nodes:
-            if other.name == name:
-                raise LaunchError(f"duplicate node name '{name}' (also at {other.source})", at("name"))
-            if exclusive_cpu and other.exclusive_cpu:
-                raise LaunchError(f"node '{name}': only one node of a launch can have exclusive_cpu "
-                                  f"('{other.name}' at {other.source} has it)", at("exclusive_cpu"))
+            if spec.exclusive_cpu and other.exclusive_cpu:
+                raise LaunchError(f"node '{spec.name}': only one node of a launch can have exclusive_cpu "
+                                  f"('{other.name}' at {other.source} has it)", decl.line_source("exclusive_cpu"))
         self.plan.nodes.append(spec)
 
-    def word_list(self, value: Any, scope: _Scope, decl: NodeDecl, key: str, split: bool = False) -> list[str]:
+    def add_container(self, decl: ContainerDecl, scope: _Scope) -> None:
+        """A ``node_container``: one process (our component container) with its composable nodes."""
+        f = decl.fields
+        at = decl.line_source
+        name = self.text(f["name"], scope, at("name"), "node_container 'name'")
+        if not _NAME_RE.match(name):
+            raise LaunchError(f"node_container name '{name}' must be letters, digits and '_'", at("name"))
+        for key, allowed in (("pkg", CONTAINER_PACKAGES), ("exec", CONTAINER_EXECUTABLES)):
+            if key in f:
+                value = self.text(f[key], scope, at(key), f"node_container '{key}'")
+                if value not in allowed:
+                    raise LaunchError(f"node_container '{key}' is '{value}': this launcher runs its own container "
+                                      f"(allowed: {', '.join(allowed)})", at(key))
+        namespace = join_namespace(scope.namespace, self.maybe_text(f.get("namespace"), scope, at("namespace"),
+                                                                    "node_container 'namespace'"))
+        _check_namespace(namespace, at("namespace"))
+        composed = [self.composable(node, scope, namespace) for node in decl.composables]
+        spec = NodeSpec(name=name, namespace=namespace, module=CONTAINER_MODULE, executable=None, args=[], params={},
+                        param_files=[], remaps=[], source=str(decl.source), composed=composed,
+                        **self.process_options(decl, scope))
+        self.add_spec(spec, decl)
+
+    def composable(self, decl: ComposableDecl, scope: _Scope, container_namespace: str) -> ComposedNodeSpec:
+        f = decl.fields
+        at = decl.line_source
+        name = self.text(f["name"], scope, at("name"), "composable_node 'name'")
+        if not _NAME_RE.match(name):
+            raise LaunchError(f"composable_node name '{name}' must be letters, digits and '_'", at("name"))
+        # as launch_ros: a composable node's namespace is its own, the container's when it has none
+        given = self.maybe_text(f.get("namespace"), scope, at("namespace"), "composable_node 'namespace'")
+        namespace = join_namespace(scope.namespace, given) if given is not None else container_namespace
+        _check_namespace(namespace, at("namespace"))
+        plugin = self.text(f["plugin"], scope, at("plugin"), "composable_node 'plugin'")
+        module, separator, class_name = plugin.partition("::")
+        if not separator or not _NAME_RE.match(class_name):
+            raise LaunchError(f"composable_node 'plugin' is '{plugin}': it must be python.module::NodeClass "
+                              f"(launch_ros's package::Class, with a Python module)", at("plugin"))
+        _check_module(module, at("plugin"))
+        if "pkg" in f:
+            pkg = self.text(f["pkg"], scope, at("pkg"), "composable_node 'pkg'")
+            if module != pkg and not module.startswith(pkg + "."):
+                raise LaunchError(f"composable_node 'plugin' '{plugin}' is not in its 'pkg' '{pkg}'", at("pkg"))
+        params: dict[str, Any] = {}
+        for i, item in enumerate(f.get("param") or []):   # launch_ros: [{name, value}] or [{from: FILE}]
+            where = _line(f["param"], i, at("param"))
+            if "from" not in item:
+                params[self.text(item["name"], scope, where, "param 'name'")] = self.param_value(item["value"], scope,
+                                                                                                   where)
+        if "params" in f:
+            params.update({str(k): self.param_value(v, scope, _line(f["params"], k, at("params")))
+                           for k, v in f["params"].items()})
+        files = [item["from"] for item in f.get("param") or [] if "from" in item]
+        param_files = []
+        for entry in [self.text(v, scope, at("param"), "param 'from'") for v in files] + self.word_list(
+                f.get("params_file"), scope, decl, "params_file"):
+            path = Path(entry).expanduser()
+            path = path if path.is_absolute() else scope.file.resolve().parent / path
+            if not path.is_file():
+                raise LaunchError(f"composable_node '{name}': parameter file not found: {entry}", at("params_file")
+                                  if "params_file" in f else at("param"))
+            param_files.append(str(path.resolve()))
+        remap = f.get("remap")
+        if isinstance(remap, list) and any(isinstance(r, dict) for r in remap):   # launch_ros: [{from, to}]
+            remaps = [(self.text(r["from"], scope, _line(remap, i, at("remap")), "remap 'from'"),
+                       self.text(r["to"], scope, _line(remap, i, at("remap")), "remap 'to'"))
+                      for i, r in enumerate(remap)]
+        else:
+            remaps = self.remaps(remap, scope, decl)
+        for i, item in enumerate(f.get("extra_arg") or []):
+            where = _line(f["extra_arg"], i, at("extra_arg"))
+            arg_name = self.text(item["name"], scope, where, "extra_arg 'name'")
+            if arg_name != "use_intra_process_comms":
+                raise LaunchError(f"composable_node 'extra_arg' '{arg_name}' is not known (allowed: "
+                                  "use_intra_process_comms)", where)
+            if not parse_bool(self.text(item["value"], scope, where, "extra_arg 'value'"),
+                              "extra_arg use_intra_process_comms", where):
+                raise LaunchError("use_intra_process_comms: false is not offered: the nodes of a container always "
+                                  "hand messages over in-process (run the node as a 'node' instead)", where)
+        return ComposedNodeSpec(name=name, namespace=namespace, plugin=plugin, params=params, param_files=param_files,
+                                remaps=remaps, source=str(decl.source))
+
+    def word_list(self, value: Any, scope: _Scope, decl: NodeDecl | ComposableDecl, key: str, split: bool = False) -> list[str]:
         if value is None:
             return []
         source = decl.line_source(key)
@@ -391,7 +549,7 @@ class _Resolver:
         except ValueError as exc:
             raise LaunchError(f"'{key}': {exc}", source) from None
 
-    def remaps(self, value: Any, scope: _Scope, decl: NodeDecl) -> list[tuple[str, str]]:
+    def remaps(self, value: Any, scope: _Scope, decl: NodeDecl | ComposableDecl) -> list[tuple[str, str]]:
         source = decl.line_source("remap")
         pairs: list[tuple[str, str]] = []
         if value is None:
@@ -464,8 +622,10 @@ def resolve(path: Path, cli_args: Mapping[str, str]) -> LaunchPlan:
                           f"(declared: {', '.join(sorted(resolver.declared)) or 'none'}; see --show-args)",
                           Source(path, 1))
     names = {n.name for n in resolver.plan.nodes}
+    names |= {c.name for n in resolver.plan.nodes for c in n.composed}   # wait_for may name a composed node
+    processes = {n.name for n in resolver.plan.nodes}
     for handler, source in resolver.pending_exit:
-        if handler.node not in names:
+        if handler.node not in processes:
             raise LaunchError(f"on_exit watches node '{handler.node}', which this launch does not start", source)
         resolver.plan.on_exit.append(handler)
     for node in resolver.plan.nodes:

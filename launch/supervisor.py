@@ -21,7 +21,7 @@ from typing import IO, Protocol
 import yaml
 
 from launch.reaper import Reaper
-from launch.resolve import LaunchPlan, NodeSpec
+from launch.resolve import ComposedNodeSpec, LaunchPlan, NodeSpec
 from nodes.core.cpu import EXCLUSIVE_CPU_ENV
 
 SIGTERM_AFTER_S = 4.0
@@ -123,6 +123,12 @@ class Supervisor:
         self.exclusive_cpu = exclusive_cpu   # told to the node with exclusive_cpu (launch.cli reserves it)
         self.nodes = [Managed(spec, _COLOURS[i % len(_COLOURS)]) for i, spec in enumerate(plan.nodes)]
         self.by_name = {m.spec.name: m for m in self.nodes}
+        # a node composed into a container: its process is the container's, its liveliness its own
+        self.composed_full_names: dict[str, str] = {}
+        for managed in self.nodes:
+            for node in managed.spec.composed:
+                self.by_name[node.name] = managed
+                self.composed_full_names[node.name] = node.full_name
         self.exit_status = 0
         self._print_lock = threading.Lock()
         self._stop_reason: str | None = None
@@ -156,7 +162,7 @@ class Supervisor:
         stream.close()
 
     # -- processes ------------------------------------------------------------------------------
-    def _params_file(self, spec: NodeSpec) -> Path | None:
+    def _params_file(self, spec: NodeSpec | ComposedNodeSpec) -> Path | None:
         if not spec.params:
             return None
         path = self.log_dir / f"{spec.name}.params.yaml"
@@ -166,7 +172,8 @@ class Supervisor:
 
     def _start(self, managed: Managed) -> None:
         spec = managed.spec
-        argv = spec.command(self.python, self._params_file(spec) if spec.module else None)
+        composed_params = {node.name: self._params_file(node) for node in spec.composed}
+        argv = spec.command(self.python, self._params_file(spec) if spec.module else None, composed_params)
         env = dict(self.child_env)
         env[STATE_DIR_ENV] = str(self.log_dir / "state")
         env[RESPAWN_ENV] = str(managed.restarts)
@@ -194,6 +201,8 @@ class Supervisor:
                                           name=f"output-{spec.name}")
         managed.reader.start()
         what = spec.module or spec.executable
+        if spec.composed:
+            what = f"container: {', '.join(node.name for node in spec.composed)}"
         again = f" (restart {managed.restarts}/{spec.respawn_max})" if managed.restarts else ""
         self.say(f"started '{spec.name}' [pid {proc.pid}] ({what}){again}")
 
@@ -207,8 +216,12 @@ class Supervisor:
                 return "failed"
             if dep.state != "running":
                 return "waiting"
-            live = self.readiness is not None and (
-                self.readiness.is_alive(dep.spec.full_name) or self.readiness.is_alive(dep.spec.name))
+            composed = self.composed_full_names.get(target)
+            if composed is not None:   # a node in a container: up when it is on the graph itself
+                live = self.readiness is not None and self.readiness.is_alive(composed)
+            else:
+                live = self.readiness is not None and (
+                    self.readiness.is_alive(dep.spec.full_name) or self.readiness.is_alive(dep.spec.name))
             if not live:
                 return "waiting"
         return "ready"

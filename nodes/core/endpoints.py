@@ -8,6 +8,7 @@ import os
 import struct
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -16,7 +17,7 @@ import zenoh
 
 import msgs
 from msgs import DecodeError
-from nodes.core import memory
+from nodes.core import intraprocess, memory
 from nodes.core.graph import parse_key
 from nodes.core.log import truncate
 from nodes.core.runtime import NodeRuntime
@@ -91,11 +92,25 @@ class Publisher:
         self._seq = itertools.count(1)   # next() on a count is atomic under the GIL: no lock per message
         self._token = node.presence.token("pub", key, msg_type._type)
         self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
+        # In a container (nodes/core/intraprocess.py): the subscriptions of this session that match the key
+        # get each message in-process; Zenoh carries it only to the others (REMOTE), so nobody gets it twice.
+        self.local_subscriptions: tuple[Subscription, ...] = ()
+        self._bus = intraprocess.bus_for(node.session)
+        self._remote_pub: Any = None
+        if self._bus is not None:
+            self._remote_pub = node.session.declare_publisher(
+                key, encoding=encoding_for(msg_type._type), allowed_destination=zenoh.Locality.REMOTE,
+                congestion_control=zenoh.CongestionControl.BLOCK if reliable else zenoh.CongestionControl.DROP,
+                priority=priority, express=express)
+            self._bus.add_publisher(self)
 
     def publish(self, msg: Any) -> None:
         """Encode and send ``msg`` (a ``msg_type`` instance)."""
         if getattr(msg, "_type", None) != self.msg_type._type:
             raise TypeError(f"publisher on '{self.key}' sends {self.msg_type._type}, got {type(msg).__name__}")
+        if self.local_subscriptions:
+            self._publish_in_process(msg, None, droppable=False)
+            return
         self.publish_raw(msgs.encode(msg))
 
     def _droppable_twin(self) -> Any:
@@ -106,12 +121,44 @@ class Publisher:
                 priority=self._priority, express=self._express)
         return twin
 
+    def _droppable_remote_twin(self) -> Any:
+        twin = self.__dict__.get("_remote_drop_pub")
+        if twin is None:
+            twin = self._remote_drop_pub = self.node.session.declare_publisher(
+                self.key, encoding=encoding_for(self.msg_type._type), congestion_control=zenoh.CongestionControl.DROP,
+                priority=self._priority, express=self._express, allowed_destination=zenoh.Locality.REMOTE)
+        return twin
+
+    def _publish_in_process(self, message: Any, payload: bytes | None, *, droppable: bool) -> None:
+        """Hand ``message`` (or, from ``publish_raw``, ``payload``) to this session's matching subscriptions
+        as the object itself, then to remote subscribers over Zenoh, encoding only if someone there listens."""
+        if self.node.closed:
+            return
+        local = self.local_subscriptions
+        if payload is None and any(s.wants_payload(self.msg_type) for s in local):
+            payload = msgs.encode(message)   # once for every subscriber that takes bytes
+        for subscription in local:
+            subscription.take_in_process(message, payload, self.key, self._source)
+        seq = next(self._seq)
+        mirror = self._mirror
+        mirrored = mirror is not None and mirror.active
+        remote = self._droppable_remote_twin() if droppable and self.reliable else self._remote_pub
+        if not (mirrored or remote.matching_status.matching):
+            return   # nobody outside this process listens: not even encoded
+        if payload is None:
+            payload = msgs.encode(message)
+        remote.put(payload, attachment=_ATTACHMENT.pack(seq, self._source))
+        if mirrored:
+            mirror.send(payload)
+
     @property
     def has_subscribers(self) -> bool:
         """True when at least one subscriber matches this key or its ROS 2 wire twin (skip costly messages
         nobody reads)."""
         mirror = self._mirror
         if mirror is not None and mirror.active:
+            return True
+        if self.local_subscriptions:
             return True
         try:
             return bool(self._pub.matching_status.matching)
@@ -123,6 +170,9 @@ class Publisher:
         (a periodic stream whose next message supersedes this one), whatever the publisher's reliability."""
         if self.node.closed:
             return  # a callback still running while the node shuts down: nothing to send to
+        if self.local_subscriptions:
+            self._publish_in_process(None, payload, droppable=droppable)
+            return
         pub = self._pub
         if droppable and self.reliable:
             pub = self._droppable_twin()
@@ -132,12 +182,15 @@ class Publisher:
             mirror.send(payload)
 
     def destroy(self) -> None:
+        if self._bus is not None:
+            self._bus.remove_publisher(self)
         self._token.undeclare()
         if self._mirror is not None:
             self._mirror.close()
         self._pub.undeclare()
-        if self.__dict__.get("_drop_pub") is not None:
-            self._drop_pub.undeclare()
+        for twin in ("_drop_pub", "_remote_pub", "_remote_drop_pub"):
+            if self.__dict__.get(twin) is not None:
+                self.__dict__[twin].undeclare()
 
 
 class Subscription:
@@ -186,10 +239,57 @@ class Subscription:
                              name=f"sub:{key}").start()
         self._token = node.presence.token("sub", key, msg_type._type if msg_type else "*")
         self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
+        # In a container: messages of this session's publishers, handed over in-process (intraprocess.py);
+        # pulled ones wait here for the owner's thread, as the others wait in Zenoh's buffer.
+        self._in_process: deque[tuple[Any, ...]] = deque()
+        self._waiting = False   # pulled: the owner's thread is (about to be) blocked in Zenoh's recv
+        self._bus = intraprocess.bus_for(node.session)
+        if self._bus is not None:
+            self._bus.add_subscription(self)
+
+    def wants_payload(self, published_type: Any) -> bool:
+        """Does an in-process message of ``published_type`` reach this callback as bytes (or need decoding
+        into another class)?"""
+        return self.raw or self.msg_type is None or self.msg_type._type != published_type._type
+
+    def take_in_process(self, message: Any, payload: bytes | None, key: str, source: bytes) -> None:
+        """A message from a publisher of this session (the publishing thread calls this): the object itself
+        when the types agree (zero copy), the publisher's bytes for a raw callback, else decoded from them."""
+        if self.closed:
+            return
+        if self.raw or self.msg_type is None:
+            value: Any = payload
+        elif message is not None and message._type == self.msg_type._type:
+            value = message
+        else:
+            try:   # bytes from publish_raw: checked as any payload is (the code that packed them may be wrong)
+                value = msgs.decode(self.msg_type, payload, decode_limits())
+            except DecodeError as exc:
+                self.node.logger.warn_throttle(1.0, f"dropped a message on '{key}': {exc}", key=f"decode:{self.key}")
+                return
+        args: tuple[Any, ...] = (value, key) if self.with_key else (value,)
+        if self.with_source:
+            args += (source,)
+        if self.pulled:
+            self._in_process.append(args)
+            if self._waiting:   # the owner is blocked in Zenoh's recv: an empty local message ends it
+                self._wake_pub.put(b"", attachment=_WAKE)
+        elif self.inline:
+            self.node.executor.run_callback(self.callback, *args, where=f"subscription '{self.key}'")
+        else:
+            self.node.executor.dispatch_in_process(self.callback, *args, where=f"subscription '{self.key}'")
+
+    def _take_in_process(self) -> int:
+        count = 0
+        while self._in_process:
+            args = self._in_process.popleft()
+            self.node.executor.run_callback(self.callback, *args, where=f"subscription '{self.key}'")
+            count += 1
+        return count
 
     def take_pending(self) -> int:
         """Pulled: handle every message that has arrived, on this thread; returns how many."""
-        count = 0
+        count = self._take_in_process() if self._in_process else 0
         while (sample := self._sub.try_recv()) is not None:
             if not _is_wake(sample):
                 self.handle_sample(sample)
@@ -208,11 +308,16 @@ class Subscription:
         if count:
             return count
         self._arm_watchdog(timeout)
+        self._waiting = True
         try:
+            if self._in_process:   # handed over in-process after take_pending looked
+                self._wake_at = None
+                return self.take_pending()
             sample = self._sub.recv()
         except zenoh.ZError:
             return 0   # undeclared while waiting (the node is closing)
         finally:
+            self._waiting = False
             self._wake_at = None
         if self.closed:
             return 0
@@ -255,6 +360,8 @@ class Subscription:
 
     def handle_sample(self, sample: zenoh.Sample) -> None:
         size = len(sample.payload)
+        if size == 0 and _is_wake(sample):
+            return   # another pulled subscription's wake-up on the same key of a shared (container) session
         memory.after_payload(size)
         if size > self.max_payload:   # before copying or decoding anything
             self.node.logger.warn_throttle(
@@ -281,6 +388,8 @@ class Subscription:
             self.node.executor.dispatch(self.callback, *args, where=f"subscription '{self.key}'")
 
     def destroy(self) -> None:
+        if self._bus is not None:
+            self._bus.remove_subscription(self)
         self._token.undeclare()
         if self._mirror is not None:
             self._mirror.close()

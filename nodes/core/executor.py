@@ -23,6 +23,10 @@ import traceback
 from collections.abc import Callable
 from typing import Any
 
+# How long an in-process hand-off waits for the receiving node's lock before queueing the callback for its
+# spinning thread (a callback of that node is running; longer than any callback should take).
+IN_PROCESS_LOCK_WAIT_S = 0.5
+
 
 class Timer:
     """A periodic callback on the wall clock or on sim time (``now`` gives the current time)."""
@@ -74,6 +78,22 @@ class Executor:
             return
         with self.lock:
             self.run_callback(fn, *args, where=where)
+
+    def dispatch_in_process(self, fn: Callable[..., None], *args: Any, where: str = "callback") -> None:
+        """Run a callback handed over in-process by another node of the same container, on the publishing
+        thread when this node's lock is free soon. Waiting for it without end could deadlock two nodes that
+        publish to each other from two threads, each holding its own lock: after ``IN_PROCESS_LOCK_WAIT_S`` the
+        callback goes to this node's spinning thread instead."""
+        if self.on_spin_thread:
+            self._queue.put((fn, args, where))
+            return
+        if not self.lock.acquire(timeout=IN_PROCESS_LOCK_WAIT_S):
+            self._queue.put((fn, args, where))
+            return
+        try:
+            self.run_callback(fn, *args, where=where)
+        finally:
+            self.lock.release()
 
     def call_soon(self, fn: Callable[..., None], *args: Any, where: str = "callback") -> None:
         """Queue ``fn(*args)`` for the spinning thread (from any thread)."""

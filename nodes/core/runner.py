@@ -70,7 +70,7 @@ def run_node(factory: Callable[..., Any], argv: list[str] | None = None, *,
     except (ValueError, ParameterError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    if _accepts(factory, "cli_args"):
+    if accepts_keyword(factory, "cli_args"):
         kwargs["cli_args"] = args
     try:
         node = factory(**kwargs)  # a failing constructor has already closed its session (Node.__init_subclass__)
@@ -97,7 +97,7 @@ def run_node(factory: Callable[..., Any], argv: list[str] | None = None, *,
     return 0
 
 
-def _accepts(factory: Callable[..., Any], name: str) -> bool:
+def accepts_keyword(factory: Callable[..., Any], name: str) -> bool:
     import inspect
 
     try:
