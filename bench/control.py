@@ -13,9 +13,14 @@
 3. The baseline of a hop, in the same conditions (simulator and manager still running, a message every
    ~30 ms): a raw zenoh-python put -> callback in another process, with the stamp in the payload.
 
+``--composed``: 2. and 3. with the simulator and the controller manager composed in one container process
+(``python -m nodes.core.container``, as ``humanoid.yaml composed:=true``): the hardware frames go between them
+in-process; the trajectory still comes over Zenoh from this process, and the command still comes back to it
+over Zenoh (a hop the simulator itself no longer pays).
+
 Prints a small table, then one JSON line: update_p99_us, command_latency_p50_us, command_latency_p99_us,
-wait_for_state_p50_us, state_to_command_p50_us, taken_a_period_later, raw_hop_p50_us.
-    python bench/control.py [--cycles 5000] [--samples 200] [--sensors on|off|both]
+wait_for_state_p50_us, state_to_command_p50_us, taken_a_period_later, raw_hop_p50_us, composed.
+    python bench/control.py [--cycles 5000] [--samples 200] [--sensors on|off|both] [--composed]
 """
 
 from __future__ import annotations
@@ -129,17 +134,23 @@ def bench_update(endpoint: str, cycles: int, sensors: bool = True) -> dict[str, 
 LATE_US = 800.0   # state -> command beyond this: the trajectory was taken a cycle later (periods are 1 ms)
 
 
-def bench_latency(endpoint: str, port: int, samples: int, sensors: bool = True) -> dict[str, float]:
+def bench_latency(endpoint: str, port: int, samples: int, sensors: bool = True,
+                  composed: bool = False) -> dict[str, float]:
     env = child_env({"ZENOH_CONNECT": endpoint})
-    procs = [
-        spawn([sys.executable, "-m", "nodes.sim", "--params-file", "config/sim.yaml", "--param",
-               "mode:=realtime", "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}]",
-               "--param", f"sensors:={'true' if sensors else 'false'}"],
-              env=env, stderr=subprocess.DEVNULL),
-        spawn([sys.executable, "-m", "nodes.control", "--ns", "humanoid", "--params-file",
-               "config/controllers.yaml", "--param", f"activate:=[{', '.join(controllers(sensors))}]"],
-              env=env, stderr=subprocess.DEVNULL),
-    ]
+    simulator = ["--params-file", "config/sim.yaml", "--param", "mode:=realtime", "--param",
+                 "entities:=[{name: humanoid, file: humanoid, z: 0.93}]", "--param",
+                 f"sensors:={'true' if sensors else 'false'}"]
+    manager = ["--ns", "humanoid", "--params-file", "config/controllers.yaml", "--param",
+               f"activate:=[{', '.join(controllers(sensors))}]"]
+    if composed:   # one process: the simulator's loop on its main thread, the manager beside it
+        procs = [spawn([sys.executable, "-m", "nodes.core.container", "--name", "simulation",
+                        "--composable", json.dumps({"plugin": "nodes.sim.node::SimulatorNode", "argv": simulator}),
+                        "--composable", json.dumps({"plugin": "nodes.control.node::ControllerManagerNode",
+                                                    "argv": manager})],
+                       env=env, stderr=subprocess.DEVNULL)]
+    else:
+        procs = [spawn([sys.executable, "-m", "nodes.sim", *simulator], env=env, stderr=subprocess.DEVNULL),
+                 spawn([sys.executable, "-m", "nodes.control", *manager], env=env, stderr=subprocess.DEVNULL)]
     node = Node("bench_control_client", connect=[endpoint], log_level="warn")
     lock = threading.Lock()
     pending: dict[str, float] = {}  # target -> publish time
@@ -264,6 +275,8 @@ def main() -> int:
     parser.add_argument("--samples", type=int, default=200)
     parser.add_argument("--sensors", choices=("on", "off", "both"), default="on",
                         help="the humanoid's IMU and F/T sensors with their three broadcasters; both: off, then on")
+    parser.add_argument("--composed", action="store_true",
+                        help="the simulator and the controller manager in one container process")
     args = parser.parse_args()
     if args.sensors == "both":
         figures = {state: measure(state == "on", args) for state in ("off", "on")}
@@ -281,10 +294,11 @@ def measure(sensors: bool, args: argparse.Namespace) -> dict[str, float]:
     try:
         endpoint = loopback_endpoint(port)
         update = bench_update(endpoint, args.cycles, sensors)
-        latency = bench_latency(endpoint, port, args.samples, sensors)
+        latency = bench_latency(endpoint, port, args.samples, sensors, args.composed)
     finally:
         router.close()
-    print(f"sensors {'on' if sensors else 'off'}")
+    print(f"sensors {'on' if sensors else 'off'}, simulator and controller manager "
+          f"{'composed in one process' if args.composed else 'in separate processes'}")
     rows = [
         ("manager update (JSB + JTC, 22 joints), thread CPU time", update["p50"], update["p99"],
          "1000 budget, goal p99 < 200"),
@@ -313,7 +327,7 @@ def measure(sensors: bool, args: argparse.Namespace) -> dict[str, float]:
                  "wait_for_state_p50_us": round(latency["wait_p50"], 1),
                  "state_to_command_p50_us": round(pct(latency["next_cycle"], 50), 1),
                  "taken_a_period_later": round(latency["late"] / max(latency["n"], 1), 3),
-                 "raw_hop_p50_us": round(latency["hop_p50"], 1)}
+                 "raw_hop_p50_us": round(latency["hop_p50"], 1), "composed": args.composed}
     print(json.dumps(figures))
     return figures
 

@@ -11,7 +11,11 @@ Each run:
   (a') plain dartpy: bench/sim_instructions.py's loop (a), the same humanoid, ground and gains stepped by
       dartpy alone (the squat as moving rest positions, none of this project's code): what the robot costs
       DART itself. (a) and (a') are measured before and after (b), alternating (a, a', b, a', a).
-``ratio`` = (b) / (a), ``ratio_to_plain`` = (b) / (a'), ``inprocess_to_plain`` = (a) / (a'). Prints a table,
+  (c) composed: (b) with ``composed:=true`` (the simulator and the controller manager in one container
+      process, hardware frames handed over in-process), in every run beside (b), the two in alternating
+      order; ``--composed off`` leaves it out.
+``ratio`` = (b) / (a), ``ratio_to_plain`` = (b) / (a'), ``inprocess_to_plain`` = (a) / (a'),
+``composed_ratio_to_plain`` = (c) / (a'). Prints a table,
 then one JSON line with ``fullstack_steps_per_s``, ``inprocess_steps_per_s``, ``plain_steps_per_s`` and the
 ratios (medians over the runs); each run also records what the launcher did with ``exclusive_cpu`` ("CPU 1",
 "not reserved: why" when another lockstep launch holds the CPU, "off").
@@ -22,6 +26,7 @@ world's ratio, its load time (the simulator's ``loaded in`` line) and ``world_co
 full-stack rate against the first's.
 
     python bench/lockstep.py [--runs 3] [--seconds 8] [--physics-rate 1000] [--sensors on|off|both] [--world NAME ...]
+                             [--composed on|off]
 """
 
 from __future__ import annotations
@@ -274,6 +279,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="world:= of the full stack; repeat to compare worlds in the same run")
     parser.add_argument("--sensors", choices=("on", "off", "both"), default="on",
                         help="the robot's IMU and force/torque sensors (sensors:=); both: each in turn every run")
+    parser.add_argument("--composed", choices=("on", "off"), default="on",
+                        help="also run the full stack with composed:=true (c) in every run")
     parser.add_argument("launch_args", nargs="*", metavar="NAME:=VALUE",
                         help="extra launch arguments, e.g. commander:=none (experiments)")
     args = parser.parse_args(argv)
@@ -287,19 +294,35 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     for run in range(args.runs):
         before = ceilings(args)
-        full = fullstack(args.seconds, args.physics_rate, args.launch, tuple(args.launch_args))
-        ceiling, plain = bracket(before, ceilings(args, after=True))   # bracket the full-stack run
-        rows.append({"inprocess": ceiling, "fullstack": full["steps_per_s"], "ratio": full["steps_per_s"] / ceiling,
-                     "pelvis_min": full["pelvis_min"], "cpu": full["cpu_percent"], "inprocess_height": before["height"],
-                     "exclusive_cpu": full["exclusive_cpu"], "plain": plain,
-                     "ratio_to_plain": full["steps_per_s"] / plain, "inprocess_to_plain": ceiling / plain})
+        # separate and composed in alternating order, so neither always meets the machine warmer
+        kinds = ("separate", "composed") if args.composed == "on" else ("separate",)
+        runs = {kind: fullstack(args.seconds, args.physics_rate, args.launch,
+                                (*args.launch_args, *(("composed:=true",) if kind == "composed" else ())))
+                for kind in (kinds if run % 2 == 0 else kinds[::-1])}
+        full = runs["separate"]
+        ceiling, plain = bracket(before, ceilings(args, after=True))   # bracket the full-stack runs
+        row = {"inprocess": ceiling, "fullstack": full["steps_per_s"], "ratio": full["steps_per_s"] / ceiling,
+               "pelvis_min": full["pelvis_min"], "cpu": full["cpu_percent"], "inprocess_height": before["height"],
+               "exclusive_cpu": full["exclusive_cpu"], "plain": plain,
+               "ratio_to_plain": full["steps_per_s"] / plain, "inprocess_to_plain": ceiling / plain}
+        composed = runs.get("composed")
+        if composed is not None:
+            row.update({"composed": composed["steps_per_s"], "composed_ratio": composed["steps_per_s"] / ceiling,
+                        "composed_ratio_to_plain": composed["steps_per_s"] / plain,
+                        "composed_pelvis_min": composed["pelvis_min"], "composed_cpu": composed["cpu_percent"],
+                        "composed_exclusive_cpu": composed["exclusive_cpu"]})
+        rows.append(row)
         print(f"run {run + 1}: in-process {ceiling:,.0f} steps/s, plain dartpy {plain:,.0f}, full stack "
               f"{full['steps_per_s']:,.0f} steps/s, ratio {full['steps_per_s'] / ceiling:.2f} (to plain "
-              f"{full['steps_per_s'] / plain:.2f}), pelvis min {full['pelvis_min']:.3f} m", file=sys.stderr)
+              f"{full['steps_per_s'] / plain:.2f}), pelvis min {full['pelvis_min']:.3f} m"
+              + (f"; composed {composed['steps_per_s']:,.0f} steps/s (to plain {composed['steps_per_s'] / plain:.2f}), "
+                 f"pelvis min {composed['pelvis_min']:.3f} m" if composed is not None else ""), file=sys.stderr)
 
-    med = {k: statistics.median(r[k] for r in rows)
-           for k in ("inprocess", "fullstack", "ratio", "plain", "ratio_to_plain", "inprocess_to_plain")}
-    pelvis_min = min(r["pelvis_min"] for r in rows)
+    keys = ["inprocess", "fullstack", "ratio", "plain", "ratio_to_plain", "inprocess_to_plain"]
+    if args.composed == "on":
+        keys += ["composed", "composed_ratio", "composed_ratio_to_plain"]
+    med = {k: statistics.median(r[k] for r in rows) for k in keys}
+    pelvis_min = min(min(r["pelvis_min"], r.get("composed_pelvis_min", math.inf)) for r in rows)
     cpu_keys = sorted({k for r in rows for k in r["cpu"]})
     cpu = {k: statistics.median(r["cpu"].get(k, 0.0) for r in rows) for k in cpu_keys}
     table = [
@@ -317,6 +340,16 @@ def main(argv: list[str] | None = None) -> int:
          "a CPU of its own for the physics thread"),
     ]
     table += [(f"  CPU of {k}", f"{v:.0f} %", "of one core, median") for k, v in cpu.items()]
+    if args.composed == "on":
+        composed_keys = sorted({k for r in rows for k in r["composed_cpu"]})
+        composed_cpu = {k: statistics.median(r["composed_cpu"].get(k, 0.0) for r in rows) for k in composed_keys}
+        table += [
+            ("(c) composed:=true: simulator + controller manager in one process", f"{med['composed']:,.0f} steps/s",
+             f"{med['composed'] / args.physics_rate:.2f}x real time"),
+            ("ratio (c)/(a'): composed / plain dartpy", f"{med['composed_ratio_to_plain']:.2f}", "goal >= 0.85"),
+            ("ratio (c)/(b): composed / separate", f"{med['composed'] / med['fullstack']:.2f}", ""),
+        ]
+        table += [(f"  CPU of {k} (composed)", f"{v:.0f} %", "of one core, median") for k, v in composed_cpu.items()]
     print_table(table, load_before)
     print(json.dumps({
         "fullstack_steps_per_s": round(med["fullstack"], 1), "inprocess_steps_per_s": round(med["inprocess"], 1),
@@ -325,6 +358,8 @@ def main(argv: list[str] | None = None) -> int:
         "plain_steps_per_s": round(med["plain"], 1), "ratio_to_plain": round(med["ratio_to_plain"], 4),
         "inprocess_to_plain": round(med["inprocess_to_plain"], 4),
         "pelvis_min": round(pelvis_min, 4), "cpu_percent": cpu, "load_average": round(load_before, 2),
+        **({"composed_steps_per_s": round(med["composed"], 1), "composed_ratio": round(med["composed_ratio"], 4),
+            "composed_ratio_to_plain": round(med["composed_ratio_to_plain"], 4)} if args.composed == "on" else {}),
     }))
     return 0
 
