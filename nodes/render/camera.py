@@ -49,7 +49,8 @@ ENCODINGS = ("rgb8", "bgr8", "mono8")
 class CameraImage:
     """One rendered frame: ``color`` (H, W, 3) uint8 in the spec's channel order (rgb8, bgr8) or (H, W)
     for mono8; with a depth camera, ``depth`` (H, W) float32 metres along the optical axis (REP 117 -inf /
-    +inf) and ``points`` (H, W, 3) float32 in the optical frame (NaN where the depth is not finite);
+    +inf) and ``points`` (H, W, 3) float32 in the optical frame (NaN where the depth is not finite; None
+    when not asked for);
     ``encoding`` is the spec's, for ``rgb``."""
 
     color: np.ndarray
@@ -103,9 +104,10 @@ def _noisy(image: np.ndarray, spec: CameraSpec, rng: np.random.Generator | None)
 
 
 def render_camera(scene: RayScene, spec: CameraSpec, sensor_pose: np.ndarray,
-                  rng: np.random.Generator | None = None) -> CameraImage:
+                  rng: np.random.Generator | None = None, *, with_points: bool = True) -> CameraImage:
     """The camera described by ``spec`` at ``sensor_pose`` (4x4 world pose of its sensor frame: +x forward)
-    in ``scene``'s visual layer; noise from ``rng`` if the spec has some (``None``: none)."""
+    in ``scene``'s visual layer; noise from ``rng`` if the spec has some (``None``: none). ``with_points``
+    False leaves a depth camera's ``points`` out (None): nobody asked for its cloud, 1 ms a 320x240 frame."""
     if spec.encoding not in ENCODINGS:
         raise RenderError(f"camera encoding '{spec.encoding}' is not one of {', '.join(ENCODINGS)}")
     rays = _rays(float(spec.horizontal_fov), int(spec.width), int(spec.height))
@@ -137,6 +139,8 @@ def render_camera(scene: RayScene, spec: CameraSpec, sensor_pose: np.ndarray,
     color = np.ascontiguousarray(np.clip(image * 255.0 + 0.5, 0.0, 255.0).astype(np.uint8))
     if not spec.depth:
         return CameraImage(color, encoding=spec.encoding)
+    depth = depth.reshape(h, w).astype(np.float32, copy=False)
+    if not with_points:
+        return CameraImage(color, depth, None, spec.encoding)
     points = rays.optical * np.where(seen, hits.distance, np.float32(np.nan))[:, None]
-    return CameraImage(color, depth.reshape(h, w).astype(np.float32, copy=False),
-                       points.reshape(h, w, 3).astype(np.float32, copy=False), spec.encoding)
+    return CameraImage(color, depth, points.reshape(h, w, 3).astype(np.float32, copy=False), spec.encoding)

@@ -221,7 +221,7 @@ class RendererNode(Node):
         spec, frame_id = sensor.spec, sensor.spec.frame_id
         if spec.camera is not None:
             camera = spec.camera
-            picture = render_camera(self.scene, camera, pose, rng)
+            picture = render_camera(self.scene, camera, pose, rng, with_points="points" in outputs)
             if "image" in outputs:
                 yield "image", payloads.image(stamp, frame_id, picture.color, camera.encoding)
             for info in ("camera_info", "depth_info"):

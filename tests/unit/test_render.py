@@ -15,6 +15,7 @@ from nodes.render.geometry import (
     RenderError,
     Shape,
     mesh_from_bytes,
+    rotate,
     triangle_count,
     triangulate,
 )
@@ -354,11 +355,11 @@ def test_mesh_bytes_are_checked() -> None:
     with pytest.raises(RenderError, match=r"600001 vertices, over the cap"):
         mesh_from_bytes(bytes(12 * (3 * MAX_MESH_TRIANGLES + 1)), triangles.tobytes())
     # a mesh shape renders: the triangle in the plane x = 1 (rotated into it), seen by a laser
-    rotate = np.eye(4)
-    rotate[:3, :3] = [[0, 0, 1], [1, 0, 0], [0, 1, 0]]      # local x -> world y, y -> z, z -> x
-    rotate[:3, 3] = (1.0, -0.2, -0.2)
-    facing = Shape("mesh", pose=rotate, vertices=v, triangles=f[:, ::-1].copy(), name="tri")   # normal -x
-    away = Shape("mesh", pose=rotate, vertices=v, triangles=f, name="tri")                       # normal +x
+    turn = np.eye(4)
+    turn[:3, :3] = [[0, 0, 1], [1, 0, 0], [0, 1, 0]]      # local x -> world y, y -> z, z -> x
+    turn[:3, 3] = (1.0, -0.2, -0.2)
+    facing = Shape("mesh", pose=turn, vertices=v, triangles=f[:, ::-1].copy(), name="tri")   # normal -x
+    away = Shape("mesh", pose=turn, vertices=v, triangles=f, name="tri")                       # normal +x
     for shape, seen in ((facing, True), (away, False)):   # a one-sided mesh is seen from its front only
         scene = RayScene(["m"], [(0, shape)])
         scene.update(np.eye(4)[None])
@@ -397,3 +398,21 @@ def test_moving_links_out_of_view_are_left_out_and_the_pictures_do_not_change() 
         assert kept < whole.triangles("visual")[1], (trial, kept)   # some of the 40 were behind or beside it
         for spec in (lidar, laser):
             assert np.array_equal(render_ray(cut, spec, sensor).ranges, render_ray(whole, spec, sensor).ranges)
+
+
+@pytest.mark.parametrize(("rows_type", "rotation_type", "translation_type"), [
+    (np.float32, np.float32, None), (np.float32, np.float64, np.float64), (np.float64, np.float32, np.float64),
+    (np.float32, np.float32, np.float64), (np.float32, np.float32, np.float32)])
+def test_rotate_is_the_plain_sum_bit_for_bit(rows_type, rotation_type, translation_type) -> None:
+    # pictures stay byte-identical across versions: rotate's column loop adds the same terms in the same order
+    rng = np.random.default_rng(7)
+    rows = rng.normal(size=(5000, 3)).astype(rows_type)
+    rotation = rng.normal(size=(3, 3)).astype(rotation_type)
+    plain = rows[:, 0:1] * rotation[:, 0] + rows[:, 1:2] * rotation[:, 1] + rows[:, 2:3] * rotation[:, 2]
+    if translation_type is None:
+        got = rotate(rows, rotation)
+    else:
+        translation = rng.normal(size=3).astype(translation_type)
+        plain = plain + translation
+        got = rotate(rows, rotation, translation)
+    assert got.dtype == plain.dtype and np.array_equal(got, plain)
