@@ -52,7 +52,8 @@ def delayed_page_server(viewer_url: str, render_seconds: float) -> http.server.T
     return server
 
 
-def take(out: Path, settle: float, render: float, size: str = "1400,800", source: str = "feeder") -> int:
+def take(out: Path, settle: float, render: float, size: str = "1400,800", source: str = "feeder",
+         viz_params: tuple[str, ...] = ()) -> int:
     browser = find_browser()
     if browser is None:
         print("no Chromium found (Debian: apt-get install chromium)", file=sys.stderr)
@@ -78,7 +79,8 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800", source
         else:
             start("nodes.state_publisher", "--ns", "humanoid",
                   "--param", f"robot_description_file:={robot_file('humanoid')}")
-        viz = start("nodes.viz", "--serve", "--web-port", str(web_port), "--grpc-port", str(grpc_port))
+        viz = start("nodes.viz", "--serve", "--web-port", str(web_port), "--grpc-port", str(grpc_port),
+                    *(arg for param in viz_params for arg in ("--param", param)))
         viewer_url = ""
         deadline = time.monotonic() + 60
         while not viewer_url and time.monotonic() < deadline and viz.poll() is None:
@@ -123,8 +125,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--render", type=float, default=30.0, help="s the viewer gets to load and draw")
     parser.add_argument("--source", choices=("feeder", "humanoid"), default="feeder",
                         help="feeder: state publisher + viz feeder; humanoid: launch/humanoid.yaml (DART)")
+    parser.add_argument("--viz-param", action="append", default=[], metavar="NAME:=VALUE",
+                        help="a parameter of the viewer node (repeatable), e.g. plots:=[camera] for the camera tab")
     args = parser.parse_args(argv)
-    return take(args.out, args.settle, args.render, source=args.source)
+    return take(args.out, args.settle, args.render, source=args.source, viz_params=tuple(args.viz_param))
 
 
 if __name__ == "__main__":
