@@ -20,6 +20,9 @@ steps (the same as running two step counts and taking the difference, in one run
       the body sensors (ours-on: the pelvis IMU and the ankle force/torque sensors at 1 kHz, the foot contact
       sensors at 100 Hz), or the IMU and force/torque sensors alone (ours-imu-ft: the contact sensors taken out
       of the URDF; issue 28's goal is <= 5 % over sensors off).
+      ours-lab: ours-off in ``worlds/simple_lab.world`` (loaded as the simulator loads it, its resting models put
+      to sleep by the simulator's RestKeeper): what a furnished world costs a step (issue 25's goal: within 5 %),
+      in steady state: it settles WORLD_SETTLE_STEPS, so its resting models are asleep before the squat.
 
 Every loop takes its commands from a table built before the first marker: what is counted is the stepping, not
 the bench making up a squat.
@@ -55,7 +58,8 @@ URDF = ROOT / "robots" / "humanoid.urdf"
 PHYSICS_RATE = 1000.0
 SPAWN_Z = 0.93
 SETTLE_STEPS = 300            # landing on the ground, holding zero, before the squat starts
-LOOPS = ("plain", "plain-force", "ours-off", "ours-on", "ours-imu-ft")
+WORLD_SETTLE_STEPS = 1500     # ours-lab: also the world's free models landing and lying still 0.5 s (asleep)
+LOOPS = ("plain", "plain-force", "ours-off", "ours-on", "ours-imu-ft", "ours-lab")
 LEG_PITCH = {"hip_pitch": -0.5, "knee": 1.0, "ankle_pitch": -0.5}   # bench/lockstep.py's squat direction
 WORLD_STEP = "dart::simulation::World::step"
 
@@ -170,11 +174,12 @@ def without_contact_sensors(urdf: str) -> str:
                   urdf, flags=re.S)
 
 
-def ours_loop(steps: int, sensors: bool, contact_sensors: bool = True) -> float:
+def ours_loop(steps: int, sensors: bool, contact_sensors: bool = True, world_file: str | None = None) -> float:
     """(b): the simulator's Simulation + HardwareInterface, as bench/lockstep.py's in-process loop."""
     from nodes.core.params import load_params_file
     from nodes.sim.config import DEFAULT_CONFIG, parse_gains
     from nodes.sim.entity import EntitySpec, Pose
+    from nodes.sim.sdf import load_world
     from nodes.sim.simulation import Simulation
     from nodes.sim.world import PhysicsWorld
 
@@ -182,6 +187,8 @@ def ours_loop(steps: int, sensors: bool, contact_sensors: bool = True) -> float:
     world = PhysicsWorld(PHYSICS_RATE)
     world.add_ground()
     sim = Simulation(world, parse_gains(defaults["gains"]), sensors_enabled=sensors)
+    if world_file is not None:
+        sim.load_world(load_world(world_file), defaults["ground_size"], defaults["ground_friction"])
     urdf = URDF.read_text() if contact_sensors else without_contact_sensors(URDF.read_text())
     entity = sim.spawn(EntitySpec("humanoid", urdf, pose=Pose.from_xyz_rpy(0, 0, SPAWN_Z)))
     hw = sim.hardware["humanoid"]
@@ -190,7 +197,7 @@ def ours_loop(steps: int, sensors: bool, contact_sensors: bool = True) -> float:
     pitches = [pitch_of(name) for name in names]
     commands = [[p * squat_depth(k) for p in pitches] for k in range(steps)]
     zeros = [0.0] * len(names)
-    for _ in range(SETTLE_STEPS):
+    for _ in range(SETTLE_STEPS if world_file is None else WORLD_SETTLE_STEPS):
         if sensors:
             sim.sample_sensors()
         hw.apply_command(names, interfaces, zeros)
@@ -215,7 +222,8 @@ def ours_loop(steps: int, sensors: bool, contact_sensors: bool = True) -> float:
 def run_loop(loop: str, steps: int) -> float:
     if loop.startswith("plain"):
         return plain_loop(steps, as_force=loop == "plain-force")
-    return ours_loop(steps, sensors=loop in ("ours-on", "ours-imu-ft"), contact_sensors=loop != "ours-imu-ft")
+    return ours_loop(steps, sensors=loop in ("ours-on", "ours-imu-ft"), contact_sensors=loop != "ours-imu-ft",
+                     world_file="simple_lab.world" if loop == "ours-lab" else None)
 
 
 # ------------------------------------------------------------------------------------------ callgrind
@@ -252,7 +260,7 @@ def callgrind(loop: str, steps: int, out_dir: Path) -> dict:
 
 
 def sensor_cost(results: dict, loop: str) -> float:
-    """What the sensors of ``loop`` add to a step, in % of ours-off's instructions."""
+    """What ``loop`` adds to a step (its sensors, or its world), in % of ours-off's instructions."""
     return 100.0 * (results[loop]["total"] - results["ours-off"]["total"]) / results["ours-off"]["total"]
 
 
@@ -288,6 +296,9 @@ def main(argv: list[str] | None = None) -> int:
         rows.append((f"{loop}: instructions per step", f"{r['total'] / 1e6:.3f} M",
                      f"World::step {r['world_step'] / 1e6:.3f} M, outside it {r['outside'] / 1e3:.0f} k "
                      f"({r['overhead_percent']:.1f} % of World::step)"))
+    if "ours-off" in results and "ours-lab" in results:
+        rows.append(("ours-lab: the world's cost", f"{sensor_cost(results, 'ours-lab'):.1f} %",
+                     "simple_lab.world over empty, per step (goal <= 5 %)"))
     for loop in ("ours-off", "ours-on", "ours-imu-ft"):
         for base in ("plain", "plain-force"):
             if base in results and loop in results:
@@ -310,6 +321,8 @@ def main(argv: list[str] | None = None) -> int:
         summary[f"{key}_per_step"] = round(r["total"])
         summary[f"{key}_world_step_per_step"] = round(r["world_step"])
         summary[f"{key}_overhead_percent"] = round(r["overhead_percent"], 2)
+    if "ours-off" in results and "ours-lab" in results:
+        summary["ours_lab_world_cost_percent"] = round(sensor_cost(results, "ours-lab"), 2)
     for loop in ("ours-on", "ours-imu-ft"):
         if "ours-off" in results and loop in results:
             summary[f"{loop.replace('-', '_')}_sensor_cost_percent"] = round(sensor_cost(results, loop), 2)
