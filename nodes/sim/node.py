@@ -323,7 +323,10 @@ class SimulatorNode(Node):
                 link.inbox.connected = lockstep
                 link.gave_up = False
                 link.answer_due.clear()
-                if lockstep:
+                # the answer to this period's state may already be the one taken (a composed controller
+                # manager answers during publish_state): then nothing is due, else waiting for it would
+                # wait for a command already applied, a lockstep_timeout every period
+                if lockstep and command.step != step:
                     link.answer_due.append(step)
             elif (not lockstep and not link.holding
                   and time.monotonic() - link.inbox.last_wall > self.command_timeout):

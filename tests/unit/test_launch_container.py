@@ -146,3 +146,14 @@ def test_humanoid_composed_puts_the_simulator_and_controller_manager_in_one_cont
     by_name = {n.name: n for n in separate.nodes}
     assert simulation.composed[0].params == by_name["simulator"].params
     assert simulation.composed[1].param_files == by_name["controller_manager"].param_files
+
+
+def test_the_example_in_docs_launch_md_resolves(tmp_path: Path) -> None:
+    text = (Path(__file__).resolve().parents[2] / "docs" / "launch.md").read_text()
+    section = text.split("## Composable nodes", 1)[1]
+    example = section.split("```yaml\n", 1)[1].split("```", 1)[0]
+    plan = resolve(write(tmp_path, example), {})
+    (container,) = plan.nodes
+    assert [c.full_name for c in container.composed] == ["simulator", "humanoid/controller_manager"]
+    assert container.composed[0].params["mode"] == "lockstep"
+    assert container.composed[1].param_files and container.composed[1].param_files[0].endswith("controllers.yaml")
