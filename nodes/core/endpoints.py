@@ -228,6 +228,8 @@ class Subscription:
         self.pulled = pulled
         self._wake_pub: Any = None
         self._wake_at: float | None = None   # pulled: monotonic deadline of the wait in progress
+        self._watchdog: threading.Condition | None = None   # pulled: wakes the watchdog thread (_watch)
+        self._watchdog_idle = False
         self.closed = False
         if pulled:
             self._sub = node.session.declare_subscriber(key, zenoh.handlers.RingChannel(backlog))
@@ -330,16 +332,32 @@ class Subscription:
         if self._wake_pub is None:
             self._wake_pub = self.node.session.declare_publisher(
                 self.key, allowed_destination=zenoh.Locality.SESSION_LOCAL)
+            self._watchdog = threading.Condition()
             threading.Thread(target=self._watch, daemon=True, name=f"wait:{self.key}").start()
-        self._wake_at = time.monotonic() + timeout
+        with self._watchdog:
+            self._wake_at = time.monotonic() + timeout
+            if self._watchdog_idle:   # asleep without a deadline: give it this one (else it looks at its own)
+                self._watchdog.notify()
 
     def _watch(self) -> None:
-        """Wake the owner's ``wait`` once its deadline has passed (checked every 10 ms: timeouts are ~1 s)."""
+        """Wake the owner's ``wait`` once its deadline has passed. It sleeps until the deadline it knows and
+        then looks again, never polling: a thread that woke every 10 ms took the GIL from the simulator's
+        physics thread 100 times a second (and, on a CPU shared with other processes, waited for that CPU
+        before giving it back)."""
+        condition = self._watchdog
         try:
-            while not (self.closed or self.node.closed):
-                time.sleep(_WAKE_CHECK_S)
-                deadline = self._wake_at
-                if deadline is not None and time.monotonic() >= deadline:
+            with condition:
+                while not (self.closed or self.node.closed):
+                    deadline = self._wake_at
+                    if deadline is None:
+                        self._watchdog_idle = True
+                        condition.wait()
+                        self._watchdog_idle = False
+                        continue
+                    remaining = deadline - time.monotonic()
+                    if remaining > 0:
+                        condition.wait(remaining)
+                        continue
                     self._wake_at = None
                     self._wake_pub.put(b"", attachment=_WAKE)
         except zenoh.ZError:
@@ -398,6 +416,8 @@ class Subscription:
             self._sub.undeclare()
             return
         self._wake_pub.put(b"", attachment=_WAKE)   # end a wait in progress: it holds the channel
+        with self._watchdog:
+            self._watchdog.notify()   # and the watchdog thread's sleep: it sees the subscription closed
         for _ in range(500):
             try:
                 self._sub.undeclare()
@@ -409,7 +429,6 @@ class Subscription:
 
 # A pulled subscription's wake-up: an empty message with this attachment (ours are 24 bytes).
 _WAKE = b"zenroid-wake"
-_WAKE_CHECK_S = 0.01
 
 
 def _is_wake(sample: zenoh.Sample) -> bool:
