@@ -94,3 +94,26 @@ def test_a_pulled_subscription_waiting_wakes_for_an_in_process_message(container
     finally:
         talker.destroy()
         stepper.destroy()
+
+
+def test_a_container_node_still_rejects_bad_input_from_other_processes(router: str, container_session: object) -> None:
+    talker = Node("talker", session=container_session)
+    listener = Node("listener", session=container_session)
+    outside = Node("outside", connect=[router])
+    try:
+        got: list[JointState] = []
+        listener.create_subscription(JointState, "joint_states", got.append)
+        talker.create_publisher(JointState, "joint_states")   # an in-process publisher on the same key
+        hostile = outside.create_publisher(JointState, "joint_states")
+        wait_until(lambda: hostile.publish(state(-1.0)) or got, 10, message="the listener hears the outside")
+        got.clear()
+        for payload in (b"\xc1", b"\x93\x01\x02\x03", bytes(64)):   # not msgpack, not a map, zeros
+            hostile.publish_raw(payload)
+        hostile.publish(JointState(name=["a"], position=[float("nan")], velocity=[0.0], effort=[0.0]))
+        hostile.publish(state(7.0))
+        wait_until(lambda: got, 10, message="the good message after the bad ones")
+        time.sleep(0.2)
+        assert [m.position for m in got] == [[7.0]], "only the valid message reaches the callback"
+    finally:
+        for node in (talker, listener, outside):
+            node.destroy()
