@@ -106,6 +106,7 @@ def test_a_container_node_still_rejects_bad_input_from_other_processes(router: s
         talker.create_publisher(JointState, "joint_states")   # an in-process publisher on the same key
         hostile = outside.create_publisher(JointState, "joint_states")
         wait_until(lambda: hostile.publish(state(-1.0)) or got, 10, message="the listener hears the outside")
+        time.sleep(0.3)   # the warm-up messages still on their way
         got.clear()
         for payload in (b"\xc1", b"\x93\x01\x02\x03", bytes(64)):   # not msgpack, not a map, zeros
             hostile.publish_raw(payload)
@@ -113,7 +114,8 @@ def test_a_container_node_still_rejects_bad_input_from_other_processes(router: s
         hostile.publish(state(7.0))
         wait_until(lambda: got, 10, message="the good message after the bad ones")
         time.sleep(0.2)
-        assert [m.position for m in got] == [[7.0]], "only the valid message reaches the callback"
+        assert [m.position for m in got if m.position != [-1.0]] == [[7.0]], \
+            "only the valid message reaches the callback"
     finally:
         for node in (talker, listener, outside):
             node.destroy()
