@@ -53,7 +53,9 @@ class RenderFrames:
         self._done = threading.Lock()
         self._last_done = -1
         self._sent: list[int] = []          # steps of frames sent in lockstep and not yet done
-        node.create_subscription(RenderDone, "/sim/render/done", self._on_done, inline=True)
+        # pulled: the physics thread takes the renderer's answers itself when it looks at them; delivered on a
+        # Zenoh thread, each of them (150 a second in lockstep) took the GIL from the physics thread
+        self._done_sub = node.create_subscription(RenderDone, "/sim/render/done", self._on_done, pulled=True)
         self.version = 0
         self._scene_key: tuple = ()
         self.links = SceneLinks([], [])
@@ -109,6 +111,7 @@ class RenderFrames:
             self._no_renderer()
             return
         self._since_no_renderer = None
+        self._done_sub.take_pending()
         wait = lockstep and not self._renderer_gone
         if wait:
             self._wait_for_renderer()
@@ -119,7 +122,7 @@ class RenderFrames:
                 self._sent.append(step)
         self.frame_pub.publish_raw(frame)
 
-    def _on_done(self, msg) -> None:   # a Zenoh thread
+    def _on_done(self, msg) -> None:   # the physics thread (pulled)
         with self._done:
             self._last_done = max(self._last_done, int(msg.step))
             self._sent = [s for s in self._sent if s > self._last_done]
@@ -138,7 +141,9 @@ class RenderFrames:
                 with self._done:
                     self._sent.clear()
                 return
-            self.idle(0.002)
+            # block (without the GIL) until the renderer answers, then serve what queued meanwhile
+            self._done_sub.wait(0.002)
+            self.idle(0.0)
 
     def _no_renderer(self) -> None:
         now = time.monotonic()
