@@ -157,3 +157,21 @@ def test_the_example_in_docs_launch_md_resolves(tmp_path: Path) -> None:
     assert [c.full_name for c in container.composed] == ["simulator", "humanoid/controller_manager"]
     assert container.composed[0].params["mode"] == "lockstep"
     assert container.composed[1].param_files and container.composed[1].param_files[0].endswith("controllers.yaml")
+
+
+@pytest.mark.parametrize("name", ["humanoid.yaml", "humanoid_20dof.yaml", "controller_lab.yaml", "lab_2_3.yaml",
+                                  "joint_animation.yaml"])
+def test_every_launch_file_with_a_simulator_takes_composed(name: str) -> None:
+    path = find_launch_file(name)
+    separate = resolve(path, {"gui": "false"})
+    composed = resolve(path, {"gui": "false", "composed": "true"})
+    (container,) = [n for n in composed.nodes if n.composed]
+    assert [c.name for c in container.composed] == ["simulator", "controller_manager"]
+    by_name = {n.name: n for n in separate.nodes}
+    # the same nodes with the same parameters, in one process instead of two
+    assert container.composed[0].params == by_name["simulator"].params
+    assert container.composed[1].full_name == by_name["controller_manager"].full_name
+    assert container.composed[1].param_files == by_name["controller_manager"].param_files
+    assert container.exclusive_cpu == by_name["simulator"].exclusive_cpu
+    assert {n.name for n in composed.nodes} | {"simulator", "controller_manager"} == \
+        {n.name for n in separate.nodes} | {container.name}
