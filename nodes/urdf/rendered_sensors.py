@@ -30,10 +30,9 @@ from nodes.urdf.sensors import (
     Noise,
     SensorDeclarationError,
     child_text,
-    parse_flag,
     parse_noise,
     parse_number,
-    parse_pose,
+    read_sensor_basics,
     resolve_topic,
     sensor_where,
 )
@@ -249,22 +248,13 @@ def _parse(element: etree._Element, reference: str, namespace: str) -> RenderedS
     name, kind, line = element.get("name") or "", element.get("type") or "", element.sourceline
     where = sensor_where(name, line)
     spec = RenderedSensorSpec(name=name, type=kind, reference=reference, line=line)
-    rate_text = child_text(element, "update_rate")
-    if rate_text is not None:
-        spec.update_rate_text = rate_text
-        spec.update_rate = parse_number(rate_text, f"{where} <update_rate>", line)
-    always_on = child_text(element, "always_on")
-    if always_on is not None:
-        spec.always_on = parse_flag(always_on, f"{where} <always_on>", line)
-    pose = child_text(element, "pose")
-    if pose:
-        spec.pose = parse_pose(pose, f"{where} <pose>", line)
+    read_sensor_basics(element, spec, where, line)
     plugin = None
     for candidate in element.findall("plugin"):
         if (candidate.get("filename") or "") in (CAMERA_PLUGIN, RAY_PLUGIN):
             plugin = candidate
     spec.plugin = "" if plugin is None else plugin.get("filename") or ""
-    if rate_text is None:   # SDF's 0 would mean every physics step; a rendered sensor gets its usual rate
+    if spec.update_rate_text is None:   # SDF's 0 would mean every physics step; a rendered sensor gets its usual rate
         spec.update_rate = DEFAULT_CAMERA_RATE if kind in CAMERA_TYPES else DEFAULT_RAY_RATE
     if kind in CAMERA_TYPES:
         spec.camera = _camera(element, kind, where)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from lxml import etree
@@ -203,14 +204,9 @@ def parse_noise(element: etree._Element, what: str) -> Noise:
     return Noise(kind, line=line, **numbers)
 
 
-def _parse_gazebo_sensor(element: etree._Element, reference: str) -> SensorSpec | None:
-    name = element.get("name") or ""
-    kind = element.get("type") or ""
-    line = element.sourceline
-    where = sensor_where(name, line)
-    if kind in OTHER_SENSOR_TYPES:
-        return None
-    spec = SensorSpec(name=name, type=kind, reference=reference, line=line)
+def read_sensor_basics(element: etree._Element, spec: Any, where: str, line: int | None) -> None:
+    """What every ``<sensor>`` may carry, Gazebo's way: ``<update_rate>``, ``<always_on>`` and ``<pose>``,
+    written onto ``spec`` (a body sensor's or a rendered sensor's); a bad value names the sensor and line."""
     rate_text = child_text(element, "update_rate")
     if rate_text is not None:
         spec.update_rate_text = rate_text
@@ -221,6 +217,17 @@ def _parse_gazebo_sensor(element: etree._Element, reference: str) -> SensorSpec 
     pose = child_text(element, "pose")
     if pose:
         spec.pose = parse_pose(pose, f"{where} <pose>", line)
+
+
+def _parse_gazebo_sensor(element: etree._Element, reference: str) -> SensorSpec | None:
+    name = element.get("name") or ""
+    kind = element.get("type") or ""
+    line = element.sourceline
+    where = sensor_where(name, line)
+    if kind in OTHER_SENSOR_TYPES:
+        return None
+    spec = SensorSpec(name=name, type=kind, reference=reference, line=line)
+    read_sensor_basics(element, spec, where, line)
     if kind == "imu":
         imu = element.find("imu")
         if imu is not None:
