@@ -30,6 +30,7 @@ from nodes.urdf.sensors import (
     Noise,
     SensorDeclarationError,
     child_text,
+    naming_problem,
     parse_noise,
     parse_number,
     read_sensor_basics,
@@ -338,11 +339,8 @@ def rendered_sensor_problems(specs: list[RenderedSensorSpec], links: dict | set,
     seen = set(taken)
     for spec in specs:
         where = spec.where
-        if not spec.name:
-            problems.append(f"{where}: <sensor> has no name attribute")
-            continue
-        if spec.name in seen:
-            problems.append(f"{where}: a second sensor named '{spec.name}'")
+        if (problem := naming_problem(spec.name, where, seen)) is not None:
+            problems.append(problem)
             continue
         seen.add(spec.name)
         if spec.reference not in links:

@@ -18,6 +18,7 @@ that is not positive or absurd, a negative noise deviation, a ros2_control senso
 from __future__ import annotations
 
 import math
+from collections.abc import Container
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -204,6 +205,15 @@ def parse_noise(element: etree._Element, what: str) -> Noise:
     return Noise(kind, line=line, **numbers)
 
 
+def naming_problem(name: str, where: str, taken: Container[str]) -> str | None:
+    """Why a ``<sensor>`` cannot be told apart from the robot's others (no name, or a name already taken), or None."""
+    if not name:
+        return f"{where}: <sensor> has no name attribute"
+    if name in taken:
+        return f"{where}: a second sensor named '{name}'"
+    return None
+
+
 def read_sensor_basics(element: etree._Element, spec: Any, where: str, line: int | None) -> None:
     """What every ``<sensor>`` may carry, Gazebo's way: ``<update_rate>``, ``<always_on>`` and ``<pose>``,
     written onto ``spec`` (a body sensor's or a rendered sensor's); a bad value names the sensor and line."""
@@ -333,11 +343,8 @@ def sensor_problems(gazebo: list[SensorSpec], ros2_control: list[Ros2ControlSens
     parent_joint = {j.child: j for j in joints.values()}
     for spec in gazebo:
         where = sensor_where(spec.name, spec.line)
-        if not spec.name:
-            problems.append(f"{where}: <sensor> has no name attribute")
-            continue
-        if spec.name in by_name:
-            problems.append(f"{where}: a second sensor named '{spec.name}'")
+        if (problem := naming_problem(spec.name, where, by_name)) is not None:
+            problems.append(problem)
             continue
         if spec.type not in SENSOR_INTERFACES:
             problems.append(f"{where}: type '{spec.type}' is not one of {', '.join(SENSOR_INTERFACES)}")
