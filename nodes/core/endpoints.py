@@ -130,26 +130,30 @@ class Publisher:
         return twin
 
     def _publish_in_process(self, message: Any, payload: bytes | None, *, droppable: bool) -> None:
-        """Hand ``message`` (or, from ``publish_raw``, ``payload``) to this session's matching subscriptions
-        as the object itself, then to remote subscribers over Zenoh, encoding only if someone there listens."""
+        """Hand ``message`` (or, from ``publish_raw``, ``payload``) to remote subscribers over Zenoh, encoding it
+        only if someone there listens, then to this session's matching subscriptions as the object itself.
+
+        Remote first: a callback here may publish in turn (the controller manager answers a hardware state with
+        a command on the same thread), and other processes must see the state before its answer, as they do
+        when the two nodes are separate processes."""
         if self.node.closed:
             return
         local = self.local_subscriptions
-        if payload is None and any(s.wants_payload(self.msg_type) for s in local):
-            payload = msgs.encode(message)   # once for every subscriber that takes bytes
-        for subscription in local:
-            subscription.take_in_process(message, payload, self.key, self._source)
         seq = next(self._seq)
         mirror = self._mirror
         mirrored = mirror is not None and mirror.active
         remote = self._droppable_remote_twin() if droppable and self.reliable else self._remote_pub
-        if not (mirrored or remote.matching_status.matching):
-            return   # nobody outside this process listens: not even encoded
-        if payload is None:
-            payload = msgs.encode(message)
-        remote.put(payload, attachment=_ATTACHMENT.pack(seq, self._source))
-        if mirrored:
-            mirror.send(payload)
+        if mirrored or remote.matching_status.matching:
+            if payload is None:
+                payload = msgs.encode(message)
+            remote.put(payload, attachment=_ATTACHMENT.pack(seq, self._source))
+            if mirrored:
+                mirror.send(payload)
+        # else nobody outside this process listens: not even encoded
+        if payload is None and any(s.wants_payload(self.msg_type) for s in local):
+            payload = msgs.encode(message)   # once for every subscriber that takes bytes
+        for subscription in local:
+            subscription.take_in_process(message, payload, self.key, self._source)
 
     @property
     def has_subscribers(self) -> bool:
