@@ -175,3 +175,24 @@ def test_every_launch_file_with_a_simulator_takes_composed(name: str) -> None:
     assert container.exclusive_cpu == by_name["simulator"].exclusive_cpu
     assert {n.name for n in composed.nodes} | {"simulator", "controller_manager"} == \
         {n.name for n in separate.nodes} | {container.name}
+
+
+def test_the_container_loads_plugins_by_module_and_class_and_names_what_is_wrong() -> None:
+    from nodes.core.container import CompositionError, load_plugin, parse_composable
+    from nodes.core.lifecycle import LifecycleNode
+
+    assert load_plugin("nodes.core.lifecycle::LifecycleNode") is LifecycleNode
+    for plugin, fragment in (("nodes.core.lifecycle.LifecycleNode", "must look like python.module::NodeClass"),
+                             ("nodes.no_such_module::Node", "cannot import 'nodes.no_such_module'"),
+                             ("json::JSONDecoder", "has no Node subclass 'JSONDecoder'"),
+                             ("json::loads", "has no Node subclass 'loads'")):
+        with pytest.raises(CompositionError, match=fragment):
+            load_plugin(plugin)
+    loaded = parse_composable(json.dumps({"plugin": "nodes.core.lifecycle::LifecycleNode",
+                                          "argv": ["--name", "x", "--ns", "robot", "--remap", "a:=b"]}))
+    assert loaded.factory is LifecycleNode and (loaded.args.name, loaded.args.namespace) == ("x", "robot")
+    for text, fragment in (("{not json", "not JSON"), ('{"argv": []}', "must be {"),
+                           ('{"plugin": "nodes.core.lifecycle::LifecycleNode", "argv": ["--bogus"]}',
+                            "bad node arguments")):
+        with pytest.raises(CompositionError, match=fragment):
+            parse_composable(text)
