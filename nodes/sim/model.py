@@ -53,7 +53,12 @@ class Model:
     # -- the model as a whole ---------------------------------------------------------------------------
     def world_matrix(self) -> np.ndarray:
         root = self.skeleton.getRootBodyNode().getWorldTransform().matrix()
-        return root @ np.linalg.inv(self.root_offset)
+        offset = self.root_offset
+        if offset is not self.__dict__.get("_inverted"):   # root_offset is set once, after construction
+            self._inverse = None if np.array_equal(offset, np.eye(4)) else np.linalg.inv(offset)
+            self._inverted = offset
+        # sim/model_states asks for every model 100 times a simulated second: the inverse once, not per call
+        return root if self._inverse is None else root @ self._inverse
 
     def world_pose(self) -> Pose:
         return Pose.from_matrix(self.world_matrix())

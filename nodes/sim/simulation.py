@@ -45,6 +45,7 @@ class Simulation:
         self.step_count = 0                                  # physics steps since start / reset_simulation
         self.pushes = Pushes()                               # apply_link_wrench / apply_joint_effort
         self.rest = RestKeeper(world)                        # world models at rest sleep until touched
+        self._still_poses: dict[str, tuple[bytes, Pose]] = {}   # model_states: poses of models that cannot move
         self._com_velocity: dict[str, tuple[float, np.ndarray]] = {}  # namespace -> (time, CoM velocity)
         self._recent_contacts: dict[str, list[tuple[float, list]]] = {}  # namespace -> [(time, contacts)]
 
@@ -204,8 +205,20 @@ class Simulation:
             rows.append((GROUND_NAME, Pose(), np.zeros(3), np.zeros(3)))
         for name, entity in self.entities.items():
             linear, angular = entity.world_twist()
-            rows.append((name, entity.world_pose(), linear, angular))
+            rows.append((name, self._model_pose(name, entity), linear, angular))
         return rows
+
+    def _model_pose(self, name: str, entity: Model) -> Pose:
+        """``entity.world_pose()``; for a model that cannot move by itself (static, or asleep) the last Pose
+        again while its transform is the same (a world's furniture, 100 times a simulated second)."""
+        matrix = entity.world_matrix()
+        if entity.skeleton.isMobile():
+            return Pose.from_matrix(matrix)
+        key = matrix.tobytes()
+        cached = self._still_poses.get(name)
+        if cached is None or cached[0] != key:
+            cached = self._still_poses[name] = (key, Pose.from_matrix(matrix))
+        return cached[1]
 
     def link_states(self) -> list[tuple[str, Pose, np.ndarray, np.ndarray]]:
         """("model::link", pose, linear, angular) of every link of every model, in the world frame."""
