@@ -234,6 +234,7 @@ class Subscription:
         self._wake_at: float | None = None   # pulled: monotonic deadline of the wait in progress
         self._watchdog: threading.Condition | None = None   # pulled: wakes the watchdog thread (_watch)
         self._watchdog_idle = False
+        self._watching_until: float | None = None   # the deadline the watchdog thread sleeps until
         self.closed = False
         if pulled:
             self._sub = node.session.declare_subscriber(key, zenoh.handlers.RingChannel(backlog))
@@ -339,8 +340,11 @@ class Subscription:
             self._watchdog = threading.Condition()
             threading.Thread(target=self._watch, daemon=True, name=f"wait:{self.key}").start()
         with self._watchdog:
-            self._wake_at = time.monotonic() + timeout
-            if self._watchdog_idle:   # asleep without a deadline: give it this one (else it looks at its own)
+            self._wake_at = deadline = time.monotonic() + timeout
+            # asleep without a deadline, or until a later one (an earlier wait's, longer timeout): wake it to
+            # take this one; otherwise it looks at the new deadline when its own comes
+            watching = self._watching_until
+            if self._watchdog_idle or (watching is not None and deadline < watching):
                 self._watchdog.notify()
 
     def _watch(self) -> None:
@@ -360,7 +364,9 @@ class Subscription:
                         continue
                     remaining = deadline - time.monotonic()
                     if remaining > 0:
+                        self._watching_until = deadline
                         condition.wait(remaining)
+                        self._watching_until = None
                         continue
                     self._wake_at = None
                     self._wake_pub.put(b"", attachment=_WAKE)
