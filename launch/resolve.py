@@ -51,6 +51,18 @@ CONTAINER_PACKAGES = ("zenroid", "rclcpp_components")
 CONTAINER_EXECUTABLES = ("component_container",)
 
 
+def node_options(namespace: str, param_files: list[str], generated_params: Path | None,
+                 remaps: list[tuple[str, str]]) -> list[str]:
+    """A node's namespace, parameter files (the launch file's own, then the generated one) and remappings as
+    its command line spells them, for a process and for a node in a container alike."""
+    argv = ["--ns", namespace] if namespace else []
+    for param_file in [*param_files, *([str(generated_params)] if generated_params is not None else [])]:
+        argv += ["--params-file", param_file]
+    for src, dst in remaps:
+        argv += ["--remap", f"{src}:={dst}"]
+    return argv
+
+
 @dataclass
 class ComposedNodeSpec:
     """One node loaded into a container process, fully resolved."""
@@ -69,16 +81,7 @@ class ComposedNodeSpec:
 
     def node_argv(self, generated_params: Path | None) -> list[str]:
         """The node's own command line, as ``python -m MODULE`` would get it."""
-        argv = ["--name", self.name]
-        if self.namespace:
-            argv += ["--ns", self.namespace]
-        for param_file in self.param_files:
-            argv += ["--params-file", param_file]
-        if generated_params is not None:
-            argv += ["--params-file", str(generated_params)]
-        for src, dst in self.remaps:
-            argv += ["--remap", f"{src}:={dst}"]
-        return argv
+        return ["--name", self.name, *node_options(self.namespace, self.param_files, generated_params, self.remaps)]
 
     def describe(self) -> dict[str, Any]:
         out: dict[str, Any] = {"name": self.name, "namespace": self.namespace, "plugin": self.plugin}
@@ -134,15 +137,7 @@ class NodeSpec:
                 generated = (composed_params or {}).get(node.name)
                 argv += ["--composable", json.dumps({"plugin": node.plugin, "argv": node.node_argv(generated)})]
             return argv
-        if self.namespace:
-            argv += ["--ns", self.namespace]
-        for param_file in self.param_files:
-            argv += ["--params-file", param_file]
-        if generated_params is not None:
-            argv += ["--params-file", str(generated_params)]
-        for src, dst in self.remaps:
-            argv += ["--remap", f"{src}:={dst}"]
-        return argv + self.args
+        return argv + node_options(self.namespace, self.param_files, generated_params, self.remaps) + self.args
 
     def describe(self) -> dict[str, Any]:
         out: dict[str, Any] = {"name": self.name, "namespace": self.namespace}

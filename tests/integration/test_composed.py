@@ -11,7 +11,6 @@ Watched by a client that imports only zenoh and msgpack, on a free loopback port
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess
@@ -24,6 +23,7 @@ import pytest
 import zenoh
 
 from bench.common import ROOT, Launch, free_port
+from tests.integration.test_lockstep_main_job import call, client_session
 
 RECORD_UNTIL = 2.0   # sim s: the knee bend below starts at 0.5 s and takes 1 s
 # The input, sent while physics is paused and stamped to start at 0.5 s of sim time: it starts at the same step
@@ -36,21 +36,6 @@ KNEE_BEND = {"header": {"stamp": {"sec": 0, "nanosec": 500_000_000}},
 ACTIVE = ("joint_state_broadcaster", "joint_trajectory_controller")
 # the smallest main job: no rendered sensors (their broadcasters then fail to configure: expected), the bare ground
 QUICK = ("sensors:=false", "world:=empty.world")
-
-
-def client_session(port: int) -> zenoh.Session:
-    config = zenoh.Config()
-    config.insert_json5("mode", json.dumps("client"))
-    config.insert_json5("connect/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
-    config.insert_json5("scouting/multicast/enabled", "false")
-    return zenoh.open(config)
-
-
-def call(session: zenoh.Session, key: str, payload: dict, timeout: float = 5.0) -> dict | None:
-    for reply in session.get(key, payload=msgpack.packb(payload), timeout=timeout):
-        if reply.ok is not None:
-            return msgpack.unpackb(reply.ok.payload.to_bytes())
-    return None
 
 
 def controllers_active(session: zenoh.Session) -> bool:

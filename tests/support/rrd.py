@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import sys
 from collections import defaultdict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -59,6 +60,18 @@ def load(path: str | Path) -> dict[str, EntityData]:
     for entity in entities.values():
         entity.rows.sort(key=lambda r: r.get(SIM, -1.0))
     return dict(entities)
+
+
+def record(path: Path, body: Callable[[Any], None], application: str = "zenroid_test") -> dict[str, EntityData]:
+    """What ``body(recording)`` logs, through a real Rerun recording saved to ``path`` and read back."""
+    import rerun as rr  # noqa: PLC0415 - only the tests that record pay for it
+
+    recording = rr.RecordingStream(application)
+    recording.save(str(path))
+    body(recording)
+    recording.flush()
+    recording.disconnect()
+    return load(path)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -22,7 +22,7 @@ from nodes.viz.ratelimit import RateLimiter
 from nodes.viz.scene import WORLD_FRAME, RobotScene, frame_name, plot_groups
 from nodes.viz.scene import parse_model as parse_urdf
 from nodes.viz.sink import OutputPlan
-from tests.support.rrd import load
+from tests.support.rrd import record as record_rrd
 
 ROOT = Path(__file__).resolve().parents[2]
 HUMANOID = (ROOT / "robots" / "humanoid.urdf").read_text()
@@ -183,13 +183,7 @@ def test_frame_names() -> None:
 
 
 def record(tmp_path: Path, body) -> dict:
-    recording = rr.RecordingStream("test_viz")
-    path = tmp_path / "scene.rrd"
-    recording.save(str(path))
-    body(recording)
-    recording.flush()
-    recording.disconnect()
-    return load(path)
+    return record_rrd(tmp_path / "scene.rrd", body, "test_viz")
 
 
 def _strips(row: dict, rgba: int) -> list:

@@ -30,7 +30,7 @@ from nodes.viz.sensors import (
     sensor_part,
     to_world,
 )
-from tests.support.rrd import load
+from tests.support.rrd import record as record_rrd
 
 Image = msgs.get_type("sensor_msgs/msg/Image")
 CameraInfo = msgs.get_type("sensor_msgs/msg/CameraInfo")
@@ -249,13 +249,7 @@ LEG = """<robot name="leg">
 
 
 def record(tmp_path: Path, body) -> dict:
-    recording = rr.RecordingStream("test_viz_sensors")
-    path = tmp_path / "sensors.rrd"
-    recording.save(str(path))
-    body(recording)
-    recording.flush()
-    recording.disconnect()
-    return load(path)
+    return record_rrd(tmp_path / "sensors.rrd", body, "test_viz_sensors")
 
 
 def test_force_arrows_and_the_centre_of_pressure_are_in_the_robots_row(tmp_path: Path) -> None:

@@ -13,7 +13,7 @@ import rerun as rr
 import msgs
 from nodes.viz.blueprint import build_blueprint
 from nodes.viz.world import MESH_ENTITY, WORLD_ENTITY, WorldModels, WorldProblem, camera_eye, read_scene
-from tests.support.rrd import load
+from tests.support.rrd import record as record_rrd
 
 Scene = msgs.get_type("zenroid_msgs/msg/Scene")
 Pose = msgs.get_type("geometry_msgs/msg/Pose")
@@ -55,13 +55,7 @@ def scene(version: int = 1, **changes: Any) -> Any:
 
 
 def record(tmp_path: Path, body) -> dict:
-    recording = rr.RecordingStream("test_viz_world")
-    path = tmp_path / "world.rrd"
-    recording.save(str(path))
-    body(recording)
-    recording.flush()
-    recording.disconnect()
-    return load(path)
+    return record_rrd(tmp_path / "world.rrd", body, "test_viz_world")
 
 
 def test_the_scene_draws_world_models_only() -> None:
