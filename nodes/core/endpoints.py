@@ -113,20 +113,17 @@ class Publisher:
             return
         self.publish_raw(msgs.encode(msg))
 
-    def _droppable_twin(self) -> Any:
-        twin = self.__dict__.get("_drop_pub")
+    def _droppable_twin(self, *, remote_only: bool = False) -> Any:
+        """This key's publisher that drops under congestion (declared on first use); ``remote_only``: the
+        container's one, which leaves this session's own subscriptions to the in-process hand-off."""
+        name = "_remote_drop_pub" if remote_only else "_drop_pub"
+        twin = self.__dict__.get(name)
         if twin is None:
-            twin = self._drop_pub = self.node.session.declare_publisher(
+            twin = self.node.session.declare_publisher(
                 self.key, encoding=encoding_for(self.msg_type._type), congestion_control=zenoh.CongestionControl.DROP,
-                priority=self._priority, express=self._express)
-        return twin
-
-    def _droppable_remote_twin(self) -> Any:
-        twin = self.__dict__.get("_remote_drop_pub")
-        if twin is None:
-            twin = self._remote_drop_pub = self.node.session.declare_publisher(
-                self.key, encoding=encoding_for(self.msg_type._type), congestion_control=zenoh.CongestionControl.DROP,
-                priority=self._priority, express=self._express, allowed_destination=zenoh.Locality.REMOTE)
+                priority=self._priority, express=self._express,
+                allowed_destination=zenoh.Locality.REMOTE if remote_only else zenoh.Locality.ANY)
+            setattr(self, name, twin)
         return twin
 
     def _publish_in_process(self, message: Any, payload: bytes | None, *, droppable: bool) -> None:
@@ -142,7 +139,7 @@ class Publisher:
         seq = next(self._seq)
         mirror = self._mirror
         mirrored = mirror is not None and mirror.active
-        remote = self._droppable_remote_twin() if droppable and self.reliable else self._remote_pub
+        remote = self._droppable_twin(remote_only=True) if droppable and self.reliable else self._remote_pub
         if mirrored or remote.matching_status.matching:
             if payload is None:
                 payload = msgs.encode(message)
