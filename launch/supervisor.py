@@ -217,11 +217,9 @@ class Supervisor:
             if dep.state != "running":
                 return "waiting"
             composed = self.composed_full_names.get(target)
-            if composed is not None:   # a node in a container: up when it is on the graph itself
-                live = self.readiness is not None and self.readiness.is_alive(composed)
-            else:
-                live = self.readiness is not None and (
-                    self.readiness.is_alive(dep.spec.full_name) or self.readiness.is_alive(dep.spec.name))
+            # a node in a container: up when it is on the graph itself; a process: under either of its names
+            names = (composed,) if composed is not None else (dep.spec.full_name, dep.spec.name)
+            live = self.readiness is not None and any(self.readiness.is_alive(name) for name in names)
             if not live:
                 return "waiting"
         return "ready"

@@ -13,7 +13,6 @@ drops frames, never the physics).
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -50,7 +49,7 @@ class RenderFrames:
         self.max_outstanding = max_outstanding
         self.scene_pub = node.create_publisher(Scene, "/sim/scene", latched=True)
         self.frame_pub = node.create_publisher(RenderFrame, "/sim/render/frame")
-        self._done = threading.Lock()
+        # the renderer's answers are pulled by the physics thread, the only one that reads or writes these two
         self._last_done = -1
         self._sent: list[int] = []          # steps of frames sent in lockstep and not yet done
         # pulled: the physics thread takes the renderer's answers itself when it looks at them; delivered on a
@@ -118,28 +117,24 @@ class RenderFrames:
         frame = _pack_frame(stamp=msgs.time_map(t), step=step, scene_version=self.version,
                             poses=self.links.poses(), sensors=[s.key for s in due], lockstep=wait)
         if wait:
-            with self._done:
-                self._sent.append(step)
+            self._sent.append(step)
         self.frame_pub.publish_raw(frame)
 
     def _on_done(self, msg) -> None:   # the physics thread (pulled)
-        with self._done:
-            self._last_done = max(self._last_done, int(msg.step))
-            self._sent = [s for s in self._sent if s > self._last_done]
-            self._renderer_gone = False   # a renderer answers (again): lockstep waits for it
+        self._last_done = max(self._last_done, int(msg.step))
+        self._sent = [s for s in self._sent if s > self._last_done]
+        self._renderer_gone = False   # a renderer answers (again): lockstep waits for it
 
     def _wait_for_renderer(self) -> None:
         deadline = time.monotonic() + DONE_TIMEOUT_S
         while True:
-            with self._done:
-                if len(self._sent) < self.max_outstanding:
-                    return
+            if len(self._sent) < self.max_outstanding:
+                return
             if time.monotonic() > deadline:
                 self.node.logger.warn(f"sim/render/done: the renderer answered no frame for {DONE_TIMEOUT_S:g} s; "
                                       "lockstep steps on without waiting for it")
                 self._renderer_gone = True
-                with self._done:
-                    self._sent.clear()
+                self._sent.clear()
                 return
             # block (without the GIL) until the renderer answers, then serve what queued meanwhile
             self._done_sub.wait(0.002)
