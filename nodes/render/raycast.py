@@ -109,7 +109,6 @@ class _Group:
             center = (corners.min(axis=0) + corners.max(axis=0)) / 2
             self.centers[k] = center
             self.radii[k] = float(np.sqrt(((corners - center) ** 2).sum(axis=1).max()))
-        self.in_scene = np.ones(len(slices), dtype=bool)     # the slices the built scene holds
 
     @property
     def empty(self) -> bool:
@@ -133,7 +132,7 @@ class _Group:
         mine = poses[self.links]
         if self.built_with is not None and wanted == self.built_slices and np.array_equal(mine, self.built_with):
             return
-        self.built_with, self.built_slices, self.in_scene = mine.copy(), wanted, include.copy()
+        self.built_with, self.built_slices = mine.copy(), wanted
         if not include.any():
             self.scene = None   # nothing of this group in view: the cast skips it
             return
