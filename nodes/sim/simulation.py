@@ -46,7 +46,7 @@ class Simulation:
         self.pushes = Pushes()                               # apply_link_wrench / apply_joint_effort
         self.rest = RestKeeper(world)                        # world models at rest sleep until touched
         self._still_poses: dict[str, tuple[bytes, Pose]] = {}   # model_states: poses of models that cannot move
-        self._com_velocity: dict[str, tuple[float, np.ndarray]] = {}  # namespace -> (time, CoM velocity)
+        self._com_velocity: dict[str, tuple[float, list[float]]] = {}  # namespace -> (time, CoM velocity)
         self._recent_contacts: dict[str, list[tuple[float, list]]] = {}  # namespace -> [(time, contacts)]
 
     @property
@@ -124,6 +124,7 @@ class Simulation:
         self.pushes.drop_model(name)
         self.rest.forget(name)
         self.rest.changed()
+        self._still_poses.pop(name, None)
         self.hardware.pop(entity.namespace, None)
         self.sensors.pop(entity.namespace, None)
         self._com_velocity.pop(entity.namespace, None)
