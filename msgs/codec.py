@@ -72,11 +72,17 @@ def _allowing_nonfinite(limits: Limits) -> Limits:
     return dataclasses.replace(limits, allow_nonfinite=True)
 
 
+def _limits_for(type_name: str, limits: Limits) -> Limits:
+    """``limits``, allowing non-finite numbers for the types that carry them as values (NONFINITE_VALUES)."""
+    if type_name in NONFINITE_VALUES and not limits.allow_nonfinite:
+        return _allowing_nonfinite(limits)
+    return limits
+
+
 def decode(cls: Any, data: bytes | bytearray | memoryview, limits: Limits = DEFAULT_LIMITS) -> Any:
     """Decode and validate ``data`` as a ``cls`` message; raises ``DecodeError``."""
     type_name = cls._type
-    if type_name in NONFINITE_VALUES and not limits.allow_nonfinite:
-        limits = _allowing_nonfinite(limits)
+    limits = _limits_for(type_name, limits)
     size = len(data)
     if size > limits.max_message_bytes:
         raise DecodeError(type_name, "", f"message is {size} bytes, over the {limits.max_message_bytes}-byte limit")
@@ -133,7 +139,9 @@ def from_dict(cls: Any, obj: Any, limits: Limits = DEFAULT_LIMITS) -> Any:
 
     The generated decoder accepts valid data fast; whatever it declines goes through the precise
     decoder below, which accepts the same inputs and names the field and the reason when it rejects.
+    The same values as ``decode`` are allowed (a LaserScan's infinities too: a bag's scans play back).
     """
+    limits = _limits_for(cls._type, limits)
     try:
         return compiled.decoder(cls._type, limits.max_array_length, limits.max_string_length,
                                 limits.allow_nonfinite)(obj)

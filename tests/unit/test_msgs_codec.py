@@ -199,6 +199,10 @@ def test_a_laser_scan_carries_rep_117_infinities_and_other_types_still_refuse_th
     assert scan.ranges == [1.5, math.inf, -math.inf]
     with pytest.raises(DecodeError, match="angular_velocity.x: not a finite number"):
         decode(Imu, packed({"angular_velocity": {"x": math.inf}}))
+    # from plain data too (a bag's CDR scans, played back): the same values, the same refusals
+    assert msgs.from_dict(LaserScan, {"ranges": [1.5, math.inf, -math.inf]}).ranges == [1.5, math.inf, -math.inf]
+    with pytest.raises(DecodeError, match="angular_velocity.x: not a finite number"):
+        msgs.from_dict(Imu, {"angular_velocity": {"x": math.inf}})
 
 
 def test_an_image_larger_than_the_array_limit_decodes_in_every_path() -> None:
