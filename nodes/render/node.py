@@ -6,8 +6,10 @@ It reads the simulator's ``sim/scene`` (every model's shapes, and each robot's U
 with ``nodes.urdf.rendered_sensors``) and its ``sim/render/frame``s (link poses at an instant, and the sensors
 due then), and answers each frame with ``sim/render/done``. In lockstep it draws every frame in order; in
 realtime the newest frame of each sensor, so a renderer that falls behind drops pictures, not physics time.
-A stream nobody subscribes to is not drawn (as gazebo_ros' lazy plugins). Noise comes from a generator seeded
-by (``seed``, sensor, step): the same run gives the same bytes.
+A stream nobody subscribes to is not drawn (as gazebo_ros' lazy plugins), and every answer names the sensors
+somebody subscribes to (unprompted too, within ``WANTED_POLL_S`` of a change), so that the simulator sends
+frames for those only. Noise comes from a generator seeded by (``seed``, sensor, step): the same run gives the
+same bytes.
 """
 
 from __future__ import annotations
@@ -40,6 +42,8 @@ MESSAGE_TYPES = {
 }
 KINDS = {1: "box", 2: "cylinder", 3: "sphere", 4: "mesh"}
 FRAME_BACKLOG = 64   # frames waiting to be drawn (lockstep keeps at most a few in flight)
+WANTED_POLL_S = 0.01   # wall s between looks at which sensors have a subscriber (told unprompted on a change)
+WANTED_REPEAT_S = 1.0  # ... and told again this often, changed or not (a simulator that started since)
 
 
 @dataclass
@@ -87,6 +91,9 @@ class RendererNode(Node):
                                                backlog=FRAME_BACKLOG)
         self._pending: list[Any] = []
         self._next_resync = 0.0
+        self._last_step = 0
+        self._told: list[str] | None = None   # the wanted sensors last sent to the simulator
+        self._next_look = self._next_tell = 0.0
         latched = self.fetch_latched(Scene, "/sim/scene", timeout=2.0)
         if latched is not None:
             self._on_scene(latched)
@@ -242,12 +249,30 @@ class RendererNode(Node):
             yield "scan", payloads.laser_scan(stamp, frame_id, ray, scan.ranges[middle], scan.intensities[middle],
                                               1.0 / spec.update_rate)
 
+    def wanted(self) -> list[str]:
+        """The sensors with a subscriber to one of their outputs now."""
+        return sorted(k for k, sensor in self.sensors.items() if any(p.has_subscribers for p in sensor.publishers.values()))
+
+    def _answer(self, step: int, published: int) -> None:
+        self._told = self.wanted()
+        self._next_tell = time.monotonic() + WANTED_REPEAT_S
+        self.done_pub.publish(RenderDone(step=step, published=published, wanted=self._told))
+
+    def _tell_wanted_if_changed(self) -> None:
+        now = time.monotonic()
+        if now < self._next_look:
+            return
+        self._next_look = now + WANTED_POLL_S
+        if now >= self._next_tell or self.wanted() != self._told:
+            self._answer(self._last_step, 0)
+
     def spin(self) -> None:
         """Take frames as they come; draw; answer each with sim/render/done."""
         while self.ok:
             if not self._pending:
-                self.frames.wait(0.05)
+                self.frames.wait(WANTED_POLL_S)
             self.spin_once(0.0)
+            self._tell_wanted_if_changed()
             for frame, keys in self._next_jobs():
                 try:
                     published = self.render_frame(frame, keys)
@@ -257,4 +282,5 @@ class RendererNode(Node):
                 except Exception as exc:  # noqa: BLE001 - one bad frame must not end the sensors
                     self.logger.error(f"frame at step {frame.step}: {type(exc).__name__}: {exc}")
                     published = 0
-                self.done_pub.publish(RenderDone(step=int(frame.step), published=published))
+                self._last_step = int(frame.step)
+                self._answer(self._last_step, published)

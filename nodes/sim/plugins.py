@@ -10,6 +10,7 @@ its sensor's reading at the sensor's rate, on the plugin's topic, as gazebo_plug
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -40,6 +41,10 @@ def _imu_covariances(spec) -> tuple[list[float], list[float]]:
     return diagonal("angular_velocity"), diagonal("linear_acceleration")
 
 
+def _has_subscribers(publisher: Any) -> Callable[[], bool]:
+    return lambda: publisher.has_subscribers
+
+
 def _vector(values) -> Any:
     x, y, z = (float(v) for v in values)
     return _vector3(x=x, y=y, z=z)
@@ -60,6 +65,8 @@ class SensorPlugins:
             frame = plugin.frame_name or (sensor.spec.link if sensor.spec.type != "contact" else "world")
             extra = _imu_covariances(sensor.spec) if sensor.spec.type == "imu" else None
             self.entries.append((sensor, publisher, msgs.packer(type_name), frame, extra))
+            if isinstance(sensor, ContactSensor):   # its plugin is its only reader
+                sensor.wanted = _has_subscribers(publisher)
 
     @property
     def publishers(self) -> list[Any]:
@@ -68,7 +75,7 @@ class SensorPlugins:
     def publish(self, sim_time: float) -> None:
         """Each plugin whose sensor was read at ``sim_time`` (sensors slower than the control rate skip)."""
         for sensor, publisher, pack, frame, extra in self.entries:
-            if sensor.stamp != sim_time:
+            if sensor.stamp != sim_time or not publisher.has_subscribers:   # nobody listens: nothing is built
                 continue
             header = _header(stamp=msgs.time_map(sim_time), frame_id=frame)
             kind = sensor.spec.type

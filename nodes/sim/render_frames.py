@@ -7,6 +7,10 @@ picture, except in lockstep.
 Lockstep: every frame is rendered, in order, from its own state, so two runs give the same images bit for bit.
 The simulator lets at most ``max_outstanding`` frames wait for the renderer's ``sim/render/done`` before it
 steps on, so the renderer's queue stays bounded and a lockstep run goes as fast as the slower of the two.
+
+A frame goes out only for the sensors somebody watches: the renderer's answers (and its unprompted ones when
+that changes) name the sensors with a subscriber, as gazebo_ros' camera plugins render only while subscribed.
+A picture nobody reads costs neither the renderer nor the physics (a frame's link poses cost ~0.3 ms).
 Realtime: frames go out on time and the renderer draws the newest it has for each sensor (a slow renderer
 drops frames, never the physics).
 """
@@ -52,6 +56,7 @@ class RenderFrames:
         # the renderer's answers are pulled by the physics thread, the only one that reads or writes these two
         self._last_done = -1
         self._sent: list[int] = []          # steps of frames sent in lockstep and not yet done
+        self._wanted: set[str] | None = None   # sensors the renderer draws for someone (None: not told yet)
         # pulled: the physics thread takes the renderer's answers itself when it looks at them; delivered on a
         # Zenoh thread, each of them (150 a second in lockstep) took the GIL from the physics thread
         self._done_sub = node.create_subscription(RenderDone, "/sim/render/done", self._on_done, pulled=True)
@@ -111,6 +116,11 @@ class RenderFrames:
             return
         self._since_no_renderer = None
         self._done_sub.take_pending()
+        wanted = self._wanted
+        if wanted is not None:
+            due = [s for s in due if s.key in wanted]
+            if not due:
+                return   # nobody subscribes to these pictures: no frame
         wait = lockstep and not self._renderer_gone
         if wait:
             self._wait_for_renderer()
@@ -122,6 +132,7 @@ class RenderFrames:
 
     def _on_done(self, msg) -> None:   # the physics thread (pulled)
         self._last_done = max(self._last_done, int(msg.step))
+        self._wanted = set(msg.wanted)
         self._sent = [s for s in self._sent if s > self._last_done]
         self._renderer_gone = False   # a renderer answers (again): lockstep waits for it
 
@@ -141,6 +152,7 @@ class RenderFrames:
             self.idle(0.0)
 
     def _no_renderer(self) -> None:
+        self._wanted = None   # the next renderer says what it draws
         now = time.monotonic()
         if self._since_no_renderer is None:
             self._since_no_renderer = now

@@ -121,6 +121,9 @@ class _NoiseModel:
 
 class _Sensor:
     channels: tuple[str, ...] = ()
+    # Whether anyone reads this sensor's measurement now (None: always). A contact sensor is read by its bumper
+    # plugin only; the plugins set this to "its topic has a subscriber", so nobody listening costs no contact walk.
+    wanted: Callable[[], bool] | None = None
 
     def __init__(self, spec: SensorSpec, skeleton: dart.dynamics.Skeleton, seed: int, entity: str,
                  probes: _Probes | None = None) -> None:
@@ -146,6 +149,9 @@ class _Sensor:
         """As at spawn (a reset simulation replays the same noise)."""
         self.stamp = math.nan
         self.noise = _NoiseModel(self.channels, self.spec.noise, *self._noise_key)
+
+    def skip(self) -> None:
+        """Due but unread (``wanted`` says so): left as it was."""
 
     def due(self, t: float) -> bool:
         return not (self.stamp <= t) or t - self.stamp >= self.due_after
@@ -447,6 +453,11 @@ class ContactSensor(_Sensor):
         super().reset()
         self._com_velocity = None
 
+    def skip(self) -> None:
+        """Due but unread (``wanted`` says so): no reading; the next one starts its average afresh."""
+        self.contacts = []
+        self._com_velocity = None
+
     def _contact_force(self, t: float, gravity: Sequence[float]) -> Vector:
         """The world force on the link from everything it touches."""
         body = self.body
@@ -517,7 +528,11 @@ class SensorSuite:
         for sensor in self.sensors:
             stamp = sensor.stamp
             if not (stamp <= t) or t - stamp >= sensor.due_after:   # _Sensor.due, inline: it runs at 1 kHz
-                sensor.sample(t, gravity)
+                wanted = sensor.wanted
+                if wanted is None or wanted():
+                    sensor.sample(t, gravity)
+                else:
+                    sensor.skip()
 
     def state_values(self) -> list[float]:
         """The ros2_control state interfaces of every sensor, in ``table()`` order."""

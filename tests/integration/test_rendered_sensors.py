@@ -238,3 +238,45 @@ def test_images_and_scans_recorded_by_zenroid_bag_are_read_by_rosbags_and_played
         assert played[-1]["data"] == bytes(image.data)
     finally:
         node.destroy()
+
+
+def test_frames_go_out_only_for_the_sensors_somebody_subscribes_to(processes, router):
+    """Nobody subscribes to a picture: the simulator sends the renderer no frame (a frame's link poses cost the
+    physics thread ~0.3 ms). A subscriber to the scan: frames for the laser alone, and scans at its rate; gone
+    again: no frames."""
+    sim = start_sim(processes, "world:=empty.world", "mode:=lockstep", "paused:=true",
+                    "entities:=[{name: humanoid, file: humanoid, z: 0.93}]")
+    renderer = processes.start("-m", "nodes.render", name="renderer")
+    node = Node("rendered_on_demand_test", connect=[router])
+    frames: list[list[str]] = []
+    scans: list[float] = []
+    node.create_subscription(None, "/sim/render/frame", lambda p: frames.append(msgpack.unpackb(p)["sensors"]),
+                             inline=True, raw=True)
+    try:
+        wait_ready(node, processes, sim)
+        wait_until(lambda: "sensors humanoid::camera" in processes.output(renderer), timeout=60,
+                   message="the renderer's scene with the sensors")
+        step(node, 200)   # the renderer's first answer tells the simulator that nobody watches
+        time.sleep(0.3)
+        frames.clear()
+        step(node, 500)
+        time.sleep(0.3)
+        assert frames == []
+        scan_sub = node.create_subscription(None, "/humanoid/scan", lambda p: scans.append(stamp(msgpack.unpackb(p))),
+                                            inline=True, raw=True)
+        time.sleep(0.5)   # the renderer notices the subscriber and says so (within ~10 ms of Zenoh's matching)
+        step(node, 500)   # 0.5 s of sim time: the laser's 20 Hz gives 10 scans
+        wait_until(lambda: len(scans) >= 10, timeout=30, message="ten scans")
+        assert frames and all(sensors == ["humanoid::laser"] for sensors in frames), frames[:5]
+        assert len(frames) == 10 and len(scans) == 10, (len(frames), len(scans))
+        node.destroy_entity(scan_sub)
+        time.sleep(0.5)
+        frames.clear()
+        step(node, 500)
+        time.sleep(0.3)
+        assert frames == []
+    except BaseException:
+        print("--- simulator:\n" + processes.output(sim)[-3000:] + "\n--- renderer:\n" + processes.output(renderer)[-3000:])
+        raise
+    finally:
+        node.destroy()

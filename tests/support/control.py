@@ -45,6 +45,7 @@ class FakePublisher:
         self.topic = topic
         self.msg_type = msg_type
         self.messages: list[Any] = []
+        self.has_subscribers = True   # as the manager's publishers say (a test sets False: nobody listens)
 
     def publish(self, msg: Any) -> None:
         self.messages.append(msg)

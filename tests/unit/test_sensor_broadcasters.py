@@ -123,6 +123,20 @@ def test_no_message_before_the_first_state_frame():
     assert rig.published("left_foot_ft_broadcaster", "wrench") == []
 
 
+def test_nothing_is_built_while_nobody_subscribes_and_the_next_cycle_publishes_again():
+    rig = Rig()
+    rig.spawn("imu_sensor_broadcaster", "left_foot_ft_broadcaster")
+    imu = rig.contexts["imu_sensor_broadcaster"].publishers["imu_sensor_broadcaster/imu"]
+    wrench = rig.contexts["left_foot_ft_broadcaster"].publishers["left_foot_ft_broadcaster/wrench"]
+    imu.has_subscribers = wrench.has_subscribers = False
+    rig.cycle(1.0)
+    assert imu.messages == [] and wrench.messages == []
+    imu.has_subscribers = wrench.has_subscribers = True   # e.g. `zenroid topic echo` starts
+    rig.cycle(1.01)
+    assert len(imu.messages) == 1 and len(wrench.messages) == 1
+    assert imu.messages[0].header.stamp.nanosec == 10_000_000
+
+
 @pytest.mark.parametrize(("name", "reason"), [
     ("lost_imu_broadcaster", "parameter 'sensor_name': 'chest_imu' is not a sensor of the hardware"),
     ("wrong_type_broadcaster", "'left_foot_ft' is a force_torque sensor, not imu"),

@@ -72,6 +72,8 @@ class ForceTorqueSensorBroadcaster(SensorBroadcaster):
         self._pub = self.context.create_publisher(WrenchStamped, "~/wrench")
 
     def update(self, time: float, period: float) -> None:
+        if not self._pub.has_subscribers:   # a message nobody reads is not even built (unlike rclcpp)
+            return
         raw = self.sensor.get_wrench()
         if any(v != v for v in raw):   # NaN: no state has arrived yet
             return

@@ -50,6 +50,8 @@ class IMUSensorBroadcaster(SensorBroadcaster):
                              list(p.static_covariance_linear_acceleration))
 
     def update(self, time: float, period: float) -> None:
+        if not self._pub.has_subscribers:   # a message nobody reads is not even built (unlike rclcpp)
+            return
         qx, qy, qz, qw, wx, wy, wz, ax, ay, az = self.imu.get_values()
         if qw != qw:   # NaN: no state has arrived yet
             return
