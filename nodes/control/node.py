@@ -288,7 +288,7 @@ class ControllerManagerNode(Node):
         # the simulator says it is paused (no frames, but there): not a lost link
         self.create_subscription(HardwareHeartbeat, "hardware/heartbeat", self._on_heartbeat, inline=True)
         self.create_subscription(HardwareState, "hardware/state", self._on_state, inline=True, raw=True,
-                                 with_source=True)
+                                 with_source=True, objects=True)
         self.create_service(ListControllers, "~/list_controllers", self._srv_list)
         self.create_service(LoadController, "~/load_controller", self._srv_load)
         self.create_service(ConfigureController, "~/configure_controller", self._srv_configure)
@@ -343,14 +343,17 @@ class ControllerManagerNode(Node):
         return NodeControllerContext(self, name)
 
     # --- hardware loop (Zenoh thread) -------------------------------------------------------------------
-    def _on_state(self, payload: bytes, source: bytes | None = None) -> None:
+    def _on_state(self, payload: bytes | Any, source: bytes | None = None) -> None:
         started = time.perf_counter()
-        try:
-            state = msgs.decode(HardwareState, payload)   # validated at the trust boundary
-        except msgs.DecodeError as exc:   # a malformed frame is dropped, the loop lives on
-            self._bad_frames += 1
-            self.logger.warn_throttle(1.0, f"dropped a malformed hardware/state frame: {exc}")
-            return
+        if isinstance(payload, bytes):
+            try:
+                state = msgs.decode(HardwareState, payload)   # validated at the trust boundary
+            except msgs.DecodeError as exc:   # a malformed frame is dropped, the loop lives on
+                self._bad_frames += 1
+                self.logger.warn_throttle(1.0, f"dropped a malformed hardware/state frame: {exc}")
+                return
+        else:
+            state = payload   # a composed simulator's frame, built in this process
         if not self._state_sender.admit(source, time.monotonic()):
             self.logger.warn_throttle(
                 1.0, f"hardware/state: ignored {self._state_sender.refused} frame(s) from "
@@ -394,9 +397,13 @@ class ControllerManagerNode(Node):
             cmd_names, cmd_kinds, cmd_values = manager.command()
             self._last_state_wall = time.monotonic()
         self._cycle_since = None
-        self._cmd_pub.publish_raw(_pack_command(step=step, update_rate=self.update_rate, name=cmd_names,
-                                                interface=cmd_kinds, value=cmd_values),
-                                  droppable=self.realtime_hardware)
+        if self._cmd_pub.local_subscriptions:   # composed: the simulator takes the object itself
+            self._cmd_pub.publish(HardwareCommand(step=step, update_rate=self.update_rate, name=cmd_names,
+                                                  interface=cmd_kinds, value=cmd_values))
+        else:
+            self._cmd_pub.publish_raw(_pack_command(step=step, update_rate=self.update_rate, name=cmd_names,
+                                                    interface=cmd_kinds, value=cmd_values),
+                                      droppable=self.realtime_hardware)
         deferred, self.deferred_publications = self.deferred_publications, None
         send_held_back(deferred or (), self.logger)
         self._cycles += 1

@@ -201,6 +201,10 @@ class Subscription:
     Zenoh keeps them in its own ring buffer (the newest ``backlog``), so a fast topic such as a 1 kHz
     ``joint_states`` costs a consumer that only needs 50 updates a second 50 wake-ups, not 1000.
 
+    ``objects=True`` (with ``raw``): in a container, a message another node of the process published as an
+    object reaches the callback as that object, built by trusted code and neither encoded nor decoded (the
+    hardware frames between a composed simulator and controller manager); from Zenoh, bytes as ``raw``.
+
     ``pulled=True``: no thread delivers anything. Messages wait in Zenoh's ring buffer (the newest
     ``backlog``) until the owner's thread takes them with ``take_pending()`` or ``wait(timeout)``, and the
     callback runs there. For a thread that holds the GIL for long stretches (the simulator's physics, in
@@ -210,7 +214,8 @@ class Subscription:
 
     def __init__(self, node: NodeRuntime, msg_type: Any, key: str, callback: Callable[..., None], *,
                  inline: bool = False, raw: bool = False, with_key: bool = False, with_source: bool = False,
-                 max_rate: float | None = None, backlog: int = 256, pulled: bool = False) -> None:
+                 max_rate: float | None = None, backlog: int = 256, pulled: bool = False,
+                 objects: bool = False) -> None:
         if not callable(callback):
             raise TypeError(f"the subscription to '{key}' needs a callback")
         self.node = node
@@ -218,6 +223,7 @@ class Subscription:
         self.key = key
         self.callback = callback
         self.raw = raw
+        self.objects = objects and raw and msg_type is not None
         self.inline = inline
         self.with_key = with_key  # callback(msg, key): for wildcard keys ("*/joint_states")
         # callback(..., source): the sending publisher's 16-byte id from the attachment (None without one),
@@ -254,6 +260,8 @@ class Subscription:
     def wants_payload(self, published_type: Any) -> bool:
         """Does an in-process message of ``published_type`` reach this callback as bytes (or need decoding
         into another class)?"""
+        if self.objects and published_type._type == self.msg_type._type:
+            return False
         return self.raw or self.msg_type is None or self.msg_type._type != published_type._type
 
     def take_in_process(self, message: Any, payload: bytes | None, key: str, source: bytes) -> None:
@@ -261,8 +269,10 @@ class Subscription:
         when the types agree (zero copy), the publisher's bytes for a raw callback, else decoded from them."""
         if self.closed:
             return
-        if self.raw or self.msg_type is None:
-            value: Any = payload
+        if self.objects and message is not None and message._type == self.msg_type._type:
+            value: Any = message
+        elif self.raw or self.msg_type is None:
+            value = payload
         elif message is not None and message._type == self.msg_type._type:
             value = message
         else:

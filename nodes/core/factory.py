@@ -36,10 +36,10 @@ class EndpointFactory:
 
     def subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *, inline: bool,
                      raw: bool, with_key: bool, max_rate: float | None, with_source: bool = False,
-                     pulled: bool = False, backlog: int = 256) -> Subscription:
+                     pulled: bool = False, backlog: int = 256, objects: bool = False) -> Subscription:
         return self._keep(Subscription(self._runtime, msg_type, self._resolve(topic, wildcards=True), callback,
                                        inline=inline, raw=raw, with_key=with_key, with_source=with_source,
-                                       max_rate=max_rate, pulled=pulled, backlog=backlog))
+                                       max_rate=max_rate, pulled=pulled, backlog=backlog, objects=objects))
 
     def service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *, inline: bool) -> ServiceServer:
         return self._keep(ServiceServer(self._runtime, srv_type, self._resolve(name), handler, inline=inline))

@@ -181,15 +181,16 @@ class Node:
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *,
                             inline: bool = False, raw: bool = False, with_key: bool = False,
                             with_source: bool = False, max_rate: float | None = None,
-                            pulled: bool = False, backlog: int = 256) -> Subscription:
+                            pulled: bool = False, backlog: int = 256, objects: bool = False) -> Subscription:
         """``with_key=True`` calls ``callback(msg, key)`` (useful with wildcards like ``"/*/joint_states"``);
         ``with_source=True`` adds the sending publisher's id (bytes, or None) as the last argument;
         ``max_rate`` (Hz) batches a fast topic: every message still arrives, at most that many wake-ups a second;
         ``pulled=True``: messages wait (the newest ``backlog``) until this node's thread takes them with the
-        subscription's ``take_pending()`` or ``wait(timeout)``, and the callback runs there."""
+        subscription's ``take_pending()`` or ``wait(timeout)``, and the callback runs there; ``objects=True``
+        (with ``raw``): in a container, what a node of the process published as an object comes as that object."""
         return self._endpoints.subscription(msg_type, topic, callback, inline=inline, raw=raw, with_key=with_key,
                                             with_source=with_source, max_rate=max_rate, pulled=pulled,
-                                            backlog=backlog)
+                                            backlog=backlog, objects=objects)
 
     def create_service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *,
                        inline: bool = False) -> ServiceServer:

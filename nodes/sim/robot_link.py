@@ -32,6 +32,7 @@ _COMMAND_LIMITS = msgs.Limits(allow_nonfinite=True)
 _pack_state = msgs.packer("zenroid_msgs/msg/HardwareState")
 _pack_humanoid_state = msgs.packer("humanoid_msgs/msg/HumanoidState")
 _pack_heartbeat = msgs.packer("zenroid_msgs/msg/HardwareHeartbeat")
+_Time = msgs.get_type("builtin_interfaces/msg/Time")
 _header = msgs.builder("std_msgs/msg/Header")
 _point = msgs.builder("geometry_msgs/msg/Point")
 
@@ -41,8 +42,11 @@ Command = HardwareCommand   # a decoded zenroid_msgs/HardwareCommand
 COMMAND_BACKLOG = 64
 
 
-def parse_command(payload: bytes) -> Any:
-    """Decode a HardwareCommand (once per control period); raises CommandError naming the field."""
+def parse_command(payload: bytes | Any) -> Any:
+    """Decode a HardwareCommand (once per control period); raises CommandError naming the field. A composed
+    controller manager's command comes as the object it built (``objects=True``): taken as it is."""
+    if not isinstance(payload, bytes):
+        return payload
     try:
         return msgs.decode(HardwareCommand, payload, _COMMAND_LIMITS)
     except msgs.DecodeError as exc:
@@ -80,7 +84,7 @@ class RobotLink:
         # newest_command), which holds the GIL while DART steps: a delivering thread would wait for it
         self.command_sub = node.create_subscription(HardwareCommand, f"{ns}/hardware/command", self._on_command,
                                                     raw=True, with_source=True, pulled=True,
-                                                    backlog=COMMAND_BACKLOG)
+                                                    backlog=COMMAND_BACKLOG, objects=True)
         self.info_srv = node.create_service(GetHardwareInfo, f"{ns}/hardware/info", self._on_info)
         # gazebo_ros sensor plugins (IMU, force/torque, bumper): published from here, at the sensor's rate
         self.plugins = SensorPlugins(node, self.sensors, self.namespace)
@@ -137,10 +141,14 @@ class RobotLink:
     # -- hardware frames --------------------------------------------------------------------------------
     def publish_state(self, step: int, sim_time: float) -> None:
         hw = self.hardware
-        self.state_pub.publish_raw(_pack_state(
-            step=step, stamp=msgs.time_map(sim_time), name=hw.names, position=hw.positions().tolist(),
-            velocity=hw.velocities().tolist(), effort=hw.efforts().tolist(),
-            sensor_values=self.sensors.state_values()), droppable=self.sim.mode == "realtime")
+        fields = dict(step=step, name=hw.names, position=hw.positions().tolist(), velocity=hw.velocities().tolist(),
+                      effort=hw.efforts().tolist(), sensor_values=self.sensors.state_values())
+        if self.state_pub.local_subscriptions:
+            # a controller manager in this process (composed): the frame as an object, never encoded for it
+            self.state_pub.publish(HardwareState(stamp=_Time(**msgs.time_map(sim_time)), **fields))
+        else:
+            self.state_pub.publish_raw(_pack_state(stamp=msgs.time_map(sim_time), **fields),
+                                       droppable=self.sim.mode == "realtime")
         self._last_state_step = step
 
     def publish_plugins(self, sim_time: float) -> None:

@@ -75,6 +75,32 @@ def test_a_message_reaches_its_own_session_in_process_and_other_sessions_over_ze
             node.destroy()
 
 
+def test_a_raw_subscription_taking_objects_gets_the_object_in_process_and_bytes_from_outside(
+        router: str, container_session: object) -> None:
+    """``objects=True`` (the composed simulator's and controller manager's hardware frames): a message published
+    as an object by a node of the same process arrives as that object, neither encoded nor decoded; raw bytes
+    published in-process, and everything from another process, arrive as bytes to check as usual."""
+    talker = Node("talker", session=container_session)
+    listener = Node("listener", session=container_session)
+    outside = Node("outside", connect=[router])
+    try:
+        got: list[object] = []
+        listener.create_subscription(JointState, "frames", got.append, raw=True, objects=True, inline=True)
+        pub = talker.create_publisher(JointState, "frames")
+        msg = state(1.5)
+        pub.publish(msg)
+        assert got == [msg] and got[0] is msg
+        pub.publish_raw(b"\x80")
+        assert got[1] == b"\x80"
+        other = outside.create_publisher(JointState, "frames")
+        wait_until(lambda: other.publish(state(2.0)) or len(got) > 2, 10, message="a frame from another process")
+        assert isinstance(got[2], bytes)
+    finally:
+        outside.destroy()
+        listener.destroy()
+        talker.destroy()
+
+
 def test_a_pulled_subscription_waiting_wakes_for_an_in_process_message(container_session: object) -> None:
     talker = Node("talker", session=container_session)
     stepper = Node("stepper", session=container_session)
