@@ -399,7 +399,8 @@ class ControllerManagerNode(Node):
         self._cycle_since = None
         if self._cmd_pub.local_subscriptions:   # composed: the simulator takes the object itself
             self._cmd_pub.publish(HardwareCommand(step=step, update_rate=self.update_rate, name=cmd_names,
-                                                  interface=cmd_kinds, value=cmd_values))
+                                                  interface=cmd_kinds, value=cmd_values),
+                                  droppable=self.realtime_hardware)
         else:
             self._cmd_pub.publish_raw(_pack_command(step=step, update_rate=self.update_rate, name=cmd_names,
                                                     interface=cmd_kinds, value=cmd_values),

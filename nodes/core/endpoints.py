@@ -104,14 +104,14 @@ class Publisher:
                 priority=priority, express=express)
             self._bus.add_publisher(self)
 
-    def publish(self, msg: Any) -> None:
-        """Encode and send ``msg`` (a ``msg_type`` instance)."""
+    def publish(self, msg: Any, *, droppable: bool = False) -> None:
+        """Encode and send ``msg`` (a ``msg_type`` instance); ``droppable`` as ``publish_raw``'s."""
         if getattr(msg, "_type", None) != self.msg_type._type:
             raise TypeError(f"publisher on '{self.key}' sends {self.msg_type._type}, got {type(msg).__name__}")
         if self.local_subscriptions:
-            self._publish_in_process(msg, None, droppable=False)
+            self._publish_in_process(msg, None, droppable=droppable)
             return
-        self.publish_raw(msgs.encode(msg))
+        self.publish_raw(msgs.encode(msg), droppable=droppable)
 
     def _droppable_twin(self, *, remote_only: bool = False) -> Any:
         """This key's publisher that drops under congestion (declared on first use); ``remote_only``: the

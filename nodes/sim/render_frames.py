@@ -7,12 +7,12 @@ picture, except in lockstep.
 Lockstep: every frame is rendered, in order, from its own state, so two runs give the same images bit for bit.
 The simulator lets at most ``max_outstanding`` frames wait for the renderer's ``sim/render/done`` before it
 steps on, so the renderer's queue stays bounded and a lockstep run goes as fast as the slower of the two.
+Realtime: frames go out on time and the renderer draws the newest it has for each sensor (a slow renderer
+drops frames, never the physics).
 
 A frame goes out only for the sensors somebody watches: the renderer's answers (and its unprompted ones when
 that changes) name the sensors with a subscriber, as gazebo_ros' camera plugins render only while subscribed.
 A picture nobody reads costs neither the renderer nor the physics (a frame's link poses cost ~0.3 ms).
-Realtime: frames go out on time and the renderer draws the newest it has for each sensor (a slow renderer
-drops frames, never the physics).
 """
 
 from __future__ import annotations

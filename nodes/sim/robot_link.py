@@ -145,7 +145,8 @@ class RobotLink:
                       effort=hw.efforts().tolist(), sensor_values=self.sensors.state_values())
         if self.state_pub.local_subscriptions:
             # a controller manager in this process (composed): the frame as an object, never encoded for it
-            self.state_pub.publish(HardwareState(stamp=_Time(**msgs.time_map(sim_time)), **fields))
+            self.state_pub.publish(HardwareState(stamp=_Time(**msgs.time_map(sim_time)), **fields),
+                                   droppable=self.sim.mode == "realtime")
         else:
             self.state_pub.publish_raw(_pack_state(stamp=msgs.time_map(sim_time), **fields),
                                        droppable=self.sim.mode == "realtime")
