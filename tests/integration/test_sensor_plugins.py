@@ -62,6 +62,11 @@ def test_imu_plugin_publishes_from_the_simulator(processes, router, tmp_path):
         for key in streams:
             node.create_subscription(None, f"/{key}", on_message, inline=True, raw=True, with_key=True)
         wait_until(lambda: len(received) > 200, timeout=90, message="200 Imu messages on demo/imu")
+
+        def contacts_after_two_seconds() -> bool:   # the same instant's contacts may still be on their way
+            with lock:
+                return any(m["header"]["stamp"]["sec"] >= 2 for m in streams["humanoid/left_foot/contacts"])
+        wait_until(contacts_after_two_seconds, timeout=30, message="contacts on humanoid/left_foot/contacts past 2 s")
         with lock:
             messages = list(received)
         stamps = [m["header"]["stamp"]["sec"] + m["header"]["stamp"]["nanosec"] * 1e-9 for m in messages]
