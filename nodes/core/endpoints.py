@@ -269,12 +269,11 @@ class Subscription:
         when the types agree (zero copy), the publisher's bytes for a raw callback, else decoded from them."""
         if self.closed:
             return
-        if self.objects and message is not None and message._type == self.msg_type._type:
+        same_type = message is not None and self.msg_type is not None and message._type == self.msg_type._type
+        if same_type and (self.objects or not self.raw):
             value: Any = message
         elif self.raw or self.msg_type is None:
             value = payload
-        elif message is not None and message._type == self.msg_type._type:
-            value = message
         else:
             try:   # bytes from publish_raw: checked as any payload is (the code that packed them may be wrong)
                 value = msgs.decode(self.msg_type, payload, decode_limits())

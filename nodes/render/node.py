@@ -253,8 +253,8 @@ class RendererNode(Node):
         """The sensors with a subscriber to one of their outputs now."""
         return sorted(k for k, sensor in self.sensors.items() if any(p.has_subscribers for p in sensor.publishers.values()))
 
-    def _answer(self, step: int, published: int) -> None:
-        self._told = self.wanted()
+    def _answer(self, step: int, published: int, wanted: list[str] | None = None) -> None:
+        self._told = self.wanted() if wanted is None else wanted
         self._next_tell = time.monotonic() + WANTED_REPEAT_S
         self.done_pub.publish(RenderDone(step=step, published=published, wanted=self._told))
 
@@ -263,8 +263,9 @@ class RendererNode(Node):
         if now < self._next_look:
             return
         self._next_look = now + WANTED_POLL_S
-        if now >= self._next_tell or self.wanted() != self._told:
-            self._answer(self._last_step, 0)
+        wanted = self.wanted()
+        if now >= self._next_tell or wanted != self._told:
+            self._answer(self._last_step, 0, wanted)
 
     def spin(self) -> None:
         """Take frames as they come; draw; answer each with sim/render/done."""
