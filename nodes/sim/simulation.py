@@ -151,7 +151,7 @@ class Simulation:
                 self.step_count += 1
             return
         # looked up once: this loop runs at the physics rate, and its Python is part of every step's cost
-        world_step, pushes, rest = self.world.step, self.pushes, self.rest
+        world_step, pushes, rest = self.world.world.step, self.pushes, self.rest   # DART's step itself
         for _ in range(count):
             for hw in hardware:
                 hw.before_step(dt)
