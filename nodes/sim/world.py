@@ -33,7 +33,7 @@ class PhysicsWorld:
         if not (math.isfinite(physics_rate) and physics_rate > 0):
             raise ValueError(f"physics_rate must be a positive number, got {physics_rate}")
         self.world = dart.simulation.World()
-        self.world.setTimeStep(1.0 / physics_rate)
+        self.set_time_step(1.0 / physics_rate)
         self.collision_detector = collision_detector
         self.world.getConstraintSolver().setCollisionDetector(_make_detector(collision_detector))
         self.set_gravity(gravity)
@@ -46,10 +46,11 @@ class PhysicsWorld:
     # -- time -------------------------------------------------------------------------------------------
     @property
     def time_step(self) -> float:
-        return self.world.getTimeStep()
+        return self._time_step   # kept here: read every control period, and only set_time_step changes it
 
     def set_time_step(self, time_step: float) -> None:
         self.world.setTimeStep(time_step)
+        self._time_step = self.world.getTimeStep()
 
     @property
     def physics_rate(self) -> float:
