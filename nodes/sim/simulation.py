@@ -166,8 +166,7 @@ class Simulation:
         """Every sensor that is due at the current sim time takes its reading (once per control period)."""
         if not self.sensors:
             return
-        world = self.world.world   # DART's, read directly: this runs every control period
-        t, gravity = world.getTime(), world.getGravity().tolist()
+        t, gravity = self.world.world.getTime(), self.world.gravity   # (DART's time, read directly: every period)
         for suite in self.sensors.values():
             suite.sample(t, gravity)
 

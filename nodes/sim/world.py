@@ -76,11 +76,12 @@ class PhysicsWorld:
         if vector.shape != (3,) or not np.all(np.isfinite(vector)):
             raise ValueError(f"gravity must be three finite numbers, got {list(np.ravel(gravity))}")
         self.world.setGravity(vector)
+        g = self.world.getGravity()
+        self._gravity = (float(g[0]), float(g[1]), float(g[2]))
 
     @property
     def gravity(self) -> tuple[float, float, float]:
-        g = self.world.getGravity()
-        return float(g[0]), float(g[1]), float(g[2])
+        return self._gravity   # kept here: the sensors read it every control period, only set_gravity changes it
 
     # -- ground -----------------------------------------------------------------------------------------
     def add_ground(self, size: float = 50.0, friction: float = 1.0, pose: np.ndarray | None = None) -> None:
