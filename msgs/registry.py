@@ -66,7 +66,18 @@ def _find_file(pkg: str, kind: str, name: str) -> Path | None:
         candidate = root / pkg / kind / f"{name}.{kind}"
         if candidate.is_file():
             return candidate
-    return None
+    share = interface_packages().get(pkg)
+    candidate = share / kind / f"{name}.{kind}" if share is not None else None
+    return candidate if candidate is not None and candidate.is_file() else None
+
+
+def interface_packages() -> dict[str, Path]:
+    """ROS packages of the package index (the workspace's src/, ROS_PACKAGE_PATH, AMENT_PREFIX_PATH ...) that
+    hold msg/, srv/ or action/ folders: user interface packages, found as ROS finds them."""
+    from nodes.packages.index import list_packages  # the index scans the disk: only when a type is unknown
+
+    return {name: package.share for name, package in list_packages().items()
+            if any((package.share / kind).is_dir() for kind in ("msg", "srv", "action"))}
 
 
 def get_spec(full_name: str) -> MsgSpec:
@@ -246,6 +257,9 @@ def list_types() -> list[str]:
             kind = path.parent.name
             if kind in ("msg", "srv", "action") and path.suffix == f".{kind}":
                 found.add(f"{path.parent.parent.name}/{kind}/{path.stem}")
+    for pkg, share in interface_packages().items():
+        for kind in ("msg", "srv", "action"):
+            found.update(f"{pkg}/{kind}/{path.stem}" for path in (share / kind).glob(f"*.{kind}"))
     return sorted(found)
 
 

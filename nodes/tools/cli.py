@@ -33,6 +33,7 @@ VERBS: dict[str, tuple[str, str]] = {
     "doctor": ("nodes.tools.doctor", "check the installation and the network"),
     "router": ("nodes.tools.router", "run a standalone Zenoh router (zenohd stand-in)"),
     "bag": ("nodes.tools.bag", "record/play/info bags"),
+    "pkg": ("nodes.tools.pkg_cmd", "list packages, their prefix and executables"),
     "teleop": ("nodes.tools.teleop", "nudge a trajectory controller's joints from the keyboard"),
 }
 

@@ -1,7 +1,8 @@
 """Turn a file path or XML text (URDF or xacro) into URDF text, safely.
 
-xacro is run in-process through the ``xacro`` package (no ROS needed); ``$(find pkg)`` cannot work without a
-ROS workspace, so that case gets a clear error instead of a traceback.
+xacro is run in-process through the ``xacro`` package (no ROS needed); its ``$(find pkg)`` asks
+``ament_index_python``, which is zenroid's package index (nodes/packages), and a package it does not know gets
+a clear error naming it and the paths searched instead of a traceback.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import os
 import tempfile
 from pathlib import Path
 
+from nodes.packages.index import PackageNotFoundError
 from nodes.urdf.model import UrdfError
 from nodes.urdf.xml_safety import UnsafeXmlError, check_xml_safety, xml_text
 
@@ -35,17 +37,28 @@ def is_xacro(text: str, path: str | None = None) -> bool:
     return bool(path and path.endswith(".xacro")) or "xmlns:xacro" in text
 
 
+def _missing_package(exc: BaseException | None) -> PackageNotFoundError | None:
+    """The package lookup that failed under a xacro error (xacro wraps the exception of ``$(find)``)."""
+    seen = 0
+    while exc is not None and seen < 10:
+        if isinstance(exc, PackageNotFoundError):
+            return exc
+        exc, seen = exc.__cause__ or exc.__context__, seen + 1
+    return None
+
+
 def _run_xacro(path: str, mappings: dict[str, str]) -> str:
     import xacro  # local import: only paid when a xacro file is used
 
     try:
         document = xacro.process_file(path, mappings=mappings)
-    except xacro.XacroException as exc:
-        message = str(exc)
-        if "find" in message and "$(" in message or "substitution args" in message.lower():
-            message += " ($(find pkg) needs a ROS workspace: use a relative path or a xacro arg instead)"
-        raise UrdfError(f"xacro failed on {path}: {message}") from None
-    except Exception as exc:  # xacro raises plain exceptions for XML and expression errors
+    except Exception as exc:
+        missing = _missing_package(exc)
+        if missing is not None:
+            raise UrdfError(f"xacro failed on {path}: $(find {missing.package}): {missing}") from None
+        if isinstance(exc, xacro.XacroException):
+            raise UrdfError(f"xacro failed on {path}: {exc}") from None
+        # xacro raises plain exceptions for XML and expression errors
         raise UrdfError(f"xacro failed on {path}: {type(exc).__name__}: {exc}") from None
     return document.toprettyxml(indent="  ")
 

@@ -25,6 +25,7 @@ import rerun as rr
 
 from msgs import duration_to_sec
 from nodes.kinematics import matrix_to_quaternion, pose_matrix
+from nodes.packages.index import UriError, resolve_uri
 
 ARROW, CUBE, SPHERE, CYLINDER, LINE_STRIP, LINE_LIST, CUBE_LIST, SPHERE_LIST, POINTS, TEXT_VIEW_FACING, \
     MESH_RESOURCE, TRIANGLE_LIST, ARROW_STRIP = range(13)
@@ -115,10 +116,16 @@ def validate(msg: Any) -> None:
 
 
 def mesh_path(resource: str) -> Path:
-    path = Path(resource.removeprefix("file://"))
-    if resource.startswith(("package://", "http://", "https://", "embedded://")) or not path.is_file():
-        raise MarkerError(f"mesh_resource '{resource}': only local mesh files (file:///path or /path) are drawn "
-                          "here (no ROS packages to resolve package:// against)")
+    """The file a marker's ``mesh_resource`` names: ``package://`` through the package index, ``file://`` or a path."""
+    if resource.startswith(("http://", "https://", "embedded://")):
+        raise MarkerError(f"mesh_resource '{resource}': only local mesh files (package://, file:///path or /path) "
+                          "are drawn here")
+    try:
+        path = resolve_uri(resource)
+    except UriError as exc:
+        raise MarkerError(f"mesh_resource: {exc}") from None
+    if not path.is_file():
+        raise MarkerError(f"mesh_resource '{resource}': {path} is not a file")
     return path
 
 

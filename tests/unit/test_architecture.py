@@ -60,7 +60,7 @@ def test_the_zenoh_check_sees_a_zenoh_import() -> None:
 
 
 # ------------------------------------------------------------------------------------------ imports
-PACKAGES = ("launch", "msgs", "nodes")
+PACKAGES = ("ament_index_python", "launch", "msgs", "nodes")
 
 
 def project_modules() -> dict[str, Path]:

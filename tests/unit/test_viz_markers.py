@@ -33,7 +33,9 @@ def marker(**fields):
     ({"type": 8, "points": []}, "points is empty"),
     ({"type": 8, "points": [{}], "colors": [{}, {}]}, "colors has 2 entries for 1 points"),
     ({"type": 9, "text": ""}, "text is empty"),
-    ({"type": 10, "mesh_resource": "package://robot/mesh.dae"}, "only local mesh files"),
+    ({"type": 10, "mesh_resource": "package://no_such_robot_pkg/mesh.dae"}, "package 'no_such_robot_pkg' not found"),
+    ({"type": 10, "mesh_resource": "package://zenroid_description/no_mesh.dae"}, "no_mesh.dae is not a file"),
+    ({"type": 10, "mesh_resource": "http://example.invalid/m.dae"}, "only local mesh files"),
 ])
 def test_markers_rviz_refuses_are_refused_with_the_reason(fields: dict, reason: str) -> None:
     with pytest.raises(MarkerError, match=reason.replace("(", r"\(").replace(")", r"\)")):

@@ -1,0 +1,47 @@
+"""The ROS packages the zenroid stack serves, and the node or tool each of their executables is.
+
+Their share folders (launch files and such) are ``nodes/share/packages/<pkg>``; this table is what runs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Served:
+    module: str  # run as ``python -m module``
+    module_args: tuple[str, ...] = ()
+    ros_node: bool = False  # takes our node options (--ros-args are translated to them)
+    what: str = ""
+
+
+TOOLS = "nodes.tools"
+
+SERVED: dict[str, dict[str, Served]] = {
+    "controller_manager": {
+        "spawner": Served(TOOLS, ("control", "spawner"), what="zenroid control spawner"),
+    },
+    "robot_state_publisher": {
+        "robot_state_publisher": Served("nodes.state_publisher", ros_node=True, what="our state publisher"),
+    },
+    "gazebo_ros": {
+        "spawn_entity.py": Served(TOOLS, ("spawn",), what="zenroid spawn"),
+    },
+    "xacro": {
+        "xacro": Served(TOOLS, ("xacro",), what="zenroid xacro"),
+    },
+    "rviz2": {
+        "rviz2": Served("nodes.viz", ros_node=True, what="our Rerun viewer"),
+    },
+}
+
+
+def served() -> list[str]:
+    """The packages served, by name."""
+    return sorted(SERVED)
+
+
+def entries(package: str) -> dict[str, Served]:
+    """``name -> Served`` for a served package (empty for any other)."""
+    return dict(SERVED.get(package, {}))
