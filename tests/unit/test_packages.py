@@ -125,7 +125,7 @@ def test_the_stack_packages_and_our_robots(clean_env: Path) -> None:
         assert found[name].source == "zenroid", name
     share = find_share("zenroid_description")
     assert share == (ROOT / "robots").resolve()
-    for folder in ("urdf", "config", "worlds", "launch"):
+    for folder in ("urdf", "config", "worlds"):
         assert (share / folder).is_dir(), folder
     assert (share / "urdf" / "humanoid.urdf").is_file() and (share / "worlds" / "simple_lab.world").is_file()
     assert (share / "config" / "controllers.yaml").is_file()
