@@ -40,9 +40,9 @@ class Entity(Model):
         if not all(_NAME.match(part) for part in self.namespace.split("/")):
             raise SpawnError(f"robot_namespace {spec.namespace!r} must be '/'-separated names of letters, digits, "
                              "'_', '-' or '.'")
-        self.info: RobotInfo = parse_urdf(spec.xml)
+        self.info: RobotInfo = parse_urdf(spec.xml, spec.base_uri or None)
         self.pose = spec.pose.validated()
-        self.skeleton = self._load_skeleton(spec)
+        self.skeleton = self._load_skeleton(spec, self.info)
         self.skeleton.setName(spec.name)
         self.floating = not spec.fixed and isinstance(self.skeleton.getRootJoint(), dart.dynamics.FreeJoint)
         # DART's DOF order differs from the URDF: map every movable joint by name once.
@@ -58,11 +58,12 @@ class Entity(Model):
         self.remember_spawn()
 
     @staticmethod
-    def _load_skeleton(spec: EntitySpec) -> dart.dynamics.Skeleton:
+    def _load_skeleton(spec: EntitySpec, info: RobotInfo) -> dart.dynamics.Skeleton:
         loader = dart.utils.DartLoader()
         flags = dart.utils.DartLoaderFlags.FIXED_BASE_LINK if spec.fixed else dart.utils.DartLoaderFlags.NONE
         uri = dart.common.Uri(spec.base_uri or "file:///")
-        skeleton = loader.parseSkeletonString(spec.xml, uri, dart.common.LocalResourceRetriever(), flags)
+        xml = spec.xml if info.physics is None else info.physics.xml   # frame links merged into their bodies
+        skeleton = loader.parseSkeletonString(xml, uri, dart.common.LocalResourceRetriever(), flags)
         if skeleton is None:
             raise SpawnError(f"DART could not load the URDF of {spec.name!r} (a mesh file that cannot be read? "
                              "see the simulator log)")

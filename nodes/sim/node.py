@@ -154,6 +154,8 @@ class SimulatorNode(Node):
             self._publish_scene_or_undo(spec.name)
             return status
         entity = self.sim.spawn(spec, reference_frame)
+        for warning in entity.info.warnings:
+            self.logger.warn(f"{entity.name!r}: {warning}")
         try:
             self.robots[entity.namespace] = RobotLink(self, self.sim, self.sim.hardware[entity.namespace],
                                                       self.command_timeout)

@@ -3,20 +3,27 @@
 DART's loader prints warnings and returns None on bad input; parsing the XML first with the project's URDF
 parser (``nodes.urdf.model``: entity declarations and external DTDs are refused, every number is checked) lets
 every error name the line it comes from, and gives us the joint limits and the ``<ros2_control>`` block, which
-DART ignores. This module adds what only the simulator refuses (negative sizes, ``package://`` meshes, interface
+DART ignores. This module adds what only the simulator refuses (negative sizes, mesh files that resolve nowhere, interface
 names other than position/velocity/effort) and the derived per-joint bounds.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from dataclasses import dataclass, field
 
+import numpy as np
+from lxml import etree
+
 from nodes.control.interfaces import JointInfo
+from nodes.urdf.frames import Lumped, check_inertias, lump_frames
 from nodes.urdf.model import Joint, RobotModel, UrdfError
 from nodes.urdf.model import parse_urdf as parse_model
+from nodes.urdf.paths import PathError, resolve_uri
 from nodes.urdf.rendered_sensors import RenderedSensorSpec, rendered_sensor_problems
 from nodes.urdf.sensors import SensorSpec, sensor_problems
+from nodes.urdf.xml_safety import parse_xml
 
 INTERFACES = ("position", "velocity", "effort")
 
@@ -30,6 +37,15 @@ class RobotInfo:
     has_ros2_control: bool = False
     sensors: list[SensorSpec] = field(default_factory=list)   # checked, with their links and joints
     rendered_sensors: list[RenderedSensorSpec] = field(default_factory=list)   # cameras and range sensors
+    # what the physics loads: frame links merged into their bodies (sensors above already moved onto them)
+    physics: Lumped | None = None
+    model: RobotModel | None = None                 # the URDF as written (every link, TF's frames)
+    warnings: list[str] = field(default_factory=list)   # for the spawn's log: what was tolerated, and how
+
+    @property
+    def frames(self) -> list[str]:
+        """Links merged into their parent body for the physics."""
+        return list(self.physics.frames) if self.physics else []
 
     def joint(self, name: str) -> JointInfo:
         for joint in self.joints:
@@ -58,20 +74,10 @@ def _check_size(model: RobotModel) -> None:
                                  f"limit of {MAX_LINKS}")
 
 
-def _mesh_path_problem(filename: str) -> str | None:
-    """Why a mesh path is refused: the simulator reads only files next to the URDF, never a path a request
-    chooses anywhere on its host (``/etc/passwd``, ``../../x``, ``/dev/zero`` would block the loader)."""
-    if filename.startswith("package://"):
-        return "package:// needs ROS; use a path relative to the URDF file"
-    if "://" in filename or filename.startswith(("/", "\\")) or (len(filename) > 1 and filename[1] == ":"):
-        return "must be a path relative to the URDF file, not an absolute path or URL"
-    if ".." in filename.replace("\\", "/").split("/"):
-        return "must stay inside the URDF file's directory (no '..')"
-    return None
-
-
-def _check_shapes(model: RobotModel) -> None:
-    """Sizes and masses DART cannot use: negative ones, and meshes behind ``package://`` (needs ROS)."""
+def _check_shapes(model: RobotModel, base: str | None) -> dict[str, str]:
+    """Sizes and masses DART cannot use (negative ones) and mesh files that resolve nowhere or outside their
+    package (``nodes.urdf.paths``); returns each mesh reference with the file it resolves to."""
+    meshes: dict[str, str] = {}
     for link in model.links.values():
         if link.inertial is not None and link.inertial.mass < 0:
             raise _error(link.inertial.line, f"<mass> value={link.inertial.mass:g} of link {link.name!r} "
@@ -83,9 +89,12 @@ def _check_shapes(model: RobotModel) -> None:
                 if any(v < 0 for v in values):
                     raise _error(shape.line, f"<{shape.kind}> {attr}={' '.join(f'{v:g}' for v in values)!r} "
                                              f"of link {link.name!r} must not be negative")
-            problem = _mesh_path_problem(shape.filename) if shape.kind == "mesh" else None
-            if problem:
-                raise _error(shape.line, f"mesh {shape.filename[:200]!r}: {problem}")
+            if shape.kind == "mesh" and shape.filename not in meshes:
+                try:
+                    meshes[shape.filename] = str(resolve_uri(shape.filename, base))
+                except PathError as exc:
+                    raise _error(shape.line, f"mesh of link {link.name!r}: {exc}") from None
+    return meshes
 
 
 def _joint_info(joint: Joint) -> JointInfo:
@@ -105,8 +114,9 @@ def _joint_info(joint: Joint) -> JointInfo:
 _LINK_TAG = re.compile(r"<link[\s/>]")
 
 
-def parse_urdf(xml: str) -> RobotInfo:
-    """Parse and check a URDF string; raises ``UrdfError`` naming the offending line."""
+def parse_urdf(xml: str, base: str | None = None) -> RobotInfo:
+    """Parse and check a URDF string; raises ``UrdfError`` naming the offending line. ``base``: the robot's
+    file (a path or ``file://`` URI), where its relative mesh paths and its own package start."""
     if not isinstance(xml, str) or not xml.strip():
         raise UrdfError("empty robot description")
     # before building anything of a huge model (parsing 10,000 links costs ~80 MB that is never returned)
@@ -119,7 +129,7 @@ def parse_urdf(xml: str) -> RobotInfo:
     except UrdfError as exc:
         raise _error(exc.line, str(exc)) from None
     _check_size(model)
-    _check_shapes(model)
+    meshes = _check_shapes(model, base)
     for (kind, name), line in model.duplicate_lines.items():
         raise _error(line, f"duplicate {kind} {name!r}")
 
@@ -143,8 +153,53 @@ def parse_urdf(xml: str) -> RobotInfo:
     if problems:
         shown = problems[:5] + ([f"... and {len(problems) - 5} more"] if len(problems) > 5 else [])
         raise UrdfError("; ".join(shown))
+    check_inertias(model)
+    physics = lump_frames(xml, model)
+    if meshes:
+        physics.xml = _with_files(physics.xml, meshes)
+    sensors, rendered = _mount_on_bodies(model, physics)
+    warnings = list(model.warnings)
+    if physics.frames:
+        warnings.append(f"{len(physics.frames)} link(s) without a usable inertia on fixed joints are frames, "
+                        f"merged into their parent body for the physics (kept as TF frames and sensor mounts): "
+                        f"{', '.join(physics.frames)}")
     return RobotInfo(name=model.name, root_link=roots[0], links=list(model.links), joints=joints,
-                     has_ros2_control=has_block, sensors=model.sensors, rendered_sensors=model.rendered_sensors)
+                     has_ros2_control=has_block, sensors=sensors, rendered_sensors=rendered, physics=physics,
+                     model=model, warnings=warnings)
+
+
+def _with_files(xml: str, meshes: dict[str, str]) -> str:
+    """The URDF with every mesh reference replaced by the file it resolved to (what DART loads)."""
+    root = parse_xml(xml)
+    for mesh in root.iter("mesh"):
+        filename = mesh.get("filename", "")
+        if filename in meshes:
+            mesh.set("filename", meshes[filename])
+    return etree.tostring(root, encoding="unicode")
+
+
+def _mount_on_bodies(model: RobotModel, physics: Lumped) -> tuple[list[SensorSpec], list[RenderedSensorSpec]]:
+    """Sensors on a merged frame sit on the body that carries it, at the frame's pose in that body."""
+    if not physics.frames:
+        return model.sensors, model.rendered_sensors
+    sensors = []
+    for sensor in model.sensors:
+        if sensor.link in physics.frames:
+            if sensor.type == "force_torque":
+                raise _error(sensor.line, f"force/torque sensor {sensor.name!r} measures joint {sensor.joint!r}, "
+                                          f"whose link {sensor.link!r} has no inertia and is merged into its "
+                                          "parent: give the link an <inertial>")
+            body, pose = physics.body_of(sensor.link)
+            sensor = dataclasses.replace(sensor, link=body, pose=np.asarray(pose @ sensor.pose))
+        sensors.append(sensor)
+    rendered = []
+    for spec in model.rendered_sensors:
+        if spec.reference in physics.frames:
+            body, pose = physics.body_of(spec.reference)
+            spec = dataclasses.replace(spec, reference=body, pose=np.asarray(pose @ spec.pose),
+                                       frame_id=spec.frame_id or spec.reference)
+        rendered.append(spec)
+    return sensors, rendered
 
 
 def _apply_ros2_control(model: RobotModel, joints: list[JointInfo]) -> bool:

@@ -143,6 +143,8 @@ class RobotModel:
     ros2_control_sensors: list[Ros2ControlSensor] = field(default_factory=list)
     # cameras and range sensors (nodes.urdf.rendered_sensors), their keys resolved without a namespace
     rendered_sensors: list[RenderedSensorSpec] = field(default_factory=list)
+    # what ROS tools tolerate and we drop with a word (a sensor declared twice in one <gazebo> block)
+    warnings: list[str] = field(default_factory=list)
 
     def roots(self) -> list[str]:
         children = {j.child for j in self.joints.values()}
@@ -412,5 +414,23 @@ def parse_urdf(xml: str | bytes) -> RobotModel:
         rendered = parse_rendered_sensors(root)
     except SensorDeclarationError as exc:
         raise UrdfError(str(exc), exc.line) from None
+    rendered, warnings = _first_of_repeats(rendered)
     return RobotModel(name, links, joints, _parse_ros2_control(root), duplicate_links, duplicate_joints,
-                      materials, root.sourceline, duplicate_lines, sensors, control_sensors, rendered)
+                      materials, root.sourceline, duplicate_lines, sensors, control_sensors, rendered, warnings)
+
+
+def _first_of_repeats(specs: list[RenderedSensorSpec]) -> tuple[list[RenderedSensorSpec], list[str]]:
+    """A sensor declared again under the same name on the same link (TALOS's depth camera) is one sensor, as
+    in Gazebo: the first declaration is kept and the others are named in a warning. On another link the
+    name clash stays an error (the checks)."""
+    kept: list[RenderedSensorSpec] = []
+    seen: dict[str, str] = {}
+    warnings = []
+    for spec in specs:
+        if seen.get(spec.name) == spec.reference:
+            warnings.append(f"{spec.where}: declared again on link '{spec.reference}': the first declaration "
+                            "is used")
+            continue
+        seen.setdefault(spec.name, spec.reference)
+        kept.append(spec)
+    return kept, warnings

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from nodes.urdf.frames import frame_links
 from nodes.urdf.model import RobotModel
 from nodes.urdf.rendered_sensors import rendered_sensor_problems
 from nodes.urdf.sensors import sensor_problems
@@ -98,8 +99,9 @@ def _joint_errors(model: RobotModel) -> list[str]:
 
 def _inertia_errors(model: RobotModel) -> list[str]:
     errors: list[str] = []
+    frames = set(frame_links(model))   # ROS tolerates these: the simulator merges them into their parent
     for link in model.links.values():
-        if link.inertial is None:
+        if link.inertial is None or link.name in frames:
             continue
         if link.inertial.mass <= 0:
             errors.append(f"link '{link.name}': mass {link.inertial.mass:g} is not positive")
@@ -126,8 +128,14 @@ FRAME_MASS = 0.05
 
 
 def _warnings(model: RobotModel) -> list[str]:
-    warnings: list[str] = []
+    warnings: list[str] = list(model.warnings)
+    frames = frame_links(model)
+    if frames:
+        warnings.append(f"{len(frames)} link(s) on fixed joints without a usable inertia are frames (the simulator "
+                        f"merges them into their parent body): {', '.join(frames)}")
     for link in model.links.values():
+        if link.name in frames:
+            continue
         if link.inertial is None:
             warnings.append(f"link '{link.name}' has no <inertial> (simulation needs mass and inertia)")
         elif not link.has_collision and link.inertial.mass > FRAME_MASS:

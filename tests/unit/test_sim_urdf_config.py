@@ -61,13 +61,13 @@ def test_without_ros2_control_every_movable_joint_gets_position_control():
     (lambda x: x.replace('<origin xyz="0 0 0.3"/>', '<origin xyz="0 0"/>'), "3 number(s)"),
     (lambda x: x.replace('<mass value="0.5"/>', '<mass value="-1"/>'), "negative"),
     (lambda x: x.replace('<box size="0.2 0.2 0.1"/></geometry></collision>',
-                         '<mesh filename="package://arm/x.stl"/></geometry></collision>'), "package://"),
+                         '<mesh filename="package://arm/x.stl"/></geometry></collision>'), "package 'arm' not found"),
     (lambda x: x.replace('<box size="0.2 0.2 0.1"/></geometry></collision>',
-                         '<mesh filename="../../etc/passwd"/></geometry></collision>'), "no '..'"),
+                         '<mesh filename="../../etc/passwd"/></geometry></collision>'), "needs the robot's file"),
     (lambda x: x.replace('<box size="0.2 0.2 0.1"/></geometry></collision>',
-                         '<mesh filename="/dev/zero"/></geometry></collision>'), "not an absolute path"),
+                         '<mesh filename="/dev/zero"/></geometry></collision>'), "outside its package root"),
     (lambda x: x.replace('<box size="0.2 0.2 0.1"/></geometry></collision>',
-                         '<mesh filename="file:///etc/passwd"/></geometry></collision>'), "not an absolute path"),
+                         '<mesh filename="file:///etc/passwd"/></geometry></collision>'), "outside its package root"),
     (lambda x: "", "empty"),
 ])
 def test_bad_urdf_errors_name_line_and_reason(mutate, expected):
