@@ -14,8 +14,10 @@ from pathlib import Path
 import yaml
 
 from launch import interrupts
-from launch.description import LaunchDeprecationWarning, parse_file
+from launch.description import LaunchDeprecationWarning
+from launch.formats import load_description
 from launch.resolve import LaunchPlan, find_launch_file, resolve
+from launch.ros_resolve import LaunchCodeError
 from launch.yaml_source import LaunchError, Source
 from nodes.tools.cli import UsageError
 
@@ -26,7 +28,8 @@ def _usage_error(message: str) -> UsageError:
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("file", help="launch file: a path, or a bare name in launch/ (humanoid.yaml)")
+    parser.add_argument("file", help="launch file (a path, or a bare name in launch/: humanoid.yaml), or a package "
+                        "name followed by a launch file in its share folder (as ros2 launch PKG FILE)")
     # REMAINDER so options may also follow the name:=value pairs (run() picks them out).
     parser.add_argument("arguments", nargs=argparse.REMAINDER, metavar="name:=value", help="launch argument values")
     parser.add_argument("--show-args", action="store_true", help="print the declared arguments and exit")
@@ -48,7 +51,7 @@ def parse_assignments(items: list[str]) -> dict[str, str]:
 
 def show_args(path: Path) -> str:
     lines = []
-    for arg in parse_file(path).declared_args():
+    for arg in load_description(path).declared_args():
         lines.append(f"'{arg.name}':")
         lines.append(f"    {arg.description or 'no description given'}")
         if arg.choices:
@@ -131,18 +134,50 @@ def _deprecations_logged() -> Iterator[None]:
                     warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
 
 
+def package_launch_file(package: str, name: str) -> Path:
+    """``ros2 launch PKG FILE``: FILE in PKG's share folder (its launch/ first, then anywhere below it)."""
+    from nodes.packages import PackageNotFoundError, find_share
+
+    try:
+        share = find_share(package)
+    except PackageNotFoundError as exc:
+        raise _usage_error(str(exc).strip('"')) from None
+    direct = share / name
+    if direct.is_file():
+        return direct
+    found = sorted(p for p in share.rglob(Path(name).name) if p.is_file())
+    preferred = [p for p in found if p.parent.name == "launch"]
+    if len(preferred) == 1 or len(found) == 1:
+        return (preferred or found)[0]
+    if found:
+        raise _usage_error(f"package '{package}' has several files named '{name}': "
+                           f"{', '.join(str(p.relative_to(share)) for p in found)}")
+    raise _usage_error(f"file '{name}' was not found in the share directory of package '{package}' ({share})")
+
+
+def _launch_file(args: argparse.Namespace) -> Path:
+    """FILE, or PKG FILE (the second word not an assignment): the file to launch."""
+    try:
+        return find_launch_file(args.file)
+    except FileNotFoundError:
+        if args.arguments and ":=" not in args.arguments[0]:
+            package, name = args.file, args.arguments.pop(0)
+            return package_launch_file(package, name)
+        raise _usage_error(f"launch file not found: {args.file} (bare names are looked up in launch/; a package's "
+                           "launch file: PKG FILE)") from None
+
+
 def load_plan(args: argparse.Namespace) -> tuple[Path, LaunchPlan | None]:
     _late_options(args)
-    try:
-        path = find_launch_file(args.file)
-    except FileNotFoundError:
-        raise _usage_error(f"launch file not found: {args.file} (bare names are looked up in launch/)") from None
+    path = _launch_file(args)
     values = parse_assignments(args.arguments)
     try:
         if args.show_args:
             return path, None
         with _deprecations_logged():
             return path, resolve(path, values)
+    except LaunchCodeError:
+        raise
     except LaunchError as exc:
         raise _usage_error(str(exc)) from None
 
@@ -271,7 +306,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m launch", description="run a YAML launch file")
+    parser = argparse.ArgumentParser(prog="python -m launch", description="run a launch file (our YAML, or ROS's "
+                                     "Python, XML or YAML formats)")
     add_arguments(parser)
     args = parser.parse_args(argv)
     try:
@@ -279,3 +315,7 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         print(f"launch: error: {exc}", file=sys.stderr)
         return 2
+    except LaunchCodeError as exc:   # the launch file's own code raised: its traceback, then file:line
+        print(exc.details, end="", file=sys.stderr)
+        print(f"launch: error: {exc}", file=sys.stderr)
+        return 1

@@ -130,12 +130,31 @@ class OnShutdownDecl(Action):
 
 @dataclass
 class LaunchDescription:
+    """A launch file loaded and checked, nothing run: our YAML's actions (the classes above) or, for ROS's
+    formats (``format``: python, xml, ros-yaml), the ROS launch actions the file built (``launch.actions``)."""
+
     file: Path
-    actions: list[Action]
+    actions: list[Any]
+    format: str = "zenroid"
 
     def declared_args(self) -> list[ArgDecl]:
         """Top-level argument declarations (what ``--show-args`` prints)."""
-        return [a for a in self.actions if isinstance(a, ArgDecl)]
+        from launch.actions import DeclareLaunchArgument
+        from launch.context import perform_substitutions
+
+        out = []
+        for action in self.actions:
+            if isinstance(action, ArgDecl):
+                out.append(action)
+            elif isinstance(action, DeclareLaunchArgument):
+                default = action.default_value
+                if default is not None and not all(isinstance(d, str) for d in default):
+                    default = " + ".join(d if isinstance(d, str) else d.describe() for d in default)
+                elif default is not None:
+                    default = perform_substitutions(None, default)  # type: ignore[arg-type]
+                out.append(ArgDecl(source=action.source, name=action.name, default=default,
+                                   description=action.description, choices=action.choices))
+        return out
 
 
 def _check_keys(mapping: LocatedDict, allowed: tuple[str, ...], what: str, file: Path) -> None:

@@ -5,17 +5,20 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 import re
 import shlex
 import shutil
 import sys
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from launch._yaml_substitutions import SubstitutionContext, has_substitution, substitute
+from launch.context import Condition, LaunchContext
 from launch.description import (
     Action,
     ArgDecl,
@@ -27,9 +30,8 @@ from launch.description import (
     NodeDecl,
     OnExitDecl,
     OnShutdownDecl,
-    parse_file,
 )
-from launch.substitutions import SubstitutionContext, has_substitution, substitute
+from launch.ros_resolve import RosResolution
 from launch.yaml_source import LaunchError, LocatedDict, LocatedList, Source
 
 LAUNCH_DIR = Path(__file__).resolve().parent
@@ -118,6 +120,13 @@ class NodeSpec:
     health_timeout: float = DEFAULT_HEALTH_TIMEOUT
     exclusive_cpu: bool = False   # a CPU of its own for its stepping thread, the other processes off it
     composed: list[ComposedNodeSpec] = field(default_factory=list)   # a node_container's nodes
+    # How the command line is built for a program (``executable``): "" its args only; "ros": ROS's trailing
+    # ``--ros-args`` (name, namespace, parameter files, remappings); "node": our node options after its args
+    style: str = ""
+    node_name: str | None = None     # the ROS node name a launch file gave ("ros"/"node" styles)
+    ros_args: list[str] = field(default_factory=list)
+    cwd: str | None = None
+    action: Any = None               # the ROS launch action it came from (event handlers match on it)
 
     @property
     def full_name(self) -> str:
@@ -128,7 +137,7 @@ class NodeSpec:
         """The argv of this node (no shell): ``python -m MODULE`` with the shared node CLI, or the program; a
         container gets one ``--composable`` JSON per node (``composed_params``: each one's generated file)."""
         if self.executable is not None:
-            return [self.executable, *self.args]
+            return [self.executable, *self.args, *self.ros_options(generated_params)]
         argv = [python, "-m", str(self.module), "--name", self.name]
         if self.composed:
             if self.namespace:
@@ -138,6 +147,24 @@ class NodeSpec:
                 argv += ["--composable", json.dumps({"plugin": node.plugin, "argv": node.node_argv(generated)})]
             return argv
         return argv + node_options(self.namespace, self.param_files, generated_params, self.remaps) + self.args
+
+    def ros_options(self, generated_params: Path | None) -> list[str]:
+        files = [*self.param_files, *([str(generated_params)] if generated_params is not None else [])]
+        if self.style == "node":
+            named = ["--name", self.node_name] if self.node_name else []
+            return [*named, *node_options(self.namespace, files, None, self.remaps), *self.ros_args]
+        if self.style != "ros":
+            return []
+        argv = ["--ros-args"]
+        if self.node_name:
+            argv += ["-r", f"__node:={self.node_name}"]
+        if self.namespace:
+            argv += ["-r", f"__ns:=/{self.namespace}"]
+        for file in files:
+            argv += ["--params-file", file]
+        for src, dst in self.remaps:
+            argv += ["-r", f"{src}:={dst}"]
+        return argv + self.ros_args
 
     def describe(self) -> dict[str, Any]:
         out: dict[str, Any] = {"name": self.name, "namespace": self.namespace}
@@ -172,12 +199,38 @@ class ExitHandler:
 
 
 @dataclass
+class Expansion:
+    """What resolving some actions yields: processes to start, lines to log, triggers, a shutdown."""
+
+    nodes: list[NodeSpec] = field(default_factory=list)
+    logs: list[tuple[str, str]] = field(default_factory=list)    # (level, text)
+    triggers: list[Trigger] = field(default_factory=list)
+    shutdown: str | None = None
+
+
+@dataclass
+class Trigger:
+    """A reaction the supervisor runs: on a process's start / exit / output line, after a delay (timer), or
+    at shutdown; ``fire(event)`` resolves its actions then (errors become LaunchError)."""
+
+    kind: str                                  # start | exit | io | timer | shutdown
+    fire: Callable[[Any], Expansion]
+    matches: Callable[[NodeSpec], bool] | None = None   # which processes (None: every one)
+    after: float = 0.0                         # timer: seconds after it was set
+    source: str = ""
+    handler: Any = None                        # the event handler object (UnregisterEventHandler)
+
+
+@dataclass
 class LaunchPlan:
     file: Path
     args: dict[str, str]
     nodes: list[NodeSpec] = field(default_factory=list)
     on_exit: list[ExitHandler] = field(default_factory=list)
     on_shutdown: list[str] = field(default_factory=list)
+    logs: list[tuple[str, str]] = field(default_factory=list)    # LogInfo at the launch's start
+    triggers: list[Trigger] = field(default_factory=list)
+    shutdown: str | None = None                # a Shutdown action reached while resolving
 
     def describe(self) -> dict[str, Any]:
         return {
@@ -245,14 +298,39 @@ class _Scope:
     variables: dict[str, str]
     namespace: str
     file: Path
+    # what ROS launch actions set for the actions after them in the same scope (GroupAction scopes them)
+    env: dict[str, str | None] = field(default_factory=dict)
+    params: dict[str, Any] = field(default_factory=dict)
+    param_files: list[str] = field(default_factory=list)
+    remaps: list[tuple[str, str]] = field(default_factory=list)
 
     def ctx(self) -> SubstitutionContext:
         return SubstitutionContext(variables=self.variables, current_file=self.file)
 
+    def child(self, variables: dict[str, str] | None = None, file: Path | None = None) -> _Scope:
+        return _Scope(dict(self.variables) if variables is None else variables, self.namespace, file or self.file,
+                      dict(self.env), dict(self.params), list(self.param_files), list(self.remaps))
 
-class _Resolver:
+    def environment(self) -> dict[str, str]:
+        env = dict(os.environ)
+        for key, value in self.env.items():
+            if value is None:
+                env.pop(key, None)
+            else:
+                env[key] = value
+        return env
+
+    def context(self) -> LaunchContext:
+        """The ROS launch context of this scope (its launch configurations are this scope's, shared)."""
+        context = LaunchContext(current_file=self.file, environment=self.environment())
+        context.launch_configurations = self.variables
+        return context
+
+
+class _Resolver(RosResolution):
     def __init__(self, cli_args: Mapping[str, str]) -> None:
         self.cli_args = dict(cli_args)
+        self.process_names: set[str] = set()
         self.declared: set[str] = set()
         self.plan: LaunchPlan | None = None
         self.include_stack: list[Path] = []
@@ -279,6 +357,10 @@ class _Resolver:
         return value
 
     def condition(self, action: Action, scope: _Scope) -> bool:
+        if isinstance(action.condition_if, Condition):
+            context = scope.context()
+            return bool(self.call_launch_code(lambda: action.condition_if.evaluate(context), action.source,
+                                              "condition"))
         if action.condition_if is not None:
             if not evaluate_condition(self.text(action.condition_if, scope, action.source, "'if'"), "'if'",
                                       action.source):
@@ -295,7 +377,9 @@ class _Resolver:
 
     def walk(self, actions: list[Action], scope: _Scope) -> None:
         for action in actions:
-            if isinstance(action, ArgDecl):
+            if not isinstance(action, Action):   # a ROS launch action: it resolves itself
+                self.resolve_ros_action(action, scope)
+            elif isinstance(action, ArgDecl):
                 self.declare(action, scope)
             elif not self.condition(action, scope):
                 continue
@@ -346,28 +430,32 @@ class _Resolver:
 
     def include(self, action: IncludeDecl, scope: _Scope) -> None:
         name = self.text(action.file, scope, action.source, "include 'file'")
+        given: dict[str, str] = {}
+        for key, value in (action.args or {}).items():
+            given[str(key)] = self.text(value, scope, _line(action.args, key, action.source), f"include arg '{key}'")
         try:
             path = find_launch_file(name, scope.file.parent)
         except FileNotFoundError:
             raise LaunchError(f"included launch file not found: {name}", action.source) from None
-        if path.resolve() in self.include_stack:
-            raise LaunchError(f"include cycle: {path} includes itself", action.source)
-        given: dict[str, str] = {}
-        for key, value in (action.args or {}).items():
-            given[str(key)] = self.text(value, scope, _line(action.args, key, action.source), f"include arg '{key}'")
-        description = parse_file(path)
+        self.include_path(str(path), given, scope, action.source)
+
+    def include_ours(self, description: LaunchDescription, path: Path, given: dict[str, str], scope: _Scope,
+                     source: Source) -> None:
+        """Our YAML format's include: only the arguments the file declares reach it."""
         declared = {a.name for a in description.declared_args()}
         for key in given:
             if key not in declared:
                 raise LaunchError(f"include passes argument '{key}' that {path.name} does not declare "
-                                  f"(declared: {', '.join(sorted(declared)) or 'none'})", action.source)
+                                  f"(declared: {', '.join(sorted(declared)) or 'none'})", source)
         # Precedence: the include's own args, then the command line, then the including file's values.
         variables = {k: v for k, v in scope.variables.items() if k in declared}
         variables.update({k: v for k, v in self.cli_args.items() if k in declared})
         variables.update(given)
         self.include_stack.append(path.resolve())
-        self.run_file(description, _Scope(variables, scope.namespace, path))
-        self.include_stack.pop()
+        try:
+            self.run_file(description, _Scope(variables, scope.namespace, path))
+        finally:
+            self.include_stack.pop()
 
     def add_node(self, decl: NodeDecl, scope: _Scope) -> None:
         f = decl.fields
@@ -440,9 +528,11 @@ class _Resolver:
         taken = {other.name: other.source for other in self.plan.nodes}
         taken.update({node.name: node.source for other in self.plan.nodes for node in other.composed})
         for name, source in [(spec.name, str(decl.source)), *((n.name, n.source) for n in spec.composed)]:
-            if name in taken:
-                raise LaunchError(f"duplicate node name '{name}' (also at {taken[name]})", _source_from(source))
+            if name in taken or name in self.process_names:
+                raise LaunchError(f"duplicate node name '{name}' (also at {taken.get(name, 'a ROS launch action')})",
+                                  _source_from(source))
             taken[name] = source
+        self.process_names.add(spec.name)
         for other in self.plan.nodes:
             if spec.exclusive_cpu and other.exclusive_cpu:
                 raise LaunchError(f"node '{spec.name}': only one node of a launch can have exclusive_cpu "
@@ -602,20 +692,40 @@ def _check_module(module: str, source: Source) -> None:
         raise LaunchError(f"Python module '{module}' not found", source)
 
 
+# The launcher's own arguments: accepted with every launch file, declared by it or not (docs/launch.md).
+LAUNCHER_ARGS = ("zenoh_port", "ros2", "gui", "mode", "sensors", "commander", "world", "composed", "exclusive_cpu")
+
+
 def resolve(path: Path, cli_args: Mapping[str, str]) -> LaunchPlan:
-    """Parse ``path`` and resolve it with ``name:=value`` command-line arguments."""
-    description = parse_file(path)
+    """Load ``path`` (any launch format) and resolve it with ``name:=value`` command-line arguments."""
+    from launch.formats import load_description
+
+    description = load_description(path)
     resolver = _Resolver(cli_args)
-    top_declared = {a.name for a in description.declared_args()}
-    scope = _Scope({k: v for k, v in cli_args.items() if k in top_declared}, "", path)
     resolver.plan = LaunchPlan(file=path, args={})
     resolver.include_stack.append(path.resolve())
+    if description.format != "zenroid":
+        # ROS's semantics: every command-line argument is a launch configuration, declared or not
+        scope = _Scope(dict(cli_args), "", path)
+        resolver.walk(description.actions, scope)
+        resolver.plan.args = dict(scope.variables)
+        _check_plan(resolver, path)
+        return resolver.plan
+    top_declared = {a.name for a in description.declared_args()}
+    scope = _Scope({k: v for k, v in cli_args.items() if k in top_declared}, "", path)
     resolver.run_file(description, scope)
-    unknown = sorted(set(cli_args) - resolver.declared)
+    unknown = sorted(set(cli_args) - resolver.declared - set(LAUNCHER_ARGS))
     if unknown:
         raise LaunchError(f"unknown launch argument(s): {', '.join(unknown)} "
                           f"(declared: {', '.join(sorted(resolver.declared)) or 'none'}; see --show-args)",
                           Source(path, 1))
+    _check_plan(resolver, path)
+    resolver.plan.args = {k: scope.variables[k] for k in top_declared if k in scope.variables}
+    resolver.plan.args.update({k: v for k, v in cli_args.items() if k in LAUNCHER_ARGS and k not in top_declared})
+    return resolver.plan
+
+
+def _check_plan(resolver: _Resolver, path: Path) -> None:
     names = {n.name for n in resolver.plan.nodes}
     names |= {c.name for n in resolver.plan.nodes for c in n.composed}   # wait_for may name a composed node
     processes = {n.name for n in resolver.plan.nodes}
@@ -630,8 +740,6 @@ def resolve(path: Path, cli_args: Mapping[str, str]) -> LaunchPlan:
                                   Source(path, 0) if not node.source else _source_from(node.source))
             if target == node.name:
                 raise LaunchError(f"node '{node.name}' waits for itself", _source_from(node.source))
-    resolver.plan.args = {k: scope.variables[k] for k in top_declared if k in scope.variables}
-    return resolver.plan
 
 
 def _source_from(text: str) -> Source:

@@ -1,109 +1,262 @@
-"""Launch substitutions: ``$(var NAME)``, ``$(env NAME [default])``, ``$(dirname)``, ``$(robot NAME)``,
-``$(config NAME)``.
+"""``launch.substitutions`` of the ROS launch API: values performed when the launch is resolved.
 
-Pure text replacement, never evaluation. Substitutions nest; ``$$(`` is a literal ``$(``.
+Our YAML format's ``$(var ...)`` text substitutions live in ``launch._yaml_substitutions``; the XML and ROS
+YAML front ends' ``$(find-pkg-share ...)``, ``$(command ...)`` and ``$(eval ...)`` call the classes here.
+
+``PythonExpression`` evaluates Python, as ROS's does: a ``.launch.py`` (and ``$(eval ...)`` of a ROS XML or
+YAML launch file) is code chosen by whoever wrote the launch file, and launching it runs it. It is the
+launcher's only ``eval``; nothing received over the wire ever reaches it.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+import shlex
+import shutil
+import subprocess
 from pathlib import Path
+from typing import Any
 
-from launch.yaml_source import LaunchError, Source
+from launch.context import LaunchContext, Substitution, normalize, perform_substitutions
 
-KINDS = ("var", "env", "dirname", "robot", "config")
+__all__ = [
+    "AndSubstitution", "AnonName", "Command", "EnvironmentVariable", "EqualsSubstitution", "FindExecutable",
+    "LaunchConfiguration", "NotEqualsSubstitution", "NotSubstitution", "OrSubstitution", "PathJoinSubstitution",
+    "PathSubstitution", "PythonExpression", "Substitution", "SubstitutionFailure", "TextSubstitution",
+    "ThisLaunchFile", "ThisLaunchFileDir",
+]
 
-
-@dataclass
-class SubstitutionContext:
-    """What substitutions can see: the launch arguments in scope and the current file."""
-
-    variables: Mapping[str, str]
-    current_file: Path
-    environ: Mapping[str, str] | None = None
-    robot_resolver: Callable[[str], Path] | None = None
-
-
-def _default_robot_resolver(name: str) -> Path:
-    from nodes.share import robot_file
-
-    return robot_file(name)
+_TRUE = ("true", "1")
+_FALSE = ("false", "0")
 
 
-def _evaluate(kind: str, words: list[str], ctx: SubstitutionContext, source: Source) -> str:
-    if kind == "var":
-        if len(words) != 1:
-            raise LaunchError(f"$(var) takes one argument name, got {len(words)}", source)
-        name = words[0]
-        if name not in ctx.variables:
-            known = ", ".join(sorted(ctx.variables)) or "none"
-            raise LaunchError(f"$(var {name}): no launch argument '{name}' is declared (declared: {known})",
-                              source)
-        return ctx.variables[name]
-    if kind == "env":
-        if len(words) not in (1, 2):
-            raise LaunchError("$(env NAME [default]) takes a name and an optional default", source)
-        environ = os.environ if ctx.environ is None else ctx.environ
-        if words[0] in environ:
-            return environ[words[0]]
-        if len(words) == 2:
-            return words[1]
-        raise LaunchError(f"$(env {words[0]}): environment variable '{words[0]}' is not set "
-                          "and no default was given", source)
-    if kind == "dirname":
-        if words:
-            raise LaunchError("$(dirname) takes no arguments", source)
-        return str(ctx.current_file.resolve().parent)
-    if kind == "robot":
-        if len(words) != 1:
-            raise LaunchError("$(robot NAME) takes one robot name", source)
-        resolver = ctx.robot_resolver or _default_robot_resolver
+class SubstitutionFailure(Exception):
+    """A substitution that cannot be performed (missing configuration, failed command, ...)."""
+
+
+class TextSubstitution(Substitution):
+    def __init__(self, *, text: str) -> None:
+        self.text = str(text)
+
+    def perform(self, context: LaunchContext) -> str:
+        return self.text
+
+    def describe(self) -> str:
+        return repr(self.text)
+
+
+class _PathOps:
+    """``/`` joins paths, as ROS's PathSubstitution and PathJoinSubstitution do."""
+
+    def __truediv__(self, other: Any) -> PathJoinSubstitution:
+        return PathJoinSubstitution([self, other])
+
+
+class PathJoinSubstitution(_PathOps, Substitution):
+    def __init__(self, substitutions: Any) -> None:
+        # each item is one path component (itself a string, a substitution or a list of them)
+        self.substitutions = [normalize(item) for item in substitutions]
+
+    def perform(self, context: LaunchContext) -> str:
+        return os.path.join(*[perform_substitutions(context, part) for part in self.substitutions]) \
+            if self.substitutions else ""
+
+    def describe(self) -> str:
+        return f"PathJoin({self.substitutions!r})"
+
+
+class PathSubstitution(_PathOps, Substitution):
+    def __init__(self, path: Any) -> None:
+        self.path = normalize(str(path) if isinstance(path, Path) else path)
+
+    def perform(self, context: LaunchContext) -> str:
+        return perform_substitutions(context, self.path)
+
+
+class LaunchConfiguration(Substitution):
+    def __init__(self, variable_name: Any, *, default: Any = None) -> None:
+        self.variable_name = normalize(variable_name)
+        self.default = None if default is None else normalize(default)
+
+    def perform(self, context: LaunchContext) -> str:
+        name = perform_substitutions(context, self.variable_name)
+        if name in context.launch_configurations:
+            return context.launch_configurations[name]
+        if self.default is not None:
+            return perform_substitutions(context, self.default)
+        known = ", ".join(sorted(context.launch_configurations)) or "none"
+        raise SubstitutionFailure(f"launch configuration '{name}' does not exist (set: {known}; declare it with "
+                                  f"DeclareLaunchArgument or give it as {name}:=VALUE)")
+
+    def describe(self) -> str:
+        return f"LaunchConfiguration({''.join(map(str, self.variable_name))!r})"
+
+
+class EnvironmentVariable(Substitution):
+    def __init__(self, name: Any, *, default_value: Any = None) -> None:
+        self.name = normalize(name)
+        self.default_value = None if default_value is None else normalize(default_value)
+
+    def perform(self, context: LaunchContext) -> str:
+        name = perform_substitutions(context, self.name)
+        if name in context.environment:
+            return context.environment[name]
+        if self.default_value is not None:
+            return perform_substitutions(context, self.default_value)
+        raise SubstitutionFailure(f"environment variable '{name}' is not set and no default_value was given")
+
+
+class ThisLaunchFileDir(_PathOps, Substitution):
+    def perform(self, context: LaunchContext) -> str:
+        return context.locals.current_launch_file_directory
+
+
+class ThisLaunchFile(Substitution):
+    def perform(self, context: LaunchContext) -> str:
+        return str(context.current_file.resolve()) if context.current_file else ""
+
+
+class FindExecutable(Substitution):
+    def __init__(self, *, name: Any) -> None:
+        self.name = normalize(name)
+
+    def perform(self, context: LaunchContext) -> str:
+        name = perform_substitutions(context, self.name)
+        found = shutil.which(name, path=context.environment.get("PATH"))
+        if found is None:
+            raise SubstitutionFailure(f"executable '{name}' not found on the PATH")
+        return found
+
+
+class Command(Substitution):
+    """Runs a program (no shell: the text is split as a POSIX shell would) and gives its stdout."""
+
+    def __init__(self, command: Any, *, on_stderr: Any = "fail") -> None:
+        self.command = normalize(command)
+        self.on_stderr = normalize(on_stderr)
+
+    def perform(self, context: LaunchContext) -> str:
+        text = perform_substitutions(context, self.command)
+        on_stderr = perform_substitutions(context, self.on_stderr)
+        argv = shlex.split(text)
+        if not argv:
+            raise SubstitutionFailure("Command: empty command")
         try:
-            return str(resolver(words[0]))
-        except FileNotFoundError as exc:
-            raise LaunchError(f"$(robot {words[0]}): {exc}", source) from None
-    if kind == "config":
-        from nodes.share import config_file
+            done = subprocess.run(argv, capture_output=True, text=True, env=context.environment, check=False)
+        except FileNotFoundError:
+            raise SubstitutionFailure(f"Command: executable '{argv[0]}' not found (command: {text})") from None
+        except OSError as exc:
+            raise SubstitutionFailure(f"Command: cannot run '{text}': {exc}") from None
+        if done.returncode != 0:
+            raise SubstitutionFailure(f"Command '{text}' failed with status {done.returncode}: "
+                                      f"{done.stderr.strip() or done.stdout.strip()}")
+        if done.stderr.strip():
+            if on_stderr == "fail":
+                raise SubstitutionFailure(f"Command '{text}' wrote to stderr: {done.stderr.strip()}")
+            if on_stderr == "capture":
+                return done.stdout + done.stderr
+            if on_stderr == "warn":
+                print(f"[launch] [WARN] Command '{text}': {done.stderr.strip()}", flush=True)
+        return done.stdout
 
-        if len(words) != 1:
-            raise LaunchError("$(config NAME) takes one file name", source)
+    def describe(self) -> str:
+        return f"Command({self.command!r})"
+
+
+class PythonExpression(Substitution):
+    """Evaluates the text as Python (with ``math`` and the ``python_modules`` given), as ROS does: this is
+    launch-file code, run because the user launched the file."""
+
+    def __init__(self, expression: Any, python_modules: Any = ("math",)) -> None:
+        self.expression = normalize(expression)
+        self.python_modules = normalize(python_modules)
+
+    def perform(self, context: LaunchContext) -> str:
+        text = perform_substitutions(context, self.expression)
+        namespace: dict[str, Any] = {}
+        for module in self.python_modules:
+            name = module if isinstance(module, str) else module.perform(context)
+            imported = importlib.import_module(name)
+            namespace[name.split(".")[0]] = importlib.import_module(name.split(".")[0])
+            if name == "math":
+                namespace.update({k: v for k, v in vars(imported).items() if not k.startswith("_")})
         try:
-            return str(config_file(words[0]))
-        except FileNotFoundError as exc:
-            raise LaunchError(f"$(config {words[0]}): {exc}", source) from None
-    raise LaunchError(f"unknown substitution '$({kind})' (known: {', '.join(KINDS)})", source)
+            return str(eval(text, namespace))  # noqa: S307 - launch-file code by design (see the module docstring)
+        except Exception as exc:
+            raise SubstitutionFailure(f"PythonExpression '{text}' raised {type(exc).__name__}: {exc}") from None
+
+    def describe(self) -> str:
+        return f"PythonExpression({self.expression!r})"
 
 
-def has_substitution(text: str) -> bool:
-    return "$(" in text
+def _bool(text: str, what: str) -> bool:
+    lowered = text.strip().lower()
+    if lowered in _TRUE:
+        return True
+    if lowered in _FALSE:
+        return False
+    raise SubstitutionFailure(f"{what}: '{text}' is not a boolean (true, false, 1 or 0)")
 
 
-def substitute(text: str, ctx: SubstitutionContext, source: Source) -> str:
-    """Replace every ``$(...)`` in ``text`` (inner ones first: ``$(robot $(var robot))``); results are
-    never re-scanned. Errors name the file and line of ``source``."""
-    result, _ = _expand(text, 0, ctx, source, nested=False)
-    return result
+def _text(value: bool) -> str:
+    return "true" if value else "false"
 
 
-def _expand(text: str, pos: int, ctx: SubstitutionContext, source: Source, nested: bool) -> tuple[str, int]:
-    out: list[str] = []
-    while pos < len(text):
-        if text.startswith("$$(", pos):  # "$$(" escapes a literal "$("
-            out.append("$(")
-            pos += 3
-        elif text.startswith("$(", pos):
-            inner, pos = _expand(text, pos + 2, ctx, source, nested=True)
-            words = inner.split()
-            if not words:
-                raise LaunchError("empty substitution '$()'", source)
-            out.append(_evaluate(words[0], words[1:], ctx, source))
-        elif nested and text[pos] == ")":
-            return "".join(out), pos + 1
-        else:
-            out.append(text[pos])
-            pos += 1
-    if nested:
-        raise LaunchError(f"unterminated substitution in '{text}' (missing ')')", source)
-    return "".join(out), pos
+class AndSubstitution(Substitution):
+    def __init__(self, left: Any, right: Any) -> None:
+        self.left, self.right = normalize(left), normalize(right)
+
+    def perform(self, context: LaunchContext) -> str:
+        return _text(_bool(perform_substitutions(context, self.left), "AndSubstitution")
+                     and _bool(perform_substitutions(context, self.right), "AndSubstitution"))
+
+
+class OrSubstitution(AndSubstitution):
+    def perform(self, context: LaunchContext) -> str:
+        return _text(_bool(perform_substitutions(context, self.left), "OrSubstitution")
+                     or _bool(perform_substitutions(context, self.right), "OrSubstitution"))
+
+
+class NotSubstitution(Substitution):
+    def __init__(self, value: Any) -> None:
+        self.value = normalize(value)
+
+    def perform(self, context: LaunchContext) -> str:
+        return _text(not _bool(perform_substitutions(context, self.value), "NotSubstitution"))
+
+
+def _comparable(text: str) -> Any:
+    lowered = text.strip().lower()
+    if lowered in ("true", "false"):
+        return lowered == "true"
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+class EqualsSubstitution(Substitution):
+    """'true' when both sides are equal, as booleans, numbers or text (as ROS compares them)."""
+
+    def __init__(self, left: Any, right: Any) -> None:
+        self.left, self.right = normalize(left), normalize(right)
+
+    def perform(self, context: LaunchContext) -> str:
+        return _text(_comparable(perform_substitutions(context, self.left))
+                     == _comparable(perform_substitutions(context, self.right)))
+
+
+class NotEqualsSubstitution(EqualsSubstitution):
+    def perform(self, context: LaunchContext) -> str:
+        return _text(super().perform(context) == "false")
+
+
+class AnonName(Substitution):
+    """A unique name for this launch (``name`` plus the launcher's pid)."""
+
+    def __init__(self, name: Any) -> None:
+        self.name = normalize(name)
+
+    def perform(self, context: LaunchContext) -> str:
+        return f"{perform_substitutions(context, self.name)}_{os.getpid()}"

@@ -9,6 +9,7 @@ orphans if the launcher itself is killed.
 from __future__ import annotations
 
 import os
+import queue
 import signal
 import subprocess
 import sys
@@ -16,12 +17,13 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, Protocol
+from typing import IO, Any, Protocol
 
 import yaml
 
 from launch.reaper import Reaper
-from launch.resolve import ComposedNodeSpec, LaunchPlan, NodeSpec
+from launch.resolve import ComposedNodeSpec, Expansion, LaunchPlan, NodeSpec, Trigger
+from launch.yaml_source import LaunchError
 from nodes.core.cpu import EXCLUSIVE_CPU_ENV
 
 SIGTERM_AFTER_S = 4.0
@@ -131,6 +133,12 @@ class Supervisor:
                 self.composed_full_names[node.name] = node.full_name
         self.exit_status = 0
         self._print_lock = threading.Lock()
+        # ROS launch reactions (launch.resolve.Trigger): events queued (output lines come from reader threads)
+        # and run on the main loop; timers due at a monotonic time
+        self._events: queue.SimpleQueue = queue.SimpleQueue()
+        self._timers: list[tuple[float, Trigger]] = []
+        self._io_watched = any(t.kind == "io" for t in plan.triggers)
+        self._shutdown_fired = False
         self._stop_reason: str | None = None
         self._signals = 0
         self._shutdown_started: float | None = None
@@ -154,6 +162,8 @@ class Supervisor:
             for raw in iter(stream.readline, b""):
                 log.write(raw)
                 log.flush()
+                if self._io_watched:
+                    self._events.put(("io", managed, raw))
                 if managed.spec.output == "screen":
                     text = raw.decode("utf-8", errors="replace").rstrip("\n")
                     with self._print_lock:
@@ -166,14 +176,17 @@ class Supervisor:
         if not spec.params:
             return None
         path = self.log_dir / f"{spec.name}.params.yaml"
-        document = {spec.name: {"ros__parameters": spec.params}}
+        # a ROS program's node name may be its own default (launch_ros writes '/**' for the same reason)
+        key = spec.name if isinstance(spec, ComposedNodeSpec) or getattr(spec, "module", None) else "/**"
+        document = {key: {"ros__parameters": spec.params}}
         path.write_text(yaml.safe_dump(document, sort_keys=False), encoding="utf-8")
         return path
 
     def _start(self, managed: Managed) -> None:
         spec = managed.spec
         composed_params = {node.name: self._params_file(node) for node in spec.composed}
-        argv = spec.command(self.python, self._params_file(spec) if spec.module else None, composed_params)
+        generated = self._params_file(spec) if spec.module or spec.style else None
+        argv = spec.command(self.python, generated, composed_params)
         env = dict(self.child_env)
         env[STATE_DIR_ENV] = str(self.log_dir / "state")
         env[RESPAWN_ENV] = str(managed.restarts)
@@ -183,7 +196,7 @@ class Supervisor:
             env[EXCLUSIVE_CPU_ENV] = str(self.exclusive_cpu)
         try:
             proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                    stderr=subprocess.STDOUT, env=env, start_new_session=True)
+                                    stderr=subprocess.STDOUT, env=env, start_new_session=True, cwd=spec.cwd)
         except OSError as exc:
             self.say(f"cannot start '{spec.name}': {exc.strerror or exc}", "ERROR")
             managed.state = "exited"
@@ -205,6 +218,7 @@ class Supervisor:
             what = f"container: {', '.join(node.name for node in spec.composed)}"
         again = f" (restart {managed.restarts}/{spec.respawn_max})" if managed.restarts else ""
         self.say(f"started '{spec.name}' [pid {proc.pid}] ({what}){again}")
+        self._event("start", managed)
 
     def _dependency_state(self, managed: Managed) -> str:
         """'ready' when every wait_for node is live (or finished with status 0), 'failed' if one can never be."""
@@ -243,6 +257,7 @@ class Supervisor:
             return
         level = "INFO" if code == 0 else "ERROR"
         self.say(f"'{spec.name}' [pid {managed.proc.pid if managed.proc else '-'}] exited with {describe}", level)
+        self._event("exit", managed)
         for handler in self.plan.on_exit:
             if handler.node == spec.name:
                 if handler.log:
@@ -302,6 +317,75 @@ class Supervisor:
             self._kill_group(managed, signal.SIGKILL)
         else:
             self.say(f"{why}; it does not respawn, so it is left running", "WARN")
+
+    # -- ROS launch reactions ------------------------------------------------------------------
+    def _event(self, kind: str, managed: Managed, data: bytes = b"") -> None:
+        if any(t.kind == kind for t in self.plan.triggers):
+            self._events.put((kind, managed, data))
+
+    def _process_event(self, kind: str, managed: Managed, data: bytes) -> None:
+        from launch import events
+
+        spec, proc = managed.spec, managed.proc
+        common = dict(action=spec.action, name=spec.name, cmd=list(proc.args) if proc else None,
+                      pid=proc.pid if proc else 0)
+        if kind == "exit":
+            event: Any = events.ProcessExited(returncode=managed.exit_code or 0, **common)
+        elif kind == "start":
+            event = events.ProcessStarted(**common)
+        else:
+            event = events.ProcessIO(text=data, **common)
+        for trigger in list(self.plan.triggers):
+            if trigger.kind == kind and (trigger.matches is None or trigger.matches(spec)):
+                self._fire(trigger, event)
+
+    def _fire(self, trigger: Trigger, event: Any) -> None:
+        try:
+            expansion = trigger.fire(event)
+        except LaunchError as exc:
+            self.say(f"event handler at {trigger.source}: {exc}", "ERROR")
+            return
+        self._absorb(expansion)
+
+    def _absorb(self, expansion: Expansion) -> None:
+        # what a fired reaction (or the launch's start) yields: logs, processes, more reactions, a shutdown
+        for level, text in expansion.logs:
+            self.say(text, level)
+        if self._shutdown_started is None:
+            for spec in expansion.nodes:
+                managed = Managed(spec, _COLOURS[len(self.nodes) % len(_COLOURS)])
+                self.nodes.append(managed)
+                self.by_name[spec.name] = managed
+        for trigger in expansion.triggers:
+            if trigger.kind == "timer":
+                self._timers.append((time.monotonic() + trigger.after, trigger))
+            else:
+                self.plan.triggers.append(trigger)
+                self._io_watched = self._io_watched or trigger.kind == "io"
+        if expansion.shutdown:
+            self.request_stop(expansion.shutdown)
+
+    def _run_reactions(self, now: float) -> None:
+        while True:
+            try:
+                kind, managed, data = self._events.get_nowait()
+            except queue.Empty:
+                break
+            self._process_event(kind, managed, data)
+        due = [entry for entry in self._timers if entry[0] <= now]
+        if due and self._shutdown_started is None:
+            self._timers = [entry for entry in self._timers if entry[0] > now]
+            for _, trigger in due:
+                self._fire(trigger, None)
+
+    def _fire_shutdown(self) -> None:
+        from launch import events
+
+        if self._shutdown_fired:
+            return
+        self._shutdown_fired = True
+        for trigger in [t for t in self.plan.triggers if t.kind == "shutdown"]:
+            self._fire(trigger, events.Shutdown(reason=self._stop_reason or "the launch ended"))
 
     def request_stop(self, reason: str) -> None:
         if self._stop_reason is None:
@@ -375,6 +459,7 @@ class Supervisor:
     def _begin_shutdown(self) -> None:
         self._shutdown_started = time.monotonic()
         self.say(f"shutting down: {self._stop_reason}")
+        self._fire_shutdown()
         for managed in self.nodes:
             if managed.state in ("waiting", "respawn_pending"):
                 managed.state = "skipped"
@@ -385,8 +470,12 @@ class Supervisor:
         self.say(f"log directory: {self.log_dir}")
         if self.own_process_tree:
             become_subreaper()
+        self._absorb(Expansion(logs=list(self.plan.logs), shutdown=self.plan.shutdown,
+                               triggers=[t for t in self.plan.triggers if t.kind == "timer"]))
+        self.plan.triggers = [t for t in self.plan.triggers if t.kind != "timer"]
         while True:
             now = time.monotonic()
+            self._run_reactions(now)
             if self._stop_reason is not None and self._shutdown_started is None:
                 self._begin_shutdown()
             if self._shutdown_started is not None:
@@ -394,8 +483,10 @@ class Supervisor:
                     break
             else:
                 self._step_running(now)
-                if all(m.state in ("exited", "skipped") for m in self.nodes):
+                if all(m.state in ("exited", "skipped") for m in self.nodes) and not self._timers \
+                        and self._events.empty():
                     self.say("all processes have ended")
+                    self._fire_shutdown()
                     break
             time.sleep(POLL_S)
         for managed in self.nodes:

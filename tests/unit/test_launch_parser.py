@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
+from launch._yaml_substitutions import SubstitutionContext, substitute
 from launch.description import LaunchDeprecationWarning
 from launch.resolve import find_launch_file, resolve
-from launch.substitutions import SubstitutionContext, substitute
 from launch.yaml_source import LaunchError, Source
 
 ROOT = Path(__file__).resolve().parents[2]

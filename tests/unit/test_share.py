@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from launch.substitutions import SubstitutionContext, substitute
+from launch._yaml_substitutions import SubstitutionContext, substitute
 from launch.yaml_source import LaunchError, Source
 from nodes import share
 from nodes.sim.robot_files import ConfigError, resolve_robot_file
