@@ -2,14 +2,16 @@
 
 from nodes.core.action import ActionClient, ActionServer, ClientGoalHandle, ServerGoalHandle
 from nodes.core.endpoints import Client, Publisher, ServiceError, ServiceServer, Subscription
+from nodes.core.executor import CallbackGroup
 from nodes.core.lifecycle import LifecycleNode
 from nodes.core.log import Logger
 from nodes.core.node import Node, Timer
 from nodes.core.params import ParameterError
 from nodes.core.runner import add_connection_arguments, add_node_arguments, connect_from_args, run_node
+from nodes.core.spinner import Spinner
 
 __all__ = [
-    "ActionClient", "ActionServer", "Client", "ClientGoalHandle", "LifecycleNode", "Logger", "Node",
-    "ParameterError", "Publisher", "ServerGoalHandle", "ServiceError", "ServiceServer", "Subscription", "Timer",
+    "ActionClient", "ActionServer", "CallbackGroup", "Client", "ClientGoalHandle", "LifecycleNode", "Logger", "Node",
+    "ParameterError", "Publisher", "ServerGoalHandle", "ServiceError", "ServiceServer", "Spinner", "Subscription", "Timer",
     "add_connection_arguments", "add_node_arguments", "connect_from_args", "run_node",
 ]

@@ -18,6 +18,7 @@ from msgs.action_msgs import CancelGoal, GoalInfo, GoalStatus, GoalStatusArray
 from msgs.unique_identifier_msgs import UUID
 from nodes.core import graph
 from nodes.core.endpoints import Publisher, ServiceError, call_raw, decode_request, encoding_for
+from nodes.core.executor import CallbackGroup
 from nodes.core.runtime import NodeRuntime
 
 ACCEPTED, EXECUTING, CANCELING, SUCCEEDED, CANCELED, ABORTED = 1, 2, 3, 4, 5, 6
@@ -106,6 +107,7 @@ class ActionServer:
         self.callbacks = _ServerCallbacks(goal_callback, cancel_callback, accepted_callback, execute_callback,
                                           preempt_callback)
         self.single_goal = single_goal
+        self.group: CallbackGroup | None = None   # on a spinning thread: its callback group (rclpy's)
         self.goals: OrderedDict[bytes, ServerGoalHandle] = OrderedDict()
         self._lock = threading.RLock()
         self._feedback = Publisher(node, action_type.FeedbackMessage, f"{key}/feedback")
@@ -126,12 +128,12 @@ class ActionServer:
     def handle_send_goal(self, query: zenoh.Query) -> None:
         request = self._decode(query, self.action_type.SendGoalRequest)
         if request is not None:
-            self.node.executor.dispatch(self._handle_goal, query, request, where=f"action '{self.key}' goal")
+            self.node.executor.dispatch(self._handle_goal, query, request, where=f"action '{self.key}' goal", group=self.group)
 
     def handle_cancel_goal(self, query: zenoh.Query) -> None:
         request = self._decode(query, CancelGoal.Request)
         if request is not None:
-            self.node.executor.dispatch(self._handle_cancel, query, request, where=f"action '{self.key}' cancel")
+            self.node.executor.dispatch(self._handle_cancel, query, request, where=f"action '{self.key}' cancel", group=self.group)
 
     def handle_get_result(self, query: zenoh.Query) -> None:
         request = self._decode(query, self.action_type.GetResultRequest)

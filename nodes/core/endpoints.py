@@ -18,6 +18,7 @@ import zenoh
 import msgs
 from msgs import DecodeError
 from nodes.core import intraprocess, memory
+from nodes.core.executor import CallbackGroup
 from nodes.core.graph import parse_key
 from nodes.core.log import truncate
 from nodes.core.runtime import NodeRuntime
@@ -239,6 +240,7 @@ class Subscription:
         self._watchdog_idle = False
         self._watching_until: float | None = None   # the deadline the watchdog thread sleeps until
         self.closed = False
+        self.group: CallbackGroup | None = None   # on a spinning thread: its callback group (rclpy's)
         if pulled:
             self._sub = node.session.declare_subscriber(key, zenoh.handlers.RingChannel(backlog))
         elif max_rate is None:
@@ -419,7 +421,7 @@ class Subscription:
         if self.inline or self.pulled:   # pulled: the taking thread is the one the owner chose
             self.node.executor.run_callback(self.callback, *args, where=f"subscription '{self.key}'")
         else:
-            self.node.executor.dispatch(self.callback, *args, where=f"subscription '{self.key}'")
+            self.node.executor.dispatch(self.callback, *args, where=f"subscription '{self.key}'", group=self.group)
 
     def destroy(self) -> None:
         if self._bus is not None:
@@ -502,6 +504,7 @@ class ServiceServer:
         self.key = key
         self.handler = handler
         self.inline = inline
+        self.group: CallbackGroup | None = None   # on a spinning thread: its callback group (rclpy's)
         self._encoding = encoding_for(srv_type.Response._type)
         self._queryable = node.session.declare_queryable(key, self.handle_query, complete=True)
         self._token = node.presence.token("srv", key, srv_type._type)
@@ -514,7 +517,7 @@ class ServiceServer:
         if self.inline:
             self._serve(query, request)
         else:
-            self.node.executor.dispatch(self._serve, query, request, where=f"service '{self.key}'")
+            self.node.executor.dispatch(self._serve, query, request, where=f"service '{self.key}'", group=self.group)
 
     def _serve(self, query: zenoh.Query, request: Any) -> None:
         try:

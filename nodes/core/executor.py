@@ -10,6 +10,11 @@ Two ways to get there:
   serves requests between control periods.
 
 While a node's constructor runs it holds the lock, so no callback sees a half-built node.
+
+Nodes that run every callback on the spinning thread may also sort them into **callback groups**
+(rclpy's model): the callbacks of an exclusive group never overlap, those of a reentrant group may, and
+callbacks without a group share the node's lock. Several such nodes can be spun together, by one thread or
+by several (``Spinner``): each executor wakes the spinner that serves it when work arrives.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ import queue
 import threading
 import time
 import traceback
+from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -41,6 +47,7 @@ class Timer:
         self.next_due = now() + self.period
         self.due_time = self.next_due   # while its callback runs: the time this tick was due
         self.cancelled = False
+        self.group: CallbackGroup | None = None   # its callback group under a Spinner (None: the node's)
 
     def cancel(self) -> None:
         self.cancelled = True
@@ -49,11 +56,50 @@ class Timer:
         self.next_due = self._now() + self.period
 
 
+class CallbackGroup:
+    """Callbacks that never run at once (``exclusive``) or may run side by side on several spinning threads.
+
+    A callback whose exclusive group is busy is parked, not waited for: a spinning thread never blocks on a
+    group, so another group's work (a service response a running callback waits for) still gets a thread."""
+
+    def __init__(self, exclusive: bool = True) -> None:
+        self.exclusive = exclusive
+        self._lock = threading.Lock()
+        self._busy = False
+        self._parked: deque[tuple[Executor, tuple[Any, ...]]] = deque()
+
+    def enter(self, executor: Executor, item: tuple[Any, ...]) -> bool:
+        """True when the callback may run now; else it is parked until the running one ends."""
+        if not self.exclusive:
+            return True
+        with self._lock:
+            if self._busy:
+                self._parked.append((executor, item))
+                return False
+            self._busy = True
+            return True
+
+    def leave(self) -> None:
+        if not self.exclusive:
+            return
+        with self._lock:
+            self._busy = False
+            parked = self._parked.popleft() if self._parked else None
+        if parked is not None:
+            executor, item = parked
+            executor.put(item)
+
+
 class Executor:
     def __init__(self, report_error: Callable[[str], None], *, on_spin_thread: bool = False) -> None:
         self.report_error = report_error
         self.on_spin_thread = on_spin_thread
         self.lock = threading.RLock()
+        # True: a callback's exception ends the spin that ran it (rclpy), instead of being reported
+        self.propagate_errors = False
+        # the group of callbacks dispatched without one (None: the node's lock)
+        self.default_group: CallbackGroup | None = None
+        self.wake: Callable[[], None] | None = None   # set by a Spinner that serves this executor
         self._queue: queue.SimpleQueue = queue.SimpleQueue()
         self._wall_timers: list[tuple[float, int, Timer]] = []
         self._sim_timers: list[Timer] = []
@@ -71,10 +117,18 @@ class Executor:
             at = f" at {tb[-1].filename}:{tb[-1].lineno}" if tb else ""
             self.report_error(f"exception in {where}: {type(exc).__name__}: {exc}{at}")
 
-    def dispatch(self, fn: Callable[..., None], *args: Any, where: str = "callback") -> None:
+    def put(self, item: tuple[Any, ...]) -> None:
+        """Queue ``(fn, args, where, group)`` for the spinning thread and wake whoever spins this executor."""
+        self._queue.put(item)
+        wake = self.wake
+        if wake is not None:
+            wake()
+
+    def dispatch(self, fn: Callable[..., None], *args: Any, where: str = "callback",
+                 group: CallbackGroup | None = None) -> None:
         """Run a delivered callback one-at-a-time with the node's others (from a Zenoh thread)."""
         if self.on_spin_thread:
-            self._queue.put((fn, args, where))
+            self.put((fn, args, where, group))
             return
         with self.lock:
             self.run_callback(fn, *args, where=where)
@@ -85,19 +139,50 @@ class Executor:
         publish to each other from two threads, each holding its own lock: after ``IN_PROCESS_LOCK_WAIT_S`` the
         callback goes to this node's spinning thread instead."""
         if self.on_spin_thread:
-            self._queue.put((fn, args, where))
+            self.put((fn, args, where, None))
             return
         if not self.lock.acquire(timeout=IN_PROCESS_LOCK_WAIT_S):
-            self._queue.put((fn, args, where))
+            self.put((fn, args, where, None))
             return
         try:
             self.run_callback(fn, *args, where=where)
         finally:
             self.lock.release()
 
-    def call_soon(self, fn: Callable[..., None], *args: Any, where: str = "callback") -> None:
+    def call_soon(self, fn: Callable[..., None], *args: Any, where: str = "callback",
+                  group: CallbackGroup | None = None) -> None:
         """Queue ``fn(*args)`` for the spinning thread (from any thread)."""
-        self._queue.put((fn, args, where))
+        self.put((fn, args, where, group))
+
+    def run_item(self, item: tuple[Any, ...]) -> bool:
+        """Run one queued callback under its group (or the node's lock); False when its group was busy and it
+        was parked. With ``propagate_errors`` the callback's exception reaches the caller."""
+        fn, args, where, group = item
+        group = group or self.default_group
+        if group is None:
+            with self.lock:
+                self._call(fn, args, where)
+            return True
+        if not group.enter(self, item):
+            return False
+        try:
+            self._call(fn, args, where)
+        finally:
+            group.leave()
+        return True
+
+    def _call(self, fn: Callable[..., None], args: tuple[Any, ...], where: str) -> None:
+        if self.propagate_errors:
+            fn(*args)
+        else:
+            self.run_callback(fn, *args, where=where)
+
+    def take(self) -> tuple[Any, ...] | None:
+        """The next queued callback without waiting (None: nothing queued)."""
+        try:
+            return self._queue.get_nowait()
+        except queue.Empty:
+            return None
 
     @property
     def idle(self) -> bool:
@@ -126,7 +211,7 @@ class Executor:
             timer.due_time = timer.next_due
             # Catch up without bursts: one call, next deadline after now.
             timer.next_due += timer.period * max(1, int((now - timer.next_due) // timer.period) + 1)
-            self.run_callback(timer.callback, where="timer")
+            self._call(timer.callback, (), "timer")
 
     def _next_wall_deadline(self) -> float | None:
         with self._timer_lock:
@@ -134,7 +219,11 @@ class Executor:
                 heapq.heappop(self._wall_timers)
             return self._wall_timers[0][0] if self._wall_timers else None
 
-    def _run_wall_timers(self) -> None:
+    def next_wall_deadline(self) -> float | None:
+        return self._next_wall_deadline()
+
+    def due_wall_timers(self) -> list[Timer]:
+        """The wall timers due now, each moved to its next deadline (the caller runs them)."""
         now = time.monotonic()
         due: list[Timer] = []
         with self._timer_lock:
@@ -148,6 +237,10 @@ class Executor:
                 if timer.next_due < now:  # fell behind: skip missed ticks instead of bursting
                     timer.next_due = now + timer.period
                 heapq.heappush(self._wall_timers, (timer.next_due, next(self._timer_seq), timer))
+        return due
+
+    def _run_wall_timers(self) -> None:
+        due = self.due_wall_timers()
         if due:
             with self.lock:
                 for timer in due:
@@ -163,17 +256,24 @@ class Executor:
             until_timer = max(0.0, deadline - time.monotonic())
             wait = until_timer if wait is None else min(wait, until_timer)
         try:
-            fn, args, where = self._queue.get(timeout=wait) if wait is None or wait > 0 else self._queue.get_nowait()
+            item = self._queue.get(timeout=wait) if wait is None or wait > 0 else self._queue.get_nowait()
         except queue.Empty:
             self._run_wall_timers()
             return False
-        with self.lock:
-            self.run_callback(fn, *args, where=where)
-        return True
+        fn, args, where, group = item
+        if group is None and self.default_group is None:
+            with self.lock:
+                self.run_callback(fn, *args, where=where)
+            return True
+        return self.run_item(item)
 
     def request_shutdown(self) -> None:
         self._stop.set()
         self.call_soon(_nothing, where="wake")
+
+    def clear_shutdown(self) -> None:
+        """Spin again after a ``request_shutdown`` (rclpy's spin_once after spin_until_future_complete)."""
+        self._stop.clear()
 
     @property
     def shutdown_requested(self) -> bool:

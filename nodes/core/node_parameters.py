@@ -64,6 +64,17 @@ class NodeParameters:
         self._values[name] = value
         return value
 
+    def store(self, name: str, value: Any) -> None:
+        """Record a value another layer has checked (rclpy's parameters, with their own descriptors and
+        callbacks) so the services report it; declares ``name`` unchecked when it is new."""
+        if name not in self._descriptors:
+            self._descriptors[name] = ParameterDescriptor(name, value, None)
+        self._values[name] = value
+
+    def undeclare(self, name: str) -> None:
+        self._descriptors.pop(name, None)
+        self._values.pop(name, None)
+
     def add_on_set_callback(self, callback: Callable[[str, Any], str | None]) -> None:
         self._callbacks.append(callback)
 

@@ -32,6 +32,7 @@ VERBS: dict[str, tuple[str, str]] = {
     "graph": ("nodes.tools.graph", "print the node graph"),
     "doctor": ("nodes.tools.doctor", "check the installation and the network"),
     "router": ("nodes.tools.router", "run a standalone Zenoh router (zenohd stand-in)"),
+    "run": ("nodes.tools.run_cmd", "run a ROS 2 Python program (rclpy) or a package's executable"),
     "bag": ("nodes.tools.bag", "record/play/info bags"),
     "pkg": ("nodes.tools.pkg_cmd", "list packages, their prefix and executables"),
     "teleop": ("nodes.tools.teleop", "nudge a trajectory controller's joints from the keyboard"),

@@ -1,0 +1,87 @@
+"""``Spinner``: several nodes' executors spun together, by one thread or by several (rclpy's executors).
+
+Each executor it serves wakes it when work is queued (``Executor.wake``); one ``spin_once`` runs the due
+timers of every executor and then at most one queued callback, taking the executors in turn so that a busy
+node cannot starve a quiet one. Callbacks run under their callback group (``executor.CallbackGroup``):
+several threads may call ``spin_once`` at once and an exclusive group still runs one callback at a time.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+
+from nodes.core.executor import Executor
+
+
+class Spinner:
+    def __init__(self) -> None:
+        self._executors: list[Executor] = []
+        self._lock = threading.Lock()
+        self._event = threading.Event()
+        self._turn = 0
+
+    @property
+    def executors(self) -> list[Executor]:
+        return list(self._executors)
+
+    def add(self, executor: Executor) -> None:
+        with self._lock:
+            if executor not in self._executors:
+                self._executors.append(executor)
+        executor.wake = self._event.set
+        self._event.set()
+
+    def remove(self, executor: Executor) -> None:
+        with self._lock:
+            if executor in self._executors:
+                self._executors.remove(executor)
+        if executor.wake == self._event.set:
+            executor.wake = None
+
+    def wake(self) -> None:
+        self._event.set()
+
+    def spin_once(self, timeout: float | None = None, stop: Callable[[], bool] | None = None) -> bool:
+        """Run due timers and at most one queued callback, waiting up to ``timeout`` s (None: until there is
+        work) or until ``stop()`` is true after a ``wake()``. True if a callback ran."""
+        end = None if timeout is None else time.monotonic() + max(0.0, timeout)
+        while True:
+            self._event.clear()   # before looking: a wake-up after the look is not lost
+            if self._run_one():
+                return True
+            if stop is not None and stop():
+                return False
+            wait = None if end is None else end - time.monotonic()
+            deadline = self._next_deadline()
+            if deadline is not None:
+                until = max(0.0, deadline - time.monotonic())
+                wait = until if wait is None else min(wait, until)
+            if wait is not None and wait <= 0:
+                if end is not None and time.monotonic() >= end:
+                    return self._run_one()
+                continue
+            self._event.wait(wait)
+            if end is not None and time.monotonic() >= end:
+                return self._run_one()
+
+    def _next_deadline(self) -> float | None:
+        deadlines = [d for e in self.executors if (d := e.next_wall_deadline()) is not None]
+        return min(deadlines) if deadlines else None
+
+    def _run_one(self) -> bool:
+        executors = self.executors
+        ran = False
+        for executor in executors:
+            for timer in executor.due_wall_timers():
+                ran = executor.run_item((timer.callback, (), "timer", timer.group)) or ran
+        count = len(executors)
+        for i in range(count):
+            executor = executors[(self._turn + i) % count]
+            while (item := executor.take()) is not None:
+                if executor.run_item(item):
+                    self._turn = (self._turn + i + 1) % max(1, count)
+                    return True
+                # its group was busy: parked until the group's running callback ends
+        return ran
