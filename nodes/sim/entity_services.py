@@ -28,7 +28,7 @@ from nodes.sim.interfaces import (
 )
 from nodes.sim.model import Model
 from nodes.sim.pose import Pose, SpawnError
-from nodes.sim.pushes import JointEffort, LinkWrench, Pushes
+from nodes.sim.pushes import JointEffort, LinkWrench, Pushes, PushLimitError
 from nodes.sim.sdf import MAX_COORDINATE
 from nodes.sim.simulation import Simulation
 from nodes.sim.world import GROUND_NAME
@@ -232,8 +232,11 @@ class EntityServices:
         offset = body_matrix[:3, :3].T @ (point_world - body_matrix[:3, 3])
         now, dt = self.sim.world.time, self.sim.world.time_step
         start, end = Pushes.span(now, msgs.time_to_sec(request.start_time), duration, dt)
-        self.pushes.add_wrench(LinkWrench(model=target.model.name, link=link, body=body, force=force, torque=torque,
-                                          offset=offset, start=start, end=end))
+        try:
+            self.pushes.add_wrench(LinkWrench(model=target.model.name, link=link, body=body, force=force,
+                                              torque=torque, offset=offset, start=start, end=end), now)
+        except PushLimitError as exc:
+            raise EntityError(str(exc)) from None
         span = "until cleared" if math.isinf(end) else f"for {end - start:g} s"
         return (f"apply_link_wrench: force {force.round(6).tolist()} N, torque {torque.round(6).tolist()} N m on "
                 f"{link!r} {span} from sim time {start:.3f} s")
@@ -280,10 +283,13 @@ class EntityServices:
         duration = msgs.time_to_sec(request.duration)
         if duration == 0:
             raise EntityError("duration: 0 s applies nothing (negative: until cleared)")
-        start, end = Pushes.span(self.sim.world.time, msgs.time_to_sec(request.start_time), duration,
-                                 self.sim.world.time_step)
-        self.pushes.add_effort(JointEffort(model=model.name, joint=scoped, dart_joint=joint, effort=float(effort),
-                                           start=start, end=end))
+        now = self.sim.world.time
+        start, end = Pushes.span(now, msgs.time_to_sec(request.start_time), duration, self.sim.world.time_step)
+        try:
+            self.pushes.add_effort(JointEffort(model=model.name, joint=scoped, dart_joint=joint,
+                                               effort=float(effort), start=start, end=end), now)
+        except PushLimitError as exc:
+            raise EntityError(str(exc)) from None
         span = "until cleared" if math.isinf(end) else f"for {end - start:g} s"
         return f"apply_joint_effort: {effort:g} on {scoped!r} {span} from sim time {start:.3f} s"
 

@@ -1,0 +1,107 @@
+"""Caps on what accumulates in the simulator, from the outside: a real simulator process given the input over
+the wire (``sim/*`` services) or through ``world:=``. Each cap refuses with its limit named in the reply and on
+rosout, and the simulator keeps serving: pending wrenches and efforts per link/joint and in total, start times
+beyond the horizon, sensors per robot and in total, IMU/F/T samples per simulated second, links reached through
+includes (counted while they are expanded), and sensor messages that would not fit the payload limit."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+
+from nodes.core import Node
+from nodes.sim.interfaces import (
+    ApplyJointEffort,
+    ApplyLinkWrench,
+    DeleteEntity,
+    GetModelList,
+    JointRequest,
+    LinkRequest,
+    SpawnEntity,
+)
+from nodes.sim.pushes import MAX_PENDING, MAX_PER_TARGET, START_HORIZON_S
+from tests.integration.test_sim_helpers import call, start_sim, wait_ready
+
+pytestmark = pytest.mark.slow
+
+ROOT = Path(__file__).resolve().parents[2]
+ARM = (ROOT / "tests" / "data" / "sim_arm.urdf").read_text()
+BOX = """<?xml version="1.0"?><sdf version="1.7"><model name="b"><pose>{x} 5 0.1 0 0 0</pose><link name="link">
+  <inertial><mass>1</mass><inertia><ixx>0.01</ixx><iyy>0.01</iyy><izz>0.01</izz></inertia></inertial>
+  <collision name="c"><geometry><box><size>0.2 0.2 0.2</size></box></geometry></collision></link></model></sdf>"""
+
+
+@pytest.fixture
+def node(router):
+    n = Node("sim_caps_test", connect=[router])
+    yield n
+    n.destroy()
+
+
+def wrench(link: str, start_sec: int = 0) -> ApplyLinkWrench.Request:
+    """A zero-newton wrench held until cleared (what piled up without limit)."""
+    request = ApplyLinkWrench.Request(link_name=link)
+    request.duration.sec = -1
+    request.start_time.sec = start_sec
+    return request
+
+
+def spawn(node: Node, name: str, xml: str, timeout: float = 30.0) -> SpawnEntity.Response:
+    return call(node, SpawnEntity, "/sim/spawn_entity", SpawnEntity.Request(name=name, xml=xml), timeout=timeout)
+
+
+# ----------------------------------------------------------------------------------------------- defect 4
+def test_pending_wrenches_and_efforts_are_capped_per_target_and_in_total(processes, node):
+    proc = start_sim(processes, "world:=simple_lab.world", "paused:=true")
+    wait_ready(node, processes, proc)
+
+    # 300 zero-newton wrenches held on one link: the first MAX_PER_TARGET are taken, the rest refused by name
+    replies = [call(node, ApplyLinkWrench, "/sim/apply_link_wrench", wrench("box_small")) for _ in range(300)]
+    accepted = sum(r.success for r in replies)
+    assert accepted == MAX_PER_TARGET, replies[-1].status_message
+    assert f"the limit per link is {MAX_PER_TARGET}" in replies[-1].status_message, replies[-1].status_message
+    call(node, LinkRequest, "/sim/clear_link_wrenches", LinkRequest.Request(link_name="box_small"))
+    assert call(node, ApplyLinkWrench, "/sim/apply_link_wrench", wrench("box_small")).success   # room again
+
+    # in total: boxes of their own, MAX_PER_TARGET wrenches on each, until the total is full
+    boxes = MAX_PENDING // MAX_PER_TARGET + 1
+    for i in range(boxes):
+        assert spawn(node, f"cap_box_{i}", BOX.format(x=i)).success
+    refused = None
+    for i in range(boxes):
+        for _ in range(MAX_PER_TARGET):
+            reply = call(node, ApplyLinkWrench, "/sim/apply_link_wrench", wrench(f"cap_box_{i}::link"))
+            if not reply.success:
+                refused = reply.status_message
+                break
+        if refused:
+            break
+    assert refused is not None and f"the limit in total is {MAX_PENDING}" in refused, refused
+
+    # a start beyond the horizon (2^31 s) is refused, naming it; one inside it is taken
+    call(node, LinkRequest, "/sim/clear_link_wrenches", LinkRequest.Request(link_name="box_small"))
+    reply = call(node, ApplyLinkWrench, "/sim/apply_link_wrench", wrench("box_small", start_sec=2**31 - 1))
+    assert not reply.success and f"beyond the {START_HORIZON_S:g} s horizon" in reply.status_message, reply
+    assert call(node, ApplyLinkWrench, "/sim/apply_link_wrench", wrench("box_small", start_sec=60)).success
+
+    # efforts: the same caps per joint
+    assert call(node, SpawnEntity, "/sim/spawn_entity",
+                SpawnEntity.Request(name="arm", xml=ARM, fixed=True), timeout=30).success
+    effort = ApplyJointEffort.Request(joint_name="arm::shoulder", effort=0.0)
+    effort.duration.sec = -1
+    replies = [call(node, ApplyJointEffort, "/sim/apply_joint_effort", effort) for _ in range(MAX_PER_TARGET + 5)]
+    assert sum(r.success for r in replies) == MAX_PER_TARGET
+    assert f"the limit per joint is {MAX_PER_TARGET}" in replies[-1].status_message, replies[-1].status_message
+    effort.start_time.sec = 2**31 - 1
+    call(node, JointRequest, "/sim/clear_joint_efforts", JointRequest.Request(joint_name="arm::shoulder"))
+    reply = call(node, ApplyJointEffort, "/sim/apply_joint_effort", effort)
+    assert not reply.success and "horizon" in reply.status_message
+
+    # the refusals are on rosout, and the simulator still serves
+    log = processes.output(proc)
+    assert f"the limit per link is {MAX_PER_TARGET}" in log and f"the limit in total is {MAX_PENDING}" in log
+    assert proc.poll() is None
+    assert "box_small" in call(node, GetModelList, "/sim/get_model_list").model_names
