@@ -105,3 +105,69 @@ def test_pending_wrenches_and_efforts_are_capped_per_target_and_in_total(process
     assert f"the limit per link is {MAX_PER_TARGET}" in log and f"the limit in total is {MAX_PENDING}" in log
     assert proc.poll() is None
     assert "box_small" in call(node, GetModelList, "/sim/get_model_list").model_names
+
+
+# ----------------------------------------------------------------------------------------------- defect 6
+LEAF = ('<link name="l"><inertial><mass>1</mass></inertial>'
+        '<collision name="c"><geometry><box><size>0.1 0.1 0.1</size></box></geometry></collision></link>')
+
+
+def fan_out(root: Path, levels: int, fan: int = 10) -> Path:
+    """``levels`` small model files fan1..fanN, each including the next ``fan`` times: fan**(levels-1) links."""
+    for i in range(1, levels + 1):
+        folder = root / f"fan{i}"
+        folder.mkdir(parents=True, exist_ok=True)
+        body = LEAF if i == levels else "".join(f"<include><uri>model://fan{i + 1}</uri><name>m{k}</name></include>"
+                                                for k in range(fan))
+        (folder / "model.sdf").write_text(f'<?xml version="1.0"?><sdf version="1.7"><model name="fan{i}">{body}'
+                                          "</model></sdf>")
+    block = root / "block"
+    block.mkdir(exist_ok=True)
+    links = "".join(LEAF.replace('name="l"', f'name="l{i}"') for i in range(100))
+    (block / "model.sdf").write_text(f'<?xml version="1.0"?><sdf version="1.7"><model name="block">{links}'
+                                     "</model></sdf>")
+    return root
+
+
+def sim_argv(*params: str) -> list[str]:
+    argv = ["-m", "nodes.sim", "--params-file", str(ROOT / "config" / "sim.yaml")]
+    for param in params:
+        argv += ["--param", param]
+    return argv
+
+
+def test_include_fan_out_is_refused_while_it_is_expanded(processes, node, tmp_path):
+    models = fan_out(tmp_path / "models", levels=8)      # 10^7 links once expanded
+    env = {"ZENROID_MODEL_PATH": str(models)}
+
+    # in a world file: the simulator refuses it and exits 2 (a configuration it cannot use), naming the limit
+    world = tmp_path / "fan.world"
+    world.write_text('<?xml version="1.0"?><sdf version="1.7"><world name="fan">'
+                     "<include><uri>model://fan1</uri></include></world></sdf>")
+    bad = processes.start(*sim_argv(f"world:={world}"), name="fan_world", env=env)
+    try:
+        bad.wait(timeout=60)    # (expanded in full, this neither got ready nor exited within 60 s)
+    except Exception:           # noqa: BLE001 - still expanding: fail below with the log
+        pass
+    assert bad.poll() == 2, processes.output(bad)[-2000:]
+    assert "a model has more than 128 links (nested and included ones counted in" in processes.output(bad)
+
+    # through sim/spawn_entity: refused in the reply, and the simulator keeps serving
+    proc = processes.start(*sim_argv("paused:=true"), name="sim", env=env)
+    wait_ready(node, processes, proc)
+    for xml, reason in [
+        ("<sdf version='1.7'><model name='x'><include><uri>model://fan1</uri></include></model></sdf>",
+         "a model has more than 128 links"),
+        ("<sdf version='1.7'><model name='x'>" + "".join(f"<include><uri>model://block</uri><name>b{k}</name>"
+                                                         "</include>" for k in range(2)) + "</model></sdf>",
+         "a model has more than 128 links"),
+    ]:
+        reply = spawn(node, "fan", xml, timeout=60)
+        assert not reply.success and reason in reply.status_message, reply.status_message
+        assert reason in processes.output(proc)
+    assert proc.poll() is None
+    assert call(node, GetModelList, "/sim/get_model_list").model_names == ["ground_plane"]
+    # one block of 100 links is within the caps
+    reply = spawn(node, "block", "<sdf version='1.7'><model name='x'><include><uri>model://block</uri>"
+                  "</include></model></sdf>", timeout=60)
+    assert reply.success, reply.status_message

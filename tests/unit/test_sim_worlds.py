@@ -289,3 +289,32 @@ def test_unknown_world_names_list_the_shipped_ones() -> None:
     with pytest.raises(WorldError, match=r"world 'no_such_world' not found .*shipped: empty.world, simple_lab.world"):
         load_world("no_such_world")
     assert load_world("simple_lab").name == load_world("simple_lab.world").name == "simple_lab"
+
+
+def test_links_and_models_reached_through_includes_are_counted_while_expanding(tmp_path: Path) -> None:
+    """Each cap is met at the first element over it: the fan-outs below are 10^7 links expanded in full."""
+    leaf = ("<link name='l'><collision name='c'><geometry><box><size>0.1 0.1 0.1</size></box></geometry>"
+            "</collision></link>")
+    for i in range(1, 9):
+        body = leaf if i == 8 else "".join(f"<include><uri>model://fan{i + 1}</uri><name>m{k}</name></include>"
+                                           for k in range(10))
+        make_model(tmp_path, f"fan{i}", f"<model name='fan{i}'>{body}</model>")
+    links = "".join(leaf.replace("name='l'", f"name='l{i}'") for i in range(100))
+    make_model(tmp_path, "block", f"<model name='block'>{links}</model>")
+    make_model(tmp_path, "one", f"<model name='one'>{leaf}</model>")
+    make_model(tmp_path, "ten", "<model name='ten'>" + "".join(
+        f"<include><uri>model://one</uri><name>o{k}</name></include>" for k in range(10)) + "</model>")
+    env = {"ZENROID_MODEL_PATH": str(tmp_path)}
+    refused(world("<include><uri>model://fan1</uri></include>"),
+            rf"a model has more than {sdf.MAX_MODEL_LINKS} links .*fan8/model.sdf", env)
+    with pytest.raises(WorldError, match=rf"a model has more than {sdf.MAX_MODEL_LINKS} links"):
+        sdf.parse_model("<sdf version='1.7'><model name='x'><include><uri>model://fan1</uri></include></model></sdf>",
+                        "spawn", env)
+    blocks = "".join(f"<include><uri>model://block</uri><name>b{k}</name></include>"
+                     for k in range(sdf.MAX_LINKS // 100 + 1))
+    refused(world(blocks), rf"more than {sdf.MAX_LINKS} links \(includes counted in", env)
+    tens = "".join(f"<include><uri>model://ten</uri><name>t{k}</name></include>"
+                   for k in range(sdf.MAX_MODELS // 11 + 1))
+    refused(world(tens), rf"more than {sdf.MAX_MODELS} models \(nested and included ones counted in", env)
+    within = "".join(f"<include><uri>model://block</uri><name>b{k}</name></include>" for k in range(3))
+    assert len(parse_world(world(within), Path("/tmp/test.world"), env).models) == 3   # within the caps
