@@ -71,6 +71,12 @@ def _find_file(pkg: str, kind: str, name: str) -> Path | None:
     return candidate if candidate is not None and candidate.is_file() else None
 
 
+def definition_file(type_name: str) -> Path | None:
+    """The ``.msg``/``.srv``/``.action`` file of a type ("pkg/kind/Name" or "pkg/Name"), or None."""
+    pkg, kind, name = normalize(type_name)
+    return _find_file(pkg, kind, name)
+
+
 def interface_packages() -> dict[str, Path]:
     """ROS packages of the package index (the workspace's src/, ROS_PACKAGE_PATH, AMENT_PREFIX_PATH ...) that
     hold msg/, srv/ or action/ folders: user interface packages, found as ROS finds them."""

@@ -20,6 +20,7 @@ from nodes.packages import stack
 from nodes.packages.index import Package, PackageNotFoundError, find_package, index
 
 ENTRY_RUNNER = "nodes.packages.entry"
+SERVE = "nodes.packages.serve"  # runs a served executable with its ROS argument spellings mapped to ours
 _ENTRY_RE = re.compile(r"^\s*([A-Za-z0-9_.\-]+)\s*=\s*([A-Za-z_][\w.]*)\s*:\s*([A-Za-z_][\w.]*)\s*$")
 
 
@@ -150,8 +151,8 @@ def _own(package: Package) -> dict[str, Executable]:
 def executables(package: str) -> dict[str, Executable]:
     """Every executable of ``package`` by name: its own, then the ones zenroid serves for it."""
     known = index().packages.get(package)
-    served = {name: Executable(package, name, (sys.executable, "-m", item.module, *item.module_args),
-                               module=item.module, module_args=item.module_args, ros_node=item.ros_node)
+    served = {name: Executable(package, name, (sys.executable, "-m", SERVE, package, name), module=SERVE,
+                               module_args=(package, name), ros_node=item.ros_node)
               for name, item in stack.entries(package).items()}
     if known is None and not served:
         find_package(package)  # raises PackageNotFoundError with the paths searched

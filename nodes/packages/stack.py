@@ -21,12 +21,16 @@ TOOLS = "nodes.tools"
 SERVED: dict[str, dict[str, Served]] = {
     "controller_manager": {
         "spawner": Served(TOOLS, ("control", "spawner"), what="zenroid control spawner"),
+        "unspawner": Served(TOOLS, ("control",), what="zenroid control set_controller_state + unload_controller"),
     },
     "robot_state_publisher": {
         "robot_state_publisher": Served("nodes.state_publisher", ros_node=True, what="our state publisher"),
     },
     "gazebo_ros": {
         "spawn_entity.py": Served(TOOLS, ("spawn",), what="zenroid spawn"),
+    },
+    "ros_gz_sim": {
+        "create": Served(TOOLS, ("spawn",), what="zenroid spawn"),
     },
     "xacro": {
         "xacro": Served(TOOLS, ("xacro",), what="zenroid xacro"),

@@ -35,6 +35,7 @@ VERBS: dict[str, tuple[str, str]] = {
     "run": ("nodes.tools.run_cmd", "run a ROS 2 Python program (rclpy) or a package's executable"),
     "bag": ("nodes.tools.bag", "record/play/info bags"),
     "pkg": ("nodes.tools.pkg_cmd", "list packages, their prefix and executables"),
+    "interface": ("nodes.tools.interface_cmd", "list and show message, service and action types"),
     "teleop": ("nodes.tools.teleop", "nudge a trajectory controller's joints from the keyboard"),
 }
 
@@ -47,12 +48,13 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv: list[str] | None = None, prog: str = "zenroid") -> int:
+    """Run one verb; ``prog`` is the name errors and usage give (``ros2`` when nodes/tools/ros2.py calls)."""
     argv = list(sys.argv[1:] if argv is None else argv)
     if not argv or argv[0] in ("-h", "--help") or argv[0] not in VERBS:
         parser = build_parser()
         if argv and argv[0] not in ("-h", "--help"):
-            print(f"zenroid: unknown verb '{argv[0]}' (choose from {', '.join(VERBS)})", file=sys.stderr)
+            print(f"{prog}: unknown verb '{argv[0]}' (choose from {', '.join(VERBS)})", file=sys.stderr)
             return 2
         parser.print_help()
         return 0
@@ -62,19 +64,19 @@ def main(argv: list[str] | None = None) -> int:
         module = importlib.import_module(module_name)
     except ModuleNotFoundError as exc:
         if exc.name and module_name.startswith(exc.name):
-            print(f"zenroid {verb}: not available in this build", file=sys.stderr)
+            print(f"{prog} {verb}: not available in this build", file=sys.stderr)
             return 2
         raise
-    parser = argparse.ArgumentParser(prog=f"zenroid {verb}", description=help_text)
+    parser = argparse.ArgumentParser(prog=f"{prog} {verb}", description=help_text)
     module.add_arguments(parser)
     try:
         args = parser.parse_args(rest)
         return int(module.run(args) or 0)
     except UsageError as exc:
-        print(f"zenroid {verb}: {exc}", file=sys.stderr)
+        print(f"{prog} {verb}: {exc}", file=sys.stderr)
         return 2
     except Failed as exc:
-        print(f"zenroid {verb}: {exc}", file=sys.stderr)
+        print(f"{prog} {verb}: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         return 130

@@ -247,7 +247,8 @@ def test_setup_cfg_console_scripts(tmp_path: Path) -> None:
 
 def test_served_executables_are_our_modules(clean_env: Path) -> None:
     spawner = find_executable("controller_manager", "spawner")
-    assert spawner.argv == (sys.executable, "-m", "nodes.tools", "control", "spawner") and not spawner.ros_node
+    assert spawner.argv == (sys.executable, "-m", "nodes.packages.serve", "controller_manager", "spawner")
+    assert not spawner.ros_node
     assert find_executable("robot_state_publisher", "robot_state_publisher").ros_node
 
 
