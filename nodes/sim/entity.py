@@ -3,16 +3,16 @@
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass, field
 
 import dartpy as dart
 
+from nodes.core import names
 from nodes.sim.model import Model
 from nodes.sim.pose import Pose, SpawnError
 from nodes.sim.urdf_info import RobotInfo, parse_urdf
-
-_NAME = re.compile(r"^[A-Za-z0-9_.\-]+$")   # entity names and namespace parts: safe in key expressions
+from nodes.urdf.rendered_sensors import parse_rendered_sensors
+from nodes.urdf.xml_safety import parse_xml
 
 
 @dataclass
@@ -28,19 +28,33 @@ class EntitySpec:
     base_uri: str = ""            # where relative mesh paths resolve (the URDF file's path)
 
 
+def sensor_key_problems(info: RobotInfo, xml: str, namespace: str) -> list[str]:
+    """The keys the robot's sensors will publish on in ``namespace``, each checked as the full topic name it
+    is (a long namespace and a long remapping may be valid alone and too long together)."""
+    keys = [(sensor.name, sensor.plugin.key(namespace)) for sensor in info.sensors if sensor.plugin is not None]
+    if info.rendered_sensors:
+        keys += [(spec.name, key) for spec in parse_rendered_sensors(parse_xml(xml.encode()), namespace)
+                 for key in spec.keys.values()]
+    return [f"sensor {names.shown(sensor)} publishes on {names.shown('/' + key)}: {problem}"
+            for sensor, key in keys if (problem := names.topic_problem("/" + key)) is not None]
+
+
 class Entity(Model):
     """A spawned model: its skeleton, URDF info and spawn state (for reset_world)."""
 
     def __init__(self, spec: EntitySpec) -> None:
-        if not _NAME.match(spec.name or ""):
-            raise SpawnError(f"name {spec.name!r} must be letters, digits, '_', '-' or '.'")
+        try:
+            names.check(names.node_name_problem(spec.name), "name", spec.name)
+            names.check(names.namespace_problem(spec.namespace), "robot_namespace", spec.namespace)
+        except names.NameError_ as exc:
+            raise SpawnError(str(exc)) from None
         self.spec = spec
         self.name = spec.name
         self.namespace = (spec.namespace or spec.name).strip("/")
-        if not all(_NAME.match(part) for part in self.namespace.split("/")):
-            raise SpawnError(f"robot_namespace {spec.namespace!r} must be '/'-separated names of letters, digits, "
-                             "'_', '-' or '.'")
         self.info: RobotInfo = parse_urdf(spec.xml, spec.base_uri or None)
+        problems = sensor_key_problems(self.info, spec.xml, self.namespace)
+        if problems:
+            raise SpawnError("; ".join(problems[:5]))
         self.pose = spec.pose.validated()
         self.skeleton = self._load_skeleton(spec, self.info)
         self.skeleton.setName(spec.name)

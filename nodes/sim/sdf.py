@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
+from nodes.core import names as ros_names
 from nodes.share import WORLDS_DIR
 from nodes.share import world_file as shared_world_file
 from nodes.urdf.model import rpy_matrix
@@ -520,8 +521,8 @@ class _Reader:
     def model(self, element: etree._Element, parent_pose: np.ndarray, name: str | None, stack: list[Path],
               override_pose: np.ndarray | None = None) -> ModelSpec:
         model_name = name or element.get("name", "")
-        if not re.fullmatch(r"[A-Za-z0-9_.\-]+", model_name or ""):
-            raise self.error(element, f"model name {model_name!r} must be letters, digits, '_', '-' or '.'")
+        if (problem := ros_names.node_name_problem(model_name)) is not None:
+            raise self.error(element, f"model name {ros_names.shown(model_name)}: {problem}")
         where = self.where
         self.budget.model(f"{where}: {_line(element)}")
         pose = parent_pose @ (override_pose if override_pose is not None else self.pose(element, where))

@@ -8,6 +8,7 @@ import math
 from typing import Any, Protocol
 
 from msgs.geometry_msgs import Vector3
+from nodes.core import names
 from nodes.core.log import Logger
 from nodes.sim.entity import EntitySpec, Pose, SpawnError
 from nodes.sim.interfaces import (
@@ -71,8 +72,17 @@ class SimServices:
     # ------------------------------------------------------------------------------------- entities
     def spawn(self, request: Any) -> Any:
         def fail(reason: str) -> Any:
-            self.logger.error(f"spawn_entity {request.name!r} failed: {reason}")
+            self.logger.error(f"spawn_entity {names.shown(request.name)} failed: {reason}")
             return SpawnEntity.Response(success=False, status_message=reason)
+
+        # names first: a name no ROS graph could carry never reaches a key expression
+        try:
+            if request.name:   # empty: an SDF model's own name
+                names.check(names.node_name_problem(request.name), "name", request.name)
+            names.check(names.namespace_problem(request.robot_namespace), "robot_namespace",
+                        request.robot_namespace)
+        except names.NameError_ as exc:
+            return fail(str(exc))
 
         if len(request.initial_joint_names) != len(request.initial_joint_positions):
             return fail(f"initial_joint_names has {len(request.initial_joint_names)} entries but "
@@ -95,7 +105,7 @@ class SimServices:
 
     def delete(self, request: Any) -> Any:
         if not self.simulator.delete_entity(request.name):
-            return DeleteEntity.Response(success=False, status_message=f"no entity named {request.name!r}")
+            return DeleteEntity.Response(success=False, status_message=f"no entity named {names.shown(request.name)}")
         self.logger.info(f"deleted {request.name!r}")
         return DeleteEntity.Response(success=True, status_message=f"deleted {request.name!r}")
 

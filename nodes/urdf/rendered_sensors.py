@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from lxml import etree
 
+from nodes.core.names import shown, topic_problem
 from nodes.urdf.sensors import (
     Noise,
     SensorDeclarationError,
@@ -33,6 +34,7 @@ from nodes.urdf.sensors import (
     naming_problem,
     parse_noise,
     parse_number,
+    plugin_name_problems,
     read_sensor_basics,
     resolve_topic,
     sensor_where,
@@ -136,6 +138,8 @@ class RenderedSensorSpec:
     keys: dict[str, str] = field(default_factory=dict)   # output -> key: image, camera_info, depth, depth_info,
                                                          # points, scan
     plugin: str = ""                                # the gazebo_ros plugin file, "" without one
+    # the plugin's names as written: node name, <ros><namespace>, <remapping>s, <camera_name>
+    plugin_names: tuple[str, str, dict[str, str], str] | None = None
     line: int | None = None
     update_rate_text: str | None = None
 
@@ -231,10 +235,12 @@ def _keys(spec: RenderedSensorSpec, plugin: etree._Element | None, namespace: st
             return keys
         return {spec.ray.output: f"{base}/{spec.ray.output}"}
     node = plugin.get("name") or spec.name
-    ros_namespace = (child_text(plugin, "ros/namespace") or namespace).strip()
+    written_namespace = (child_text(plugin, "ros/namespace") or "").strip()
+    ros_namespace = written_namespace or namespace.strip()
     remappings = _remappings(plugin, spec.where)
+    camera = child_text(plugin, "camera_name") or spec.name
+    spec.plugin_names = (node, written_namespace, remappings, camera)
     if spec.camera is not None:   # gazebo_ros_camera: <camera_name> (default: the sensor's name) in the namespace
-        camera = child_text(plugin, "camera_name") or spec.name
         keys = {"image": resolve_topic(ros_namespace, node, f"{camera}/image_raw", remappings),
                 "camera_info": resolve_topic(ros_namespace, node, f"{camera}/camera_info", remappings)}
         if spec.camera.depth:
@@ -343,11 +349,16 @@ def rendered_sensor_problems(specs: list[RenderedSensorSpec], links: dict | set,
             problems.append(problem)
             continue
         seen.add(spec.name)
+        if spec.plugin_names is not None:
+            node, namespace, remappings, camera = spec.plugin_names
+            problems += plugin_name_problems(where, node, namespace, remappings, spec.frame_id)
+            if spec.camera is not None and (problem := topic_problem(camera)) is not None:
+                problems.append(f"{where} <plugin> <camera_name> {shown(camera)}: {problem}")
         if spec.reference not in links:
-            problems.append(f"{where}: <gazebo reference='{spec.reference}'> is not a link of the robot")
+            problems.append(f"{where}: <gazebo reference={shown(spec.reference)}> is not a link of the robot")
         if spec.frame_id not in links:
-            problems.append(f"{where} <plugin> <frame_name> '{spec.frame_id}' is not a link of the robot (a TF frame "
-                            "the state publisher publishes)")
+            problems.append(f"{where} <plugin> <frame_name> {shown(spec.frame_id)} is not a link of the robot (a TF "
+                            "frame the state publisher publishes)")
         rate, written = spec.update_rate, spec.update_rate_text or f"{spec.update_rate:g}"
         if not (math.isfinite(rate) and rate > 0):
             problems.append(f"{where} <update_rate> {written}: must be a positive number of Hz")

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from lxml import etree
 
+from nodes.core import names
 from nodes.urdf.rotation import rpy_matrix
 
 IMU_INTERFACES = ("orientation.x", "orientation.y", "orientation.z", "orientation.w",
@@ -154,7 +155,28 @@ class SensorSpec:
 
 
 def sensor_where(sensor_name: str, line: int | None) -> str:
-    return f"sensor '{sensor_name}'" + (f" (line {line})" if line else "")
+    shown = f"'{sensor_name}'" if len(sensor_name) <= 60 else names.shown(sensor_name)
+    return f"sensor {shown}" + (f" (line {line})" if line else "")
+
+
+def plugin_name_problems(where: str, node: str, namespace: str, remappings: dict[str, str],
+                         frame: str = "") -> list[str]:
+    """The names a gazebo_ros plugin writes, each checked as ROS checks it: its node name, its
+    ``<ros><namespace>``, both sides of each ``<remapping>``, its ``<frame_name>``."""
+    problems = []
+    if (problem := names.node_name_problem(node)) is not None:
+        problems.append(f"{where} <plugin name> {names.shown(node)}: {problem}")
+    if namespace and (problem := names.namespace_problem(namespace)) is not None:
+        problems.append(f"{where} <plugin> <ros><namespace> {names.shown(namespace)}: {problem}")
+    for source, target in remappings.items():
+        for side, name in (("from", source), ("to", target)):
+            if (problem := names.topic_problem(name)) is not None:
+                problems.append(f"{where} <plugin> <remapping> {names.shown(f'{source}:={target}')}: {side} "
+                                f"{names.shown(name, 40)} {problem}")
+                break
+    if frame and (problem := names.frame_problem(frame)) is not None:
+        problems.append(f"{where} <plugin> <frame_name> {names.shown(frame)}: {problem}")
+    return problems
 
 
 def parse_number(text: str | None, what: str, line: int | None) -> float:
@@ -211,6 +233,8 @@ def naming_problem(name: str, where: str, taken: Container[str]) -> str | None:
         return f"{where}: <sensor> has no name attribute"
     if name in taken:
         return f"{where}: a second sensor named '{name}'"
+    if (problem := names.node_name_problem(name)) is not None:
+        return f"{where}: <sensor name> {problem}"
     return None
 
 
@@ -380,6 +404,8 @@ def sensor_problems(gazebo: list[SensorSpec], ros2_control: list[Ros2ControlSens
             if PLUGINS[plugin.filename] != spec.type:
                 problems.append(f"{where} <plugin filename='{plugin.filename}'> belongs in a "
                                 f"{PLUGINS[plugin.filename]} sensor, not {spec.type}")
+            problems += plugin_name_problems(where, plugin.name, plugin.namespace, plugin.remappings,
+                                             plugin.frame_name)
             frames_allowed = ("world",) if spec.type == "contact" else ()   # the bumper's contacts: world frame
             if plugin.frame_name and plugin.frame_name not in links and plugin.frame_name not in frames_allowed:
                 problems.append(f"{where} <plugin> <frame_name> '{plugin.frame_name}' is not a link of the robot (a "

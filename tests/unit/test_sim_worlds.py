@@ -217,7 +217,7 @@ def test_limits_are_counted_before_parsing(tmp_path: Path) -> None:
      "</geometry></collision></link></model>", r"<radius>: 0 m is outside \(0, 10000\]"),
     ("<gravity>0 0 -1e6</gravity>", r"<gravity>: \[0.0, 0.0, -1000000.0\] m/s\^2"),
     ("<physics type='ode'><max_step_size>0</max_step_size></physics>", r"<max_step_size>: 0 is outside"),
-    ("<model name='a b'><link name='l'/></model>", r"model name 'a b' must be"),
+    ("<model name='a b'><link name='l'/></model>", r"model name 'a b': has ' '"),
     ("<model name='e'/>", r"model 'e' has no <link>"),
     (box_model("twin") + box_model("twin"), r"two models are named 'twin'"),
     ("<model name='j'><link name='a'/><link name='b'/><joint name='x' type='screw'><parent>a</parent>"
