@@ -25,15 +25,15 @@ from __future__ import annotations
 import numpy as np
 
 from nodes.render.camera import intrinsics
-from nodes.urdf.rendered_sensors import CameraSpec, RaySpec
+from nodes.urdf.rendered_sensors import CAMERA_POINT_BYTES, LIDAR_POINT_BYTES, CameraSpec, RaySpec
 
 FLOAT32, UINT16 = 7, 4                                   # sensor_msgs/PointField datatypes
 IMAGE_CHANNELS = {"rgb8": (3, np.uint8), "bgr8": (3, np.uint8), "mono8": (1, np.uint8),
                   "32FC1": (1, np.dtype("<f4"))}                      # encoding -> (channels, dtype)
-CAMERA_POINT_STEP = 32
+CAMERA_POINT_STEP = CAMERA_POINT_BYTES          # (the spawn's message size check counts with these)
 LIDAR_POINT = np.dtype({"names": ["x", "y", "z", "intensity", "ring"],
                         "formats": ["<f4", "<f4", "<f4", "<f4", "<u2"],
-                        "offsets": [0, 4, 8, 12, 16], "itemsize": 20})
+                        "offsets": [0, 4, 8, 12, 16], "itemsize": LIDAR_POINT_BYTES})
 
 
 def header(stamp: dict, frame_id: str) -> dict:

@@ -18,6 +18,7 @@ from nodes.core import Node
 from nodes.core.cpu import ExclusiveCpu
 from nodes.core.endpoints import ServiceError
 from nodes.core.params import ParameterError, load_params_file
+from nodes.core.session import max_payload_bytes
 from nodes.sim.config import DEFAULT_CONFIG, StartupEntity, parse_entities, parse_gains
 from nodes.sim.entity import EntitySpec, Pose, SpawnError
 from nodes.sim.entity_services import EntityServices
@@ -106,6 +107,7 @@ class SimulatorNode(Node):
             self.world.add_ground(ground_size, ground_friction)
         self.sim = Simulation(self.world, gains_for, self.logger.warn, mode, sensor_seed=sensor_seed,
                               sensors_enabled=sensors)
+        self.sim.max_message_bytes = max_payload_bytes()   # what a sensor's messages must fit in
         self.world_spec: WorldSpec | None = None
         if world_file:
             self._load_world(world_file, ground_size, ground_friction)

@@ -21,8 +21,15 @@ from nodes.sim.sdf import WorldSpec
 from nodes.sim.sdf_model import WorldModel
 from nodes.sim.sensors import SensorSuite
 from nodes.sim.world import GROUND_NAME, PhysicsWorld
+from nodes.urdf.rendered_sensors import message_size_problem
+from nodes.urdf.sensors import SensorSpec
 
 SUPPORT_WINDOW = 0.015  # s of contacts the support polygon spans (1.5 periods of the 100 Hz humanoid_state)
+# Sensors of every robot together, and the IMU and force/torque samples they take per simulated second (each
+# sample is a few dartpy reads, on the physics thread): a robot over these is refused at spawn. The shipped
+# humanoid has 8 sensors and takes 3,000 samples a second (an IMU and two F/T sensors at 1 kHz).
+MAX_SENSORS = 256
+MAX_SENSOR_SAMPLES = 20_000
 
 
 class Simulation:
@@ -42,6 +49,7 @@ class Simulation:
         self.sensors: dict[str, SensorSuite] = {}           # by robot namespace
         self.sensor_seed = sensor_seed
         self.sensors_enabled = sensors_enabled
+        self.max_message_bytes: int | None = None           # the payload limit a sensor's messages must fit
         self.step_count = 0                                  # physics steps since start / reset_simulation
         self.pushes = Pushes()                               # apply_link_wrench / apply_joint_effort
         self.rest = RestKeeper(world)                        # world models at rest sleep until touched
@@ -70,10 +78,8 @@ class Simulation:
                 raise SpawnError(f"reference_frame {frame!r} is neither 'world' nor an existing entity")
             spec.pose = parent.world_pose().compose(spec.pose.validated())
         entity = Entity(spec)
-        for sensor in entity.info.rendered_sensors if self.sensors_enabled else []:
-            if sensor.update_rate > self.physics_rate:
-                raise SpawnError(f"{sensor.where} <update_rate> {sensor.update_rate:g}: over the physics rate "
-                                 f"({self.physics_rate:g} Hz)")
+        if self.sensors_enabled:
+            self._check_sensors(entity)
         if entity.namespace in self.hardware:
             raise SpawnError(f"robot namespace {entity.namespace!r} is already used by entity "
                              f"{self.hardware[entity.namespace].entity.name!r}")
@@ -89,6 +95,36 @@ class Simulation:
         self.hardware[entity.namespace] = hardware
         self.sensors[entity.namespace] = sensors
         return entity
+
+    def _sample_rate(self, spec: SensorSpec) -> float:
+        """Samples a simulated second (without an update_rate: every control period, at most every step)."""
+        return min(spec.update_rate or self.physics_rate, self.physics_rate)
+
+    def _check_sensors(self, entity: Entity) -> None:
+        """What the robot's sensors would add to the rest: refused over the caps (SpawnError naming the cap)."""
+        info = entity.info
+        for sensor in info.rendered_sensors:
+            if sensor.update_rate > self.physics_rate:
+                raise SpawnError(f"{sensor.where} <update_rate> {sensor.update_rate:g}: over the physics rate "
+                                 f"({self.physics_rate:g} Hz)")
+            if self.max_message_bytes is not None:
+                problem = message_size_problem(sensor, self.max_message_bytes)
+                if problem:
+                    raise SpawnError(problem)
+        others = sum(len(self.sensors[namespace].sensors) + len(hw.entity.info.rendered_sensors)
+                     for namespace, hw in self.hardware.items())
+        mine = len(info.sensors) + len(info.rendered_sensors)
+        if others + mine > MAX_SENSORS:
+            raise SpawnError(f"{mine} sensors more would make {others + mine} in the simulator, over its limit of "
+                             f"{MAX_SENSORS} sensors in total")
+        sampled = [s for s in info.sensors if s.type in ("imu", "force_torque")]
+        rate = sum(self._sample_rate(s) for s in sampled)
+        taken = sum(self._sample_rate(sensor.spec) for suite in self.sensors.values() for sensor in suite.sensors
+                    if sensor.spec.type in ("imu", "force_torque"))
+        if rate + taken > MAX_SENSOR_SAMPLES:
+            raise SpawnError(f"its {len(sampled)} IMU and force/torque sensors take {rate:g} samples a simulated "
+                             f"second; with the {taken:g} of the robots already here that is over the limit of "
+                             f"{MAX_SENSOR_SAMPLES} (lower their <update_rate>)")
 
     def add_model(self, model: WorldModel) -> WorldModel:
         """Add a world file's (or an SDF spawn request's) model; raises SpawnError on a name already taken."""

@@ -63,6 +63,9 @@ def _error(line: int | None, message: str) -> UrdfError:
 # 0.5 s, 400 links 9.6 s, 10,000 links a crash), and the simulator serves nothing while it loads: a model
 # beyond this is refused before DART sees it. Humanoids have 20-40 links.
 MAX_LINKS = 128
+# Sensors of one robot (IMU, force/torque, contact, cameras, range sensors): each is sampled or rendered every
+# period of its own, so their number is work every step (the shipped humanoid has 8)
+MAX_SENSORS = 64
 
 
 def _check_size(model: RobotModel) -> None:
@@ -112,6 +115,7 @@ def _joint_info(joint: Joint) -> JointInfo:
 
 
 _LINK_TAG = re.compile(r"<link[\s/>]")
+_SENSOR_TAG = re.compile(r"<sensor[\s/>]")
 
 
 def parse_urdf(xml: str, base: str | None = None) -> RobotInfo:
@@ -124,11 +128,20 @@ def parse_urdf(xml: str, base: str | None = None) -> RobotInfo:
     if links > MAX_LINKS:
         raise UrdfError(f"the robot description has {links} <link> elements, over the simulator's limit of "
                         f"{MAX_LINKS}")
+    # a sensor is declared twice at most (<gazebo> and <ros2_control>): count before parsing thousands of them
+    sensors = len(_SENSOR_TAG.findall(xml))
+    if sensors > 2 * MAX_SENSORS:
+        raise UrdfError(f"the robot description has {sensors} <sensor> elements, over the simulator's limit of "
+                        f"{MAX_SENSORS} sensors a robot")
     try:
         model = parse_model(xml)
     except UrdfError as exc:
         raise _error(exc.line, str(exc)) from None
     _check_size(model)
+    declared = len(model.sensors) + len(model.rendered_sensors)
+    if declared > MAX_SENSORS:
+        raise _error(model.line, f"robot {model.name!r} has {declared} sensors, over the simulator's limit of "
+                                 f"{MAX_SENSORS} sensors a robot")
     meshes = _check_shapes(model, base)
     for (kind, name), line in model.duplicate_lines.items():
         raise _error(line, f"duplicate {kind} {name!r}")

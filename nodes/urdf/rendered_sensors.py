@@ -60,6 +60,15 @@ MAX_RAYS = 1_000_000
 MAX_RANGE = 10_000.0   # m
 DEFAULT_CAMERA_RATE = 30.0   # Hz, without an <update_rate>
 DEFAULT_RAY_RATE = 10.0
+# Bytes of the messages the renderer makes (``nodes.render.payloads`` lays them out): per pixel of an image by
+# encoding, per point of a depth camera's organised cloud (x y z, rgb, padded) and of a lidar's (x y z intensity
+# ring); per ray of a LaserScan, ranges and intensities as msgpack float64s (9 bytes each); plus the header and
+# the other fields.
+PIXEL_BYTES = {"rgb8": 3, "bgr8": 3, "mono8": 1, "32FC1": 4}
+CAMERA_POINT_BYTES = 32
+LIDAR_POINT_BYTES = 20
+SCAN_RAY_BYTES = 18
+MESSAGE_OVERHEAD_BYTES = 1024
 
 
 @dataclass(frozen=True)
@@ -334,6 +343,39 @@ def _ray_problems(spec: RenderedSensorSpec) -> list[str]:
     if not (math.isfinite(ray.range_resolution) and ray.range_resolution >= 0):
         problems.append(f"{where} <range><resolution> {ray.range_resolution:g}: must not be negative")
     return problems
+
+
+def message_bytes(spec: RenderedSensorSpec) -> dict[str, int]:
+    """The largest message each output of ``spec`` can make, in bytes (every pixel and every ray returned)."""
+    out: dict[str, int] = {}
+    if spec.camera is not None:
+        pixels = spec.camera.width * spec.camera.height
+        out["image"] = pixels * PIXEL_BYTES.get(spec.camera.encoding, 3) + MESSAGE_OVERHEAD_BYTES
+        if spec.camera.depth:
+            out["depth"] = pixels * PIXEL_BYTES["32FC1"] + MESSAGE_OVERHEAD_BYTES
+            out["points"] = pixels * CAMERA_POINT_BYTES + MESSAGE_OVERHEAD_BYTES
+    if spec.ray is not None:
+        if spec.ray.output == "scan":
+            out["scan"] = spec.ray.horizontal.count * SCAN_RAY_BYTES + MESSAGE_OVERHEAD_BYTES
+        else:
+            out["points"] = spec.ray.rays * LIDAR_POINT_BYTES + MESSAGE_OVERHEAD_BYTES
+    return out
+
+
+def message_size_problem(spec: RenderedSensorSpec, limit: int) -> str | None:
+    """Why ``spec``'s messages could not be sent under a payload limit of ``limit`` bytes (receivers drop a
+    bigger message unread), naming each output over it; None when all fit."""
+    sizes = message_bytes(spec)
+    over = {output: size for output, size in sizes.items() if size > limit}
+    if not over:
+        return None
+    if spec.camera is not None:
+        what = f"<camera> <image> {spec.camera.width}x{spec.camera.height}"
+    else:
+        what = f"<scan> {spec.ray.horizontal.count} x {spec.ray.vertical.count} rays"
+    made = ", ".join(f"{spec.keys.get(output, output)} up to {size} bytes" for output, size in over.items())
+    return (f"{spec.where} {what}: its messages would be too big to send ({made}), over the payload limit of "
+            f"{limit} bytes (ZENROID_MAX_PAYLOAD_BYTES)")
 
 
 def rendered_sensor_problems(specs: list[RenderedSensorSpec], links: dict | set, physics_rate: float | None = None,

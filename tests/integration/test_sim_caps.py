@@ -171,3 +171,107 @@ def test_include_fan_out_is_refused_while_it_is_expanded(processes, node, tmp_pa
     reply = spawn(node, "block", "<sdf version='1.7'><model name='x'><include><uri>model://block</uri>"
                   "</include></model></sdf>", timeout=60)
     assert reply.success, reply.status_message
+
+
+# ----------------------------------------------------------------------------------------------- defects 5, 10
+def probe_robot(name: str, imus: int = 0, rate: float = 1000.0, extra: str = "") -> str:
+    """A one-link robot with ``imus`` IMUs at ``rate`` Hz on it, plus ``extra`` <gazebo> blocks."""
+    sensors = "".join(f'<gazebo reference="base"><sensor name="imu_{i}" type="imu"><update_rate>{rate:g}'
+                      "</update_rate></sensor></gazebo>" for i in range(imus))
+    return (f'<?xml version="1.0"?><robot name="{name}"><link name="base"><inertial><mass value="1"/>'
+            '<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>'
+            '<collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>'
+            f"{sensors}{extra}</robot>")
+
+
+def spawn_robot(node: Node, name: str, xml: str) -> SpawnEntity.Response:
+    request = SpawnEntity.Request(name=name, xml=xml, fixed=True)
+    request.initial_pose.position.x = float(len(name))
+    return call(node, SpawnEntity, "/sim/spawn_entity", request, timeout=60)
+
+
+def rss_mb(proc) -> float:
+    return psutil.Process(proc.pid).memory_info().rss / 1e6
+
+
+def test_sensors_are_capped_per_robot_in_total_and_in_samples_and_their_memory_comes_back(processes, node):
+    from nodes.sim.simulation import MAX_SENSOR_SAMPLES, MAX_SENSORS
+    from nodes.sim.urdf_info import MAX_SENSORS as PER_ROBOT
+
+    proc = start_sim(processes, "mode:=realtime")
+    wait_ready(node, processes, proc)
+    assert spawn_robot(node, "warmup", probe_robot("warmup", imus=2)).success    # one-time costs out of the way
+    assert call(node, DeleteEntity, "/sim/delete_entity", DeleteEntity.Request(name="warmup")).success
+    time.sleep(1.0)
+    fresh = rss_mb(proc)
+
+    # 1,000 IMUs at 1 kHz on one robot (accepted before, and the real-time factor fell to 0.09)
+    reply = spawn_robot(node, "many", probe_robot("many", imus=1000))
+    assert not reply.success and f"over the simulator's limit of {PER_ROBOT} sensors a robot" in reply.status_message
+    reply = spawn_robot(node, "many", probe_robot("many", imus=PER_ROBOT + 1, rate=1.0))
+    assert not reply.success and f"{PER_ROBOT} sensors a robot" in reply.status_message, reply.status_message
+
+    # samples a simulated second: one robot over them, then the robots together
+    reply = spawn_robot(node, "fast", probe_robot("fast", imus=PER_ROBOT, rate=1000.0))
+    assert not reply.success and f"over the limit of {MAX_SENSOR_SAMPLES}" in reply.status_message, reply
+    per_robot = 10
+    robots = MAX_SENSOR_SAMPLES // (per_robot * 1000)
+    for i in range(robots):
+        reply = spawn_robot(node, f"imu{i}", probe_robot(f"imu{i}", imus=per_robot))
+        assert reply.success, reply.status_message
+    reply = spawn_robot(node, "one_more", probe_robot("one_more", imus=per_robot))
+    assert not reply.success and "with the 20000 of the robots already here" in reply.status_message, reply
+
+    # sensors in total: slow ones, until the simulator has MAX_SENSORS (room for their samples made first)
+    assert call(node, DeleteEntity, "/sim/delete_entity", DeleteEntity.Request(name="imu0")).success
+    spawned = [f"imu{i}" for i in range(1, robots)]
+    refused = None
+    for i in range(MAX_SENSORS // PER_ROBOT + 1):
+        reply = spawn_robot(node, f"slow{i}", probe_robot(f"slow{i}", imus=PER_ROBOT, rate=1.0))
+        if not reply.success:
+            refused = reply.status_message
+            break
+        spawned.append(f"slow{i}")
+    assert refused is not None and f"over its limit of {MAX_SENSORS} sensors in total" in refused, refused
+    log = processes.output(proc)
+    assert f"{PER_ROBOT} sensors a robot" in log and f"{MAX_SENSORS} sensors in total" in log
+
+    # deleted after running a while, their memory comes back
+    time.sleep(3.0)
+    loaded = rss_mb(proc)
+    for name in spawned:
+        assert call(node, DeleteEntity, "/sim/delete_entity", DeleteEntity.Request(name=name)).success
+    time.sleep(1.0)
+    after = rss_mb(proc)
+    print(f"simulator RSS: {fresh:.1f} MB fresh, {loaded:.1f} MB with {len(spawned)} robots, {after:.1f} MB after")
+    assert after - fresh < 10, (fresh, loaded, after)
+    assert proc.poll() is None
+
+
+CAMERA = ('<gazebo reference="base"><sensor name="cam" type="{kind}"><update_rate>1</update_rate><camera>'
+          "<image><width>{w}</width><height>{h}</height></image></camera></sensor></gazebo>")
+LIDAR = ('<gazebo reference="base"><sensor name="lidar" type="gpu_lidar"><update_rate>1</update_rate><lidar><scan>'
+         "<horizontal><samples>{h}</samples><min_angle>-3.1</min_angle><max_angle>3.1</max_angle></horizontal>"
+         "<vertical><samples>{v}</samples><min_angle>-0.3</min_angle><max_angle>0.3</max_angle></vertical>"
+         "</scan></lidar></sensor></gazebo>")
+
+
+def test_sensors_whose_messages_could_not_be_sent_are_refused_at_spawn(processes, node):
+    proc = start_sim(processes, "paused:=true")
+    wait_ready(node, processes, proc)
+    limit = 4 * 1024 * 1024
+    for extra, made in [
+        (CAMERA.format(kind="camera", w=1920, h=1080), "cam/image_raw up to 6221824 bytes"),
+        (CAMERA.format(kind="depth", w=1920, h=1080), "cam/depth/image_raw up to 8295424 bytes"),
+        (LIDAR.format(h=1000, v=1000), "lidar/points up to 20001024 bytes"),
+    ]:
+        reply = spawn_robot(node, "big", probe_robot("big", extra=extra))
+        assert not reply.success, extra
+        assert made in reply.status_message and f"over the payload limit of {limit} bytes" in reply.status_message, \
+            reply.status_message
+        assert made in processes.output(proc)
+    # what fits is taken: a 1280x720 RGB camera (2.8 MB), a 32-ring lidar
+    reply = spawn_robot(node, "ok", probe_robot("ok", extra=CAMERA.format(kind="camera", w=1280, h=720)
+                                                + LIDAR.format(h=1800, v=32)))
+    assert reply.success, reply.status_message
+    assert proc.poll() is None
