@@ -94,6 +94,7 @@ def SetParametersResult(successful: bool = True, reason: str = "") -> Any:  # no
 
 class Node:
     PARAM_REL_TOL = 1e-6
+    _zr_core_class: type[CoreNode] = _CoreNode
 
     def __init__(self, node_name: str, *, context: Context | None = None, cli_args: list[str] | None = None,
                  namespace: str | None = None, use_global_arguments: bool = True, enable_rosout: bool = True,
@@ -119,7 +120,7 @@ class Node:
         for parameter in parameter_overrides or []:
             overrides[parameter.name] = parameter.value
         level = args.log_levels.get(name) or args.log_levels.get("") or "info"
-        self._zr = _CoreNode(name, namespace=ns, params=overrides, remap=args.node_remaps(name),
+        self._zr = self._zr_core_class(name, namespace=ns, params=overrides, remap=args.node_remaps(name),
                              session=self._zr_context.session, log_level=level)
         self._zr.executor.propagate_errors = True
         self._zr_default_group: CallbackGroup = MutuallyExclusiveCallbackGroup()

@@ -331,8 +331,8 @@ class ActionClient:
         return False
 
     def send_goal(self, goal: Any, feedback_callback: Callable[[Any], None] | None = None,
-                  timeout: float = 5.0) -> ClientGoalHandle:
-        goal_id = os.urandom(16)
+                  timeout: float = 5.0, goal_id: bytes | None = None) -> ClientGoalHandle:
+        goal_id = goal_id or os.urandom(16)
         if feedback_callback is not None:
             self._feedback_callbacks[goal_id] = feedback_callback
         request = self.action_type.SendGoalRequest(goal_id=UUID(uuid=goal_id), goal=goal)
