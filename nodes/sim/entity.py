@@ -50,6 +50,7 @@ class Entity(Model):
             raise SpawnError(str(exc)) from None
         self.spec = spec
         self.name = spec.name
+        # "/" is the root namespace: the layout the ROS tutorials' programs expect (/joint_states ...)
         self.namespace = (spec.namespace or spec.name).strip("/")
         self.info: RobotInfo = parse_urdf(spec.xml, spec.base_uri or None)
         problems = sensor_key_problems(self.info, spec.xml, self.namespace)
