@@ -6,14 +6,17 @@ includes (counted while they are expanded), and sensor messages that would not f
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
+import psutil
 import pytest
 
 from nodes.core import Node
 from nodes.sim.interfaces import (
     ApplyJointEffort,
     ApplyLinkWrench,
+    DeleteEntity,
     GetModelList,
     JointRequest,
     LinkRequest,
