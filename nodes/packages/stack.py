@@ -26,11 +26,23 @@ SERVED: dict[str, dict[str, Served]] = {
     "robot_state_publisher": {
         "robot_state_publisher": Served("nodes.state_publisher", ros_node=True, what="our state publisher"),
     },
+    "joint_state_publisher": {
+        "joint_state_publisher": Served("nodes.joint_state_publisher.node", ros_node=True,
+                                        what="joint_states from the robot description"),
+    },
+    "joint_state_publisher_gui": {
+        "joint_state_publisher_gui": Served("nodes.joint_state_publisher.gui", ros_node=True,
+                                            what="the joint state publisher with a web page of sliders"),
+    },
     "gazebo_ros": {
         "spawn_entity.py": Served(TOOLS, ("spawn",), what="zenroid spawn"),
     },
     "ros_gz_sim": {
         "create": Served(TOOLS, ("spawn",), what="zenroid spawn"),
+    },
+    "tf2_ros": {
+        "static_transform_publisher": Served("nodes.static_transform", ros_node=True,
+                                             what="a latched tf_static transform"),
     },
     "xacro": {
         "xacro": Served(TOOLS, ("xacro",), what="zenroid xacro"),

@@ -1,0 +1,146 @@
+"""The executables zenroid serves for ROS packages, started the ROS way (``nodes.packages.serve PKG EXEC
+--ros-args ...``, what ``ros2 run`` and launch_ros' ``Node`` run) as real processes over real Zenoh:
+joint_state_publisher (description as a parameter and from the topic), joint_state_publisher_gui (its page
+in headless Chromium), tf2_ros' static_transform_publisher (both argument forms)."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import threading
+import urllib.request
+
+import pytest
+import zenoh
+
+import msgs
+from tests.conftest import wait_until
+
+pytestmark = pytest.mark.slow
+
+JointState = msgs.get_type("sensor_msgs/msg/JointState")
+String = msgs.get_type("std_msgs/msg/String")
+TFMessage = msgs.get_type("tf2_msgs/msg/TFMessage")
+
+CART = """<robot name="cart">
+  <link name="base"/><link name="slider"/><link name="arm"/><link name="wheel"/><link name="twin"/><link name="cam"/>
+  <joint name="rail" type="prismatic"><parent link="base"/><child link="slider"/><axis xyz="1 0 0"/>
+    <limit lower="-0.5" upper="0.5" effort="10" velocity="1"/></joint>
+  <joint name="shoulder" type="revolute"><parent link="slider"/><child link="arm"/><axis xyz="0 0 1"/>
+    <limit lower="0.2" upper="1.0" effort="10" velocity="1"/></joint>
+  <joint name="spin" type="continuous"><parent link="base"/><child link="wheel"/><axis xyz="0 1 0"/></joint>
+  <joint name="shadow" type="revolute"><parent link="base"/><child link="twin"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/><mimic joint="shoulder" multiplier="2" offset="0.1"/></joint>
+  <joint name="mount" type="fixed"><parent link="arm"/><child link="cam"/></joint>
+</robot>"""
+
+
+class Latest:
+    """The newest message on a key, decoded."""
+
+    def __init__(self, session, key: str, msg_type) -> None:
+        self.msg = None
+        self.count = 0
+        self._lock = threading.Lock()
+        self._type = msg_type
+        self._sub = session.declare_subscriber(key, self._on)
+
+    def _on(self, sample) -> None:
+        with self._lock:
+            self.msg = msgs.decode(self._type, sample.payload.to_bytes())
+            self.count += 1
+
+    def positions(self) -> dict[str, float] | None:
+        with self._lock:
+            return None if self.msg is None else dict(zip(self.msg.name, self.msg.position))
+
+
+def serve(processes, zenoh_port: int, package: str, executable: str, *args: str):
+    return processes.start("-m", "nodes.packages.serve", package, executable, *args,
+                           name=executable)
+
+
+def test_joint_state_publisher_from_the_parameter(processes, zenoh_port, session) -> None:
+    states = Latest(session, "joint_states", JointState)
+    serve(processes, zenoh_port, "joint_state_publisher", "joint_state_publisher",
+          "--ros-args", "-p", f"robot_description:={CART}", "-p", "rate:=20.0")
+    got = wait_until(states.positions, timeout=30, message="joint_states from joint_state_publisher")
+    # 0 where the limits allow it, the middle where they do not; the mimic joint follows; no fixed joint
+    assert list(got) == ["rail", "shoulder", "spin", "shadow"]
+    assert got["rail"] == 0.0 and got["spin"] == 0.0
+    assert got["shoulder"] == pytest.approx(0.6)
+    assert got["shadow"] == pytest.approx(2 * 0.6 + 0.1)
+
+
+def test_joint_state_publisher_from_the_topic_in_a_namespace(processes, zenoh_port, session) -> None:
+    description = session.declare_publisher("cart/robot_description")
+    # our robot_state_publisher publishes the latched description the JSP reads when it has no parameter
+    serve(processes, zenoh_port, "robot_state_publisher", "robot_state_publisher",
+          "--ros-args", "-r", "__ns:=/cart", "-p", f"robot_description:={CART}")
+    states = Latest(session, "cart/joint_states", JointState)
+    serve(processes, zenoh_port, "joint_state_publisher", "joint_state_publisher", "--ros-args", "-r", "__ns:=/cart",
+          "-p", "zeros:={rail: 0.25}")
+    got = wait_until(states.positions, timeout=30, message="cart/joint_states from the topic's description")
+    assert got["rail"] == 0.25 and got["shoulder"] == pytest.approx(0.6)
+    del description
+
+
+def test_static_transform_publisher_both_forms(processes, zenoh_port, session) -> None:
+    serve(processes, zenoh_port, "tf2_ros", "static_transform_publisher",
+          "--x", "1", "--y", "2", "--z", "3", "--yaw", str(math.pi / 2), "--frame-id", "world", "--child-frame-id", "a")
+    serve(processes, zenoh_port, "tf2_ros", "static_transform_publisher", "0", "0", "0.5", "0", "0", "0", "1",
+          "a", "b")
+
+    def frames():
+        # every latched publisher's answer (ROS's transient-local tf_static gives a late joiner all of them)
+        found: dict[str, dict] = {}
+        for reply in session.get("tf_static", timeout=2.0, target=zenoh.QueryTarget.ALL,
+                                 consolidation=zenoh.ConsolidationMode.NONE):
+            if reply.ok is not None:
+                for t in msgs.decode(TFMessage, reply.ok.payload.to_bytes()).transforms:
+                    found[t.child_frame_id] = t
+        return found if {"a", "b"} <= set(found) else None
+
+    found = wait_until(frames, timeout=30, message="both static transforms on tf_static")
+    a, b = found["a"], found["b"]
+    assert a.header.frame_id == "world" and (a.transform.translation.x, a.transform.translation.z) == (1.0, 3.0)
+    assert (a.transform.rotation.z, a.transform.rotation.w) == pytest.approx((math.sqrt(0.5), math.sqrt(0.5)))
+    assert b.header.frame_id == "a" and b.transform.translation.z == 0.5 and b.transform.rotation.w == 1.0
+
+
+def test_static_transform_publisher_refuses_bad_arguments(processes, zenoh_port) -> None:
+    proc = serve(processes, zenoh_port, "tf2_ros", "static_transform_publisher", "1", "2", "world", "a")
+    assert proc.wait(timeout=60) == 2
+    assert "expected 'x y z yaw pitch roll frame_id child_frame_id'" in processes.output(proc)
+
+
+def test_joint_state_publisher_gui_page_moves_a_joint(processes, zenoh_port, session) -> None:
+    from tests.support.browser import HeadlessBrowser, find_browser
+
+    states = Latest(session, "joint_states", JointState)
+    proc = serve(processes, zenoh_port, "joint_state_publisher_gui", "joint_state_publisher_gui",
+                 "--ros-args", "-p", f"robot_description:={CART}", "-p", "rate:=20.0")
+    url = wait_until(lambda: (m := re.search(r"joint_state_publisher_gui: (http://\S+)", processes.output(proc)))
+                     and m[1], timeout=30, message="the sliders page's URL printed")
+    joints = json.loads(urllib.request.urlopen(f"{url}joints", timeout=10).read())["joints"]
+    assert [(j["name"], j["lower"], j["upper"]) for j in joints] == [
+        ("rail", -0.5, 0.5), ("shoulder", 0.2, 1.0), ("spin", -math.pi, math.pi)]
+    wait_until(states.positions, timeout=30, message="joint_states from the GUI publisher")
+    if find_browser() is None:
+        pytest.skip("no Chromium here: the page's slider was not driven (the JSON side was checked)")
+    with HeadlessBrowser(timeout=120) as browser:
+        browser.navigate(url)
+        wait_until(lambda: browser.evaluate("document.querySelectorAll('input[type=range]').length") == 3,
+                   timeout=60, message="three sliders on the page (the mimic joint has none)")
+        assert browser.evaluate("[...document.querySelectorAll('input[type=range]')].map(s => "
+                                "[s.dataset.joint, +s.min, +s.max])") == [
+            ["rail", -0.5, 0.5], ["shoulder", 0.2, 1.0], ["spin", -math.pi, math.pi]]
+        browser.evaluate("(() => { const s = document.getElementById('joint-shoulder'); s.value = 0.9; "
+                         "s.dispatchEvent(new Event('input')); })()")
+        got = wait_until(lambda: (p := states.positions()) and abs(p["shoulder"] - 0.9) < 1e-6 and p, timeout=30,
+                         message="the slider's value in joint_states")
+        assert got["shadow"] == pytest.approx(2 * 0.9 + 0.1)
+        # beyond the limits is clamped, as the slider itself does
+        browser.evaluate("fetch('/joint', {method: 'POST', body: JSON.stringify({name: 'rail', position: 7})})")
+        wait_until(lambda: (p := states.positions()) and p["rail"] == 0.5, timeout=30, message="rail clamped at 0.5")
