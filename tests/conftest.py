@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import atexit
+import os
+import shutil
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -14,6 +18,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.common import child_env, free_port, spawn, stop_all  # noqa: E402 - the checkout is on the path now
+
+# converted meshes go to a folder of this run, not the user's cache (child processes inherit it)
+if "ZENROID_MESH_CACHE" not in os.environ:
+    os.environ["ZENROID_MESH_CACHE"] = tempfile.mkdtemp(prefix="zenroid-mesh-cache-")
+    atexit.register(shutil.rmtree, os.environ["ZENROID_MESH_CACHE"], True)
 
 __all__ = ["ROOT", "ProcessGroup", "free_port", "wait_until"]
 

@@ -25,7 +25,14 @@ import msgs
 from nodes.core import Node
 from nodes.render import payloads
 from nodes.render.camera import render_camera
-from nodes.render.geometry import RenderError, Shape, mesh_from_bytes
+from nodes.render.geometry import (
+    MAX_SCENE_TRIANGLES,
+    RenderError,
+    Shape,
+    mesh_from_bytes,
+    triangle_count,
+    triangulate,
+)
 from nodes.render.lidar import render_ray
 from nodes.render.raycast import RayScene
 from nodes.urdf.rendered_sensors import RenderedSensorSpec, parse_rendered_sensors
@@ -90,6 +97,7 @@ class RendererNode(Node):
         self.frames = self.create_subscription(RenderFrame, "/sim/render/frame", self._queue_frame, pulled=True,
                                                backlog=FRAME_BACKLOG)
         self._pending: list[Any] = []
+        self._skipped: set[tuple[str, str, str]] = set()   # shapes left out, said once each
         self._next_resync = 0.0
         self._last_step = 0
         self._told: list[str] | None = None   # the wanted sensors last sent to the simulator
@@ -105,7 +113,7 @@ class RendererNode(Node):
         if int(scene.version) == self.scene_version:
             return
         try:
-            shapes = [(int(s.link), self._shape(s)) for s in scene.shapes]
+            shapes = self._usable_shapes(scene)
             static_models = {i for i, static in enumerate(scene.static_models) if static}
             static_links = {i for i, model in enumerate(scene.link_models) if int(model) in static_models}
             ray_scene = RayScene(list(scene.links), shapes, static_links, threads=self.threads)
@@ -122,6 +130,38 @@ class RendererNode(Node):
             self.logger.info(f"scene {scene.version}: {len(scene.models)} models, {len(shapes)} shapes; sensors "
                              + ", ".join(f"{s.key} ({s.spec.type}, {s.spec.update_rate:g} Hz -> "
                                          f"{', '.join(s.spec.keys.values())})" for s in sensors.values()))
+
+    def _usable_shapes(self, scene: Any) -> list[tuple[int, Shape]]:
+        """The scene's shapes the renderer can draw. One it cannot (a bad mesh, a size, over a triangle cap)
+        is left out and said once on rosout, with its model, link and file: the rest is still drawn."""
+        shapes: list[tuple[int, Shape]] = []
+        total = 0
+        for entry in scene.shapes:
+            link = int(entry.link)
+            name = scene.links[link] if 0 <= link < len(scene.links) else f"link #{link}"
+            try:
+                if not 0 <= link < len(scene.links):
+                    raise RenderError(f"link index {link} is not one of the {len(scene.links)} links")
+                shape = self._shape(entry)
+                shape.name = name
+                triangulate(shape)
+                if not np.isfinite(shape.pose).all():
+                    raise RenderError("its pose is not finite")
+                count = triangle_count(shape)
+                if total + count > MAX_SCENE_TRIANGLES:
+                    raise RenderError(f"{count} more triangles would pass the scene's cap of {MAX_SCENE_TRIANGLES}")
+            except (RenderError, ValueError, TypeError) as exc:
+                model, _, link_name = name.partition("::")
+                source = f" mesh {entry.mesh_uri!r}" if entry.mesh_uri else ""
+                key = (name, entry.mesh_uri, str(exc))
+                if key not in self._skipped:
+                    self._skipped.add(key)
+                    self.logger.warn(f"model {model!r} link {link_name!r}{source}: not drawn ({exc}); the rest of "
+                                     "the scene is")
+                continue
+            total += count
+            shapes.append((link, shape))
+        return shapes
 
     @staticmethod
     def _shape(entry: Any) -> Shape:

@@ -8,6 +8,9 @@ from dataclasses import dataclass, field
 import dartpy as dart
 
 from nodes.core import names
+from nodes.meshes import MeshError
+from nodes.meshes.convert import collision_policy
+from nodes.meshes.urdf import base_path, prepare_urdf
 from nodes.sim.model import Model
 from nodes.sim.pose import Pose, SpawnError
 from nodes.sim.urdf_info import RobotInfo, parse_urdf
@@ -57,6 +60,7 @@ class Entity(Model):
         if problems:
             raise SpawnError("; ".join(problems[:5]))
         self.pose = spec.pose.validated()
+        self.mesh_warnings: list[str] = []     # visual meshes left out (missing files), for the log
         self.skeleton = self._load_skeleton(spec, self.info)
         self.skeleton.setName(spec.name)
         self.floating = not spec.fixed and isinstance(self.skeleton.getRootJoint(), dart.dynamics.FreeJoint)
@@ -72,17 +76,28 @@ class Entity(Model):
         self._apply_initial_positions(spec.initial_positions)
         self.remember_spawn()
 
-    @staticmethod
-    def _load_skeleton(spec: EntitySpec, info: RobotInfo) -> dart.dynamics.Skeleton:
+    def _load_skeleton(self, spec: EntitySpec, info: RobotInfo) -> dart.dynamics.Skeleton:
         loader = dart.utils.DartLoader()
         flags = dart.utils.DartLoaderFlags.FIXED_BASE_LINK if spec.fixed else dart.utils.DartLoaderFlags.NONE
         uri = dart.common.Uri(spec.base_uri or "file:///")
         xml = spec.xml if info.physics is None else info.physics.xml   # frame links merged into their bodies
+        xml = self._with_meshes(spec, xml)
         skeleton = loader.parseSkeletonString(xml, uri, dart.common.LocalResourceRetriever(), flags)
         if skeleton is None:
             raise SpawnError(f"DART could not load the URDF of {spec.name!r} (a mesh file that cannot be read? "
                              "see the simulator log)")
         return skeleton
+
+    def _with_meshes(self, spec: EntitySpec, xml: str) -> str:
+        """The description DART loads: its meshes checked and converted (``nodes.meshes``), so DART never
+        reads a file the user named."""
+        try:
+            prepared = prepare_urdf(xml, base_path(spec.base_uri), f"robot {spec.name!r}", collision_policy(),
+                                    resolved=True)
+        except MeshError as exc:
+            raise SpawnError(str(exc)) from None
+        self.mesh_warnings = prepared.warnings
+        return prepared.xml
 
     def _place(self, pose: Pose) -> None:
         root = self.skeleton.getRootJoint()

@@ -19,6 +19,8 @@ from nodes.core.cpu import ExclusiveCpu
 from nodes.core.endpoints import ServiceError
 from nodes.core.params import ParameterError, load_params_file
 from nodes.core.session import max_payload_bytes
+from nodes.meshes import MeshError
+from nodes.meshes.convert import set_collision_policy
 from nodes.sim.config import DEFAULT_CONFIG, StartupEntity, parse_entities, parse_gains
 from nodes.sim.entity import EntitySpec, Pose, SpawnError
 from nodes.sim.entity_services import EntityServices
@@ -96,6 +98,12 @@ class SimulatorNode(Node):
                     "(false: left out, with their state interfaces)")
         world_file = p("world", "", description="SDF world file (a path or a name in worlds/); its physics, "
                        "gravity and ground replace physics_rate, gravity, real_time_factor and ground_enabled")
+        collision_mesh = p("collision_mesh", "hull", description="what a collision mesh collides as: hull | "
+                           "decompose | exact, for every link, then LINK=MODE for some (hull,left_hand=decompose)")
+        try:
+            set_collision_policy(collision_mesh)
+        except MeshError as exc:
+            raise ValueError(str(exc)) from None
         try:
             gains_for = parse_gains(gains_table)
             self._startup: list[StartupEntity] = parse_entities(entities)
@@ -158,6 +166,8 @@ class SimulatorNode(Node):
         entity = self.sim.spawn(spec, reference_frame)
         for warning in entity.info.warnings:
             self.logger.warn(f"{entity.name!r}: {warning}")
+        for warning in entity.mesh_warnings:
+            self.logger.warn(warning)
         try:
             self.robots[entity.namespace] = RobotLink(self, self.sim, self.sim.hardware[entity.namespace],
                                                       self.command_timeout)

@@ -4,18 +4,20 @@ a ``sim/render/frame``).
 
 Reading DART's shape nodes, not the files, covers everything alike: URDF robots (DART's loader built their
 visual and collision shapes with the materials' colours), world files' and spawned SDF models, and the ground.
-Meshes are read again with trimesh (dartpy does not expose a mesh's triangles) and sent as triangles, so a
-renderer on another host needs no file of ours; their size is capped before they are read.
+Meshes are read again through ``nodes.meshes`` (dartpy does not expose a mesh's triangles; DART was given the
+checked, converted files) and sent as triangles, so a renderer on another host needs no file of ours; their
+size is capped before they are read.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 
 import dartpy as dart
 import numpy as np
 
+from nodes.meshes import MeshError, load_mesh
+from nodes.meshes.convert import source_of
 from nodes.sim.model import Model
 from nodes.sim.pose import Pose
 from nodes.sim.world import GROUND_NAME, PhysicsWorld
@@ -54,21 +56,18 @@ def _pose(matrix: np.ndarray) -> dict:
 
 def _mesh_triangles(shape, where: str, budget: int) -> tuple[bytes, bytes, int]:
     """(vertices, triangles, count) of a DART mesh shape, scale applied; refuses more than ``budget``."""
-    import trimesh  # noqa: PLC0415 - only a world with meshes pays for importing it
-
     path = shape.getMeshPath()
-    if not path or not Path(path).is_file():
-        raise SceneError(f"{where}: mesh {path!r} cannot be read for the renderer")
     try:
-        mesh = trimesh.load(path, force="mesh", process=False)
-    except Exception as exc:   # trimesh raises many kinds for a file it cannot read
-        raise SceneError(f"{where}: mesh {path!r} cannot be read for the renderer: {exc}") from None
-    count = len(mesh.faces)
+        mesh = load_mesh(path)
+    except MeshError as exc:
+        raise SceneError(f"{where}: mesh {source_of(path)!r} cannot be given to the renderer: {exc}") from None
+    count = mesh.triangles
     if count > min(MAX_MESH_TRIANGLES, budget):
-        raise SceneError(f"{where}: mesh {path!r} has {count} triangles, over the renderer's cap of "
+        raise SceneError(f"{where}: mesh {source_of(path)!r} has {count} triangles, over the renderer's cap of "
                          f"{min(MAX_MESH_TRIANGLES, budget)}")
-    vertices = np.asarray(mesh.vertices, dtype=np.float64) * np.asarray(shape.getScale(), dtype=np.float64)
-    return (vertices.astype("<f4").tobytes(), np.asarray(mesh.faces, dtype="<u4").tobytes(), count)
+    vertices, faces = mesh.merged()
+    vertices = vertices * np.asarray(shape.getScale(), dtype=np.float64)
+    return (vertices.astype("<f4").tobytes(), np.asarray(faces, dtype="<u4").tobytes(), count)
 
 
 def _shape_entry(node, link_index: int, where: str, budget: int) -> tuple[dict, int] | None:
@@ -90,7 +89,7 @@ def _shape_entry(node, link_index: int, where: str, budget: int) -> tuple[dict, 
         entry.update(kind=SPHERE, size=[float(shape.getRadius())])
     elif isinstance(shape, dart.dynamics.MeshShape):
         vertices, faces, triangles = _mesh_triangles(shape, where, budget)
-        entry.update(kind=MESH, size=[], mesh_uri=shape.getMeshPath(), vertices=vertices, triangles=faces)
+        entry.update(kind=MESH, size=[], mesh_uri=source_of(shape.getMeshPath()), vertices=vertices, triangles=faces)
     else:
         return None   # shapes our files never build (capsules, cones, height maps): nothing to render
     return entry, triangles

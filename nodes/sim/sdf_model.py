@@ -2,8 +2,9 @@
 and visual shapes (material colours), joints, a static model welded where it stands.
 
 Links that no joint connects are separate trees of one skeleton, each free (or welded, in a static model),
-as Gazebo simulates them. Meshes are loaded through DART's URDF loader (its only path to assimp in dartpy),
-after ``sdf`` has checked their path and size.
+as Gazebo simulates them. Meshes are checked and converted by ``nodes.meshes`` (collision: a hull, convex parts
+or the mesh; visual: one part per material with its colour) and DART loads only those converted files, through
+its URDF loader (its only path to assimp in dartpy).
 """
 
 from __future__ import annotations
@@ -16,6 +17,8 @@ from xml.sax.saxutils import quoteattr
 import dartpy as dart
 import numpy as np
 
+from nodes.meshes import MeshBudget, MeshError, load_mesh
+from nodes.meshes.convert import collision_files, collision_policy, visual_files
 from nodes.sim.model import Model, isometry
 from nodes.sim.sdf import JointSpec, LinkSpec, ModelSpec, ShapeSpec, WorldError
 
@@ -55,6 +58,7 @@ def build_skeleton(spec: ModelSpec) -> dart.dynamics.Skeleton:
         parent_joint[joint.child] = joint
     skeleton = dart.dynamics.Skeleton(spec.name)
     bodies: dict[str, object] = {}
+    budget = MeshBudget(f"{spec.source}: model {spec.name!r}")
     # roots (links no joint holds, or held by a joint to the world) first, then each tree breadth first, in
     # file order: the same file always builds the same skeleton (lockstep runs stay bit-identical)
     order = [link.name for link in spec.links if link.name not in parent_joint
@@ -77,9 +81,9 @@ def build_skeleton(spec: ModelSpec) -> dart.dynamics.Skeleton:
         body = _add_body(skeleton, spec, link, joint, parent, links)
         _set_inertia(body, link)
         for shape in link.collisions:
-            _add_shape(body, shape, spec, collision=True)
+            _add_shape(body, shape, spec, collision=True, link=link.name, budget=budget)
         for shape in link.visuals:
-            _add_shape(body, shape, spec, collision=False)
+            _add_shape(body, shape, spec, collision=False, link=link.name, budget=budget)
         body.setGravityMode(link.gravity)
         bodies[name] = body
     if spec.static:
@@ -151,26 +155,45 @@ def _set_inertia(body, link: LinkSpec) -> None:
     body.setInertia(dart.dynamics.Inertia(link.inertial.mass, link.inertial.pose[:3, 3], moments))
 
 
-def _add_shape(body, shape: ShapeSpec, spec: ModelSpec, *, collision: bool) -> None:
+def _add_shape(body, shape: ShapeSpec, spec: ModelSpec, *, collision: bool, link: str, budget: MeshBudget) -> None:
     offset = shape.pose
     if shape.kind == "box":
-        dart_shape = dart.dynamics.BoxShape(list(shape.size))
+        parts = [(dart.dynamics.BoxShape(list(shape.size)), None)]
     elif shape.kind == "sphere":
-        dart_shape = dart.dynamics.SphereShape(shape.size[0])
+        parts = [(dart.dynamics.SphereShape(shape.size[0]), None)]
     elif shape.kind == "cylinder":
-        dart_shape = dart.dynamics.CylinderShape(shape.size[0], shape.size[1])
+        parts = [(dart.dynamics.CylinderShape(shape.size[0], shape.size[1]), None)]
     elif shape.kind == "plane":
-        dart_shape = dart.dynamics.BoxShape([shape.size[0], shape.size[1], PLANE_THICKNESS])
+        parts = [(dart.dynamics.BoxShape([shape.size[0], shape.size[1], PLANE_THICKNESS]), None)]
         offset = shape.pose @ _plane_frame(shape.normal)
     else:
-        dart_shape = _mesh(str(shape.mesh), tuple(shape.scale), f"{spec.source}: model {spec.name!r}")
-    node = body.createShapeNode(dart_shape)
-    node.setRelativeTransform(isometry(offset))
-    if collision:
-        node.createCollisionAspect()
-        node.createDynamicsAspect().setFrictionCoeff(DEFAULT_FRICTION if shape.friction is None else shape.friction)
-    else:
-        node.createVisualAspect().setRGBA(np.asarray(shape.colour or (0.7, 0.7, 0.7, 1.0), dtype=float))
+        parts = _mesh_parts(shape, spec, link, collision, budget)
+    for dart_shape, rgba in parts:
+        node = body.createShapeNode(dart_shape)
+        node.setRelativeTransform(isometry(offset))
+        if collision:
+            node.createCollisionAspect()
+            node.createDynamicsAspect().setFrictionCoeff(DEFAULT_FRICTION if shape.friction is None
+                                                         else shape.friction)
+        else:
+            # the model's <material> wins over the mesh file's own colour, as in Gazebo
+            colour = shape.colour or rgba or (0.7, 0.7, 0.7, 1.0)
+            node.createVisualAspect().setRGBA(np.asarray(colour, dtype=float))
+
+
+def _mesh_parts(shape: ShapeSpec, spec: ModelSpec, link: str, collision: bool, budget: MeshBudget) -> list:
+    """DART shapes of a mesh, each with the file's colour for it: converted files only (``nodes.meshes``)."""
+    where = f"{spec.source}: model {spec.name!r} link {link!r}"
+    try:
+        mesh = load_mesh(shape.mesh)
+        budget.add(mesh)
+        if collision:
+            files = [(path, None) for path in collision_files(mesh, collision_policy().mode(link))[0]]
+        else:
+            files = visual_files(mesh)[0]
+    except MeshError as exc:
+        raise WorldError(f"{where}: {'collision' if collision else 'visual'} mesh: {exc}") from None
+    return [(_mesh(str(path), tuple(shape.scale), where), rgba) for path, rgba in files]
 
 
 def _plane_frame(normal: tuple[float, float, float]) -> np.ndarray:

@@ -85,6 +85,7 @@ def _check_shapes(model: RobotModel, base: str | None) -> dict[str, str]:
         if link.inertial is not None and link.inertial.mass < 0:
             raise _error(link.inertial.line, f"<mass> value={link.inertial.mass:g} of link {link.name!r} "
                                              "must not be negative")
+        visuals = {id(shape) for shape in link.visuals}
         for shape in (*link.visuals, *link.collisions):
             sizes = {"box": {"size": shape.size}, "cylinder": {"radius": (shape.radius,), "length": (shape.length,)},
                      "sphere": {"radius": (shape.radius,)}}.get(shape.kind, {})
@@ -96,6 +97,8 @@ def _check_shapes(model: RobotModel, base: str | None) -> dict[str, str]:
                 try:
                     meshes[shape.filename] = str(resolve_uri(shape.filename, base))
                 except PathError as exc:
+                    if id(shape) in visuals and "does not exist" in str(exc):
+                        continue   # a missing visual mesh: drawn without it, with a warning (nodes.meshes.urdf)
                     raise _error(shape.line, f"mesh of link {link.name!r}: {exc}") from None
     return meshes
 

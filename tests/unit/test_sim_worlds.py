@@ -276,9 +276,12 @@ def test_a_mesh_inside_its_model_folder_is_loaded(tmp_path: Path) -> None:
                         "name='c'><geometry><mesh><uri>model://wedge/meshes/wedge.stl</uri><scale>2 2 2</scale>"
                         "</mesh></geometry></collision></link></model>")
     (folder / "meshes").mkdir()
-    (folder / "meshes" / "wedge.stl").write_text(
-        "solid w\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
-        "endsolid w\n")
+    corners = ["0 0 0", "1 0 0", "0 1 0", "0 0 1"]   # a tetrahedron: a hull with a volume
+    facets = ""
+    for face in ((0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)):
+        facets += "facet normal 0 0 0\nouter loop\n" + "".join(f"vertex {corners[i]}\n" for i in face)
+        facets += "endloop\nendfacet\n"
+    (folder / "meshes" / "wedge.stl").write_text(f"solid w\n{facets}endsolid w\n")
     spec = parse_world(world("<include><uri>model://wedge</uri></include>"),
                        environ={"ZENROID_MODEL_PATH": str(tmp_path)})
     shape = WorldModel(spec.models[0]).skeleton.getBodyNode(0).getShapeNode(0).getShape()

@@ -1,0 +1,245 @@
+"""Meshes from the outside (real simulator, real renderer, real launcher, real Zenoh):
+
+- hostile meshes (non-finite vertices in STL, OBJ and DAE, garbage, empty, flat, a header claiming 1.25 M
+  triangles), as collision and as visual, spawned as SDF models or named by a robot's URDF, are refused with
+  the file named; the simulator keeps stepping, its memory does not jump, and the humanoid's camera keeps
+  rendering;
+- a world file with such a mesh ends the launch with status 1 at once, naming the file;
+- a mesh with its own colour (OBJ + MTL) is seen by the camera in that colour, at the right depth;
+- a renderer given a scene with a shape it cannot draw leaves that shape out, says so once on rosout with the
+  model and the file, and draws the rest.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import msgpack
+import numpy as np
+import pytest
+
+import msgs
+from nodes.core import Node
+from nodes.sim.interfaces import GetEntityState, SpawnEntity, StepSimulation
+from tests.conftest import free_port, wait_until
+from tests.integration.test_sim_helpers import call, wait_ready
+from tests.support import meshes as M
+
+pytestmark = pytest.mark.slow
+ROOT = Path(__file__).resolve().parents[2]
+PAINT = (0.1, 0.3, 0.9)
+
+
+def mesh_model(name: str, uri: str, *, collision: bool = True, visual: bool = True) -> str:
+    geometry = f"<geometry><mesh><uri>{uri}</uri></mesh></geometry>"
+    return (f"<?xml version='1.0'?><sdf version='1.7'><model name='{name}'><static>true</static><link name='link'>"
+            + (f"<collision name='c'>{geometry}</collision>" if collision else "")
+            + (f"<visual name='v'>{geometry}</visual>" if visual else "") + "</link></model></sdf>")
+
+
+def rss_mb(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1]) / 1024
+    return 0.0
+
+
+class Images:
+    """The newest camera image and depth image, by sim time (decoded with msgpack alone)."""
+
+    def __init__(self, node: Node, prefix: str = "humanoid/camera") -> None:
+        self.lock = threading.Lock()
+        self.latest: dict[str, dict] = {}
+        for key in (f"{prefix}/rgb", f"{prefix}/depth"):
+            node.create_subscription(None, f"/{key}", self._on, inline=True, raw=True, with_key=True)
+
+    def _on(self, payload: bytes, key: str) -> None:
+        with self.lock:
+            self.latest[key.rsplit("/", 1)[-1]] = msgpack.unpackb(payload)
+
+    def after(self, t: float) -> dict[str, dict]:
+        def ready():
+            with self.lock:
+                ok = all(k in self.latest and stamp(self.latest[k]) > t for k in ("rgb", "depth"))
+                return dict(self.latest) if ok else None
+        return wait_until(ready, timeout=60, message=f"camera images past sim time {t:.2f}")
+
+
+def stamp(msg: dict) -> float:
+    return msg["header"]["stamp"]["sec"] + msg["header"]["stamp"]["nanosec"] * 1e-9
+
+
+def centre(images: dict[str, dict]) -> tuple[float, np.ndarray]:
+    depth, rgb = images["depth"], images["rgb"]
+    h, w = depth["height"], depth["width"]
+    d = np.frombuffer(depth["data"], np.float32).reshape(h, w)
+    c = np.frombuffer(rgb["data"], np.uint8).reshape(h, w, 3)
+    return float(d[h // 2, w // 2]), c[h // 2, w // 2].astype(float)
+
+
+def step(node: Node, steps: int) -> None:
+    response = call(node, StepSimulation, "/sim/step", StepSimulation.Request(steps=steps), timeout=120)
+    assert response.success, response.status_message
+
+
+def test_hostile_meshes_are_refused_and_a_coloured_mesh_is_seen(processes, router, tmp_path):
+    models = tmp_path / "models"
+    bad = M.hostile(models / "bad" / "meshes")
+    M.obj(models / "paint" / "meshes" / "slab.obj", size=(0.1, 6, 3), rgb=PAINT)
+    for name in ("bad", "paint"):     # a model folder of the model path: its meshes are model://NAME/...
+        (models / name / "model.sdf").write_text(f"<sdf version='1.7'><model name='{name}'><static>true</static>"
+                                                 "<link name='link'/></model></sdf>")
+    robot_dir = tmp_path / "robot"
+    M.binary_stl(robot_dir / "meshes" / "inf.stl", M.with_bad_vertex())
+    urdf = (robot_dir / "bot.urdf")
+    urdf.write_text("<robot name='bot'><link name='base'><inertial><mass value='1'/><inertia ixx='0.1' iyy='0.1' "
+                    "izz='0.1' ixy='0' ixz='0' iyz='0'/></inertial><collision><geometry>"
+                    "<mesh filename='meshes/inf.stl'/></geometry></collision></link></robot>")
+    sim = processes.start("-m", "nodes.sim", "--params-file", str(ROOT / "config" / "sim.yaml"),
+                          "--param", "world:=empty.world", "--param", "mode:=lockstep", "--param", "paused:=true",
+                          "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}, "
+                          f"{{name: bot, file: {urdf}, z: 2}}]", name="sim", env={"GAZEBO_MODEL_PATH": str(models)})
+    renderer = processes.start("-m", "nodes.render", name="renderer")
+    node = Node("meshes_test", connect=[router])
+    try:
+        wait_ready(node, processes, sim)
+        # a robot whose URDF names a mesh with an inf vertex: refused at start, the file named, no crash
+        wait_until(lambda: "cannot spawn 'bot'" in processes.output(sim), timeout=30, message="bot refused")
+        log = processes.output(sim)
+        assert re.search(r"cannot spawn 'bot': .*collision mesh 'meshes/inf.stl': .*inf.stl: vertex \d+ is not finite",
+                         log), log[-2000:]
+        images = Images(node)
+        wait_until(lambda: "sensors humanoid::camera" in processes.output(renderer), timeout=60,
+                   message="the renderer's scene with the camera")
+        step(node, 300)
+        images.after(0.2)
+
+        # every hostile mesh, as collision and as visual: refused naming the file and the reason
+        t = 0.3
+        for case, (path, reason) in bad.items():
+            for part in ("collision",) if case == "flat_stl" else ("collision", "visual"):   # a flat decal is drawn
+                uri = f"model://bad/meshes/{path.name}"
+                before = rss_mb(sim.pid)
+                reply = call(node, SpawnEntity, "/sim/spawn_entity", SpawnEntity.Request(
+                    name=f"{case}_{part}", xml=mesh_model(case, uri, collision=part == "collision",
+                                                          visual=part == "visual")), timeout=30)
+                assert not reply.success, (case, part)
+                assert path.name in reply.status_message and reason in reply.status_message, reply.status_message
+                if case == "big_stl":   # refused from its header: nothing of 62.5 MB was read
+                    assert rss_mb(sim.pid) - before < 30, (before, rss_mb(sim.pid))
+            step(node, 100)                      # the physics and the camera go on after each
+            t += 0.1
+            images.after(t - 0.05)
+        assert sim.poll() is None and renderer.poll() is None
+
+        # a mesh with its own colour, 2 m ahead of the camera: seen in that colour, at that depth
+        camera = call(node, GetEntityState, "/sim/get_entity_state",
+                      GetEntityState.Request(name="humanoid::camera_link")).state.pose.position.x
+        reply = call(node, SpawnEntity, "/sim/spawn_entity", msgs.from_dict(SpawnEntity.Request, {
+            "name": "slab", "xml": mesh_model("slab", "model://paint/meshes/slab.obj"),
+            "initial_pose": {"position": {"x": camera + 2.05, "y": 0.0, "z": 1.5}}}), timeout=30)
+        assert reply.success, reply.status_message
+        step(node, 300)
+        depth, pixel = centre(images.after(t + 0.25))
+        assert depth == pytest.approx(2.0, abs=0.01)
+        assert pixel / pixel.sum() == pytest.approx(np.array(PAINT) / sum(PAINT), abs=0.03), pixel
+        assert sim.poll() is None and renderer.poll() is None
+    except BaseException:
+        print("--- simulator:\n" + processes.output(sim)[-4000:] + "\n--- renderer:\n" + processes.output(renderer)[-3000:])
+        raise
+    finally:
+        node.destroy()
+
+
+@pytest.mark.parametrize(("case", "part"), [("inf_stl", "collision"), ("nan_obj", "visual"),
+                                            ("garbage_obj", "visual"), ("flat_stl", "collision")])
+def test_a_world_with_a_bad_mesh_ends_the_launch_at_once_naming_the_file(tmp_path, case, part):
+    path, reason = M.hostile(tmp_path / "meshes")[case]
+    geometry = f"<geometry><mesh><uri>meshes/{path.name}</uri></mesh></geometry>"
+    world = tmp_path / "bad_mesh.world"
+    world.write_text(f"<sdf version='1.6'><world name='w'><include><uri>model://ground_plane</uri></include>"
+                     f"<model name='statue'><static>true</static><pose>3 0 0.5 0 0 0</pose><link name='link'>"
+                     f"<{part} name='x'>{geometry}</{part}></link></model></world></sdf>")
+    try:
+        result = subprocess.run([sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false", "mode:=lockstep",
+                                 "ros2:=false", f"world:={world}", f"zenoh_port:={free_port()}",
+                                 "--log-dir", str(tmp_path / "logs")],
+                                cwd=ROOT, capture_output=True, text=True, timeout=90)
+    except subprocess.TimeoutExpired as exc:
+        pytest.fail(f"the launch with {path.name} did not end: {str(exc.stdout)[-2000:]}")
+    output = result.stdout + result.stderr
+    assert result.returncode == 1, output[-3000:]
+    line = next((x for x in output.splitlines() if f"model 'statue' link 'link': {part} mesh: " in x), "")
+    assert path.name in line and reason in line, output[-3000:]
+    assert "respawning 'simulator'" not in output and "signal 11" not in output.lower()
+
+
+ROBOT = """<robot name="bot"><link name="camera_link"/>
+<gazebo reference="camera_link"><sensor name="camera" type="depth"><always_on>true</always_on>
+<update_rate>10</update_rate><camera><horizontal_fov>1.0</horizontal_fov>
+<image><width>32</width><height>24</height><format>R8G8B8</format></image><clip><near>0.05</near><far>10</far></clip>
+</camera><plugin name="c" filename="libgazebo_ros_camera.so"><ros><remapping>camera/image_raw:=camera/rgb</remapping>
+<remapping>camera/depth/image_raw:=camera/depth</remapping></ros><camera_name>camera</camera_name></plugin>
+</sensor></gazebo></robot>"""
+
+
+def _shape(link: int, kind: int, size=(), colour=(1.0, 0.0, 0.0), vertices=b"", triangles=b"", uri="") -> dict:
+    return {"link": link, "kind": kind, "size": list(size),
+            "pose": {"position": {"x": 0.0, "y": 0.0, "z": 0.0}, "orientation": {"w": 1.0}},
+            "color": {"r": colour[0], "g": colour[1], "b": colour[2], "a": 1.0}, "visual": True, "collision": True,
+            "mesh_uri": uri, "vertices": vertices, "triangles": triangles}
+
+
+def test_the_renderer_leaves_out_a_shape_it_cannot_draw_and_draws_the_rest(processes, router):
+    """A scene that carries one mesh with a NaN vertex (as a simulator of another version might send):
+    that shape is left out and named once on rosout, and the wall beside it is still seen."""
+    node = Node("renderer_feeder", connect=[router])
+    renderer = processes.start("-m", "nodes.render", name="renderer")
+    try:
+        wait_until(lambda: "renderer ready" in processes.output(renderer), timeout=60, message="renderer ready")
+        rosout: list[str] = []
+        node.create_subscription(None, "/rosout", lambda p: rosout.append(msgpack.unpackb(p).get("msg", "")),
+                                 inline=True, raw=True)
+        nan_vertices = np.array([[0, 0, 0], [1, 0, 0], [0, np.nan, 0]], "<f4").tobytes()
+        scene = msgs.from_dict(msgs.get_type("zenroid_msgs/msg/Scene"), {
+            "version": 1, "models": ["bot", "wall"], "namespaces": ["bot", ""], "static_models": [False, True],
+            "descriptions": [ROBOT, ""], "links": ["bot::camera_link", "wall::link"], "link_models": [0, 1],
+            "shapes": [_shape(1, 1, (0.1, 6, 3), (0.0, 1.0, 0.0)),
+                       _shape(1, 4, vertices=nan_vertices, triangles=np.array([[0, 1, 2]], "<u4").tobytes(),
+                              uri="/models/statue/meshes/broken.obj")],
+            "has_camera_pose": False, "camera_pose": {"orientation": {"w": 1.0}}})
+        node.create_publisher(msgs.get_type("zenroid_msgs/msg/Scene"), "/sim/scene", latched=True).publish(scene)
+        images = Images(node, "bot/camera")
+        frames = node.create_publisher(msgs.get_type("zenroid_msgs/msg/RenderFrame"), "/sim/render/frame")
+        wall = [1, 0, 0, 2.05, 0, 1, 0, 0, 0, 0, 1, 0]          # 3x4 row-major: 2.05 m ahead
+        camera = [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]
+        step_no = 0
+
+        def drawn():
+            nonlocal step_no
+            step_no += 1
+            frames.publish(msgs.from_dict(msgs.get_type("zenroid_msgs/msg/RenderFrame"), {
+                "stamp": {"sec": step_no}, "step": step_no, "scene_version": 1, "poses": camera + wall,
+                "sensors": ["bot::camera"], "lockstep": True}))
+            time.sleep(0.1)
+            with images.lock:
+                return images.latest if {"rgb", "depth"} <= set(images.latest) else None
+        wait_until(drawn, timeout=60, message="a camera image of the scene with the bad mesh")
+        depth, pixel = centre(images.after(0))
+        assert depth == pytest.approx(2.0, abs=0.01) and pixel[1] > 100 and pixel[0] + pixel[2] < 30, (depth, pixel)
+        for _ in range(3):
+            drawn()
+        warnings = [m for m in rosout if "broken.obj" in m]
+        assert len(warnings) == 1 and "model 'wall' link 'link'" in warnings[0] and "not finite" in warnings[0], \
+            warnings
+        assert renderer.poll() is None
+    except BaseException:
+        print("--- renderer:\n" + processes.output(renderer)[-3000:])
+        raise
+    finally:
+        node.destroy()
