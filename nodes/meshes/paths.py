@@ -19,5 +19,5 @@ def resolve_mesh(uri: str, base: Path | str | None) -> Path:
     try:
         return resolve_uri(uri, base)
     except PathError as exc:
-        message = f"mesh {str(exc)}"
+        message = str(exc).removeprefix(f"{uri.strip()!r}: ")   # the callers name the reference already
         raise (MissingMesh if "does not exist" in message else MeshError)(message) from None

@@ -106,6 +106,8 @@ def resolve_uri(uri: str, base: str | os.PathLike | None = None) -> Path:
     scheme = parsed.scheme if len(parsed.scheme) > 1 else ""   # "C:" is a drive, not a scheme
     if scheme in ("package", "model"):
         package, rest = parsed.netloc, unquote(parsed.path).lstrip("/")
+        if not package:   # package:///pkg/... (three slashes, as TALOS's URDF writes it) names pkg too
+            package, _, rest = rest.partition("/")
         if not package:
             raise PathError(f"{text!r}: no package name after {scheme}://")
         root, _ = package_root(package, base_path)
