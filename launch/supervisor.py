@@ -31,6 +31,7 @@ SIGKILL_AFTER_S = 7.0
 # The shutdown's stages after the first SIGINT: (seconds after it, signal sent, the one sent before, log level)
 _ESCALATION = ((SIGTERM_AFTER_S, signal.SIGTERM, "SIGINT", "WARN"), (SIGKILL_AFTER_S, signal.SIGKILL, "SIGTERM", "ERROR"))
 POLL_S = 0.02
+HEALTH_KILL_GRACE_S = 2.0  # a node killed for not answering: SIGTERM, then SIGKILL this much later
 # A process that ran this long before it exited starts a fresh respawn count: respawn_max caps crash
 # loops, not the number of unrelated faults over a long run.
 RESPAWN_RESET_AFTER_S = 30.0
@@ -104,6 +105,8 @@ class Managed:
     started_at: float = 0.0
     probed: bool = False  # its health is being probed (it showed up on the graph)
     silent_reported: bool = False
+    sigkill_at: float | None = None  # killed for silence: when SIGKILL follows the SIGTERM
+    wedged: bool = False  # killed for silence (its exit is a failure whatever its status)
 
 
 class Supervisor:
@@ -207,6 +210,8 @@ class Supervisor:
         managed.pgid = proc.pid  # start_new_session: the child leads its own group
         managed.started_at = time.monotonic()
         managed.probed = managed.silent_reported = False
+        managed.sigkill_at = None
+        managed.wedged = False
         if self.reaper:
             self.reaper.watch(proc.pid)
         managed.state = "running"
@@ -255,6 +260,9 @@ class Supervisor:
         if self._shutdown_started is not None:
             self.say(f"'{spec.name}' ended ({describe})")
             return
+        if managed.wedged:
+            describe += ", killed for not answering"
+            code = code if code else 1
         level = "INFO" if code == 0 else "ERROR"
         self.say(f"'{spec.name}' [pid {managed.proc.pid if managed.proc else '-'}] exited with {describe}", level)
         self._event("exit", managed)
@@ -294,6 +302,13 @@ class Supervisor:
         spec, health = managed.spec, self._health
         if health is None or spec.health_timeout <= 0:
             return
+        if managed.sigkill_at is not None:   # killed for silence: it has its grace to end, then SIGKILL
+            if now >= managed.sigkill_at:
+                managed.sigkill_at = None
+                self.say(f"'{spec.name}' still running {HEALTH_KILL_GRACE_S:g} s after SIGTERM: sending SIGKILL",
+                         "ERROR")
+                self._kill_group(managed, signal.SIGKILL)
+            return
         if not managed.probed:
             if self.readiness.is_alive(spec.full_name):  # a node (not a plain program) is on the graph
                 health.watch(spec.full_name)
@@ -311,12 +326,15 @@ class Supervisor:
         if managed.silent_reported:
             return
         managed.silent_reported = True
-        why = f"'{spec.name}' has not answered for {silent:.1f} s (hung, or its Zenoh link is lost)"
-        if spec.respawn:
-            self.say(f"{why}: killing it to respawn it", "ERROR")
-            self._kill_group(managed, signal.SIGKILL)
+        why = f"'{spec.name}' stopped answering for {silent:.1f} s (hung, or its Zenoh link is lost)"
+        if spec.respawn or spec.required:
+            # a wedged node is a dead node: ended like a crash, then respawned (or the launch ends) as one
+            self.say(f"{why}: killed", "ERROR")
+            self._kill_group(managed, signal.SIGTERM)
+            managed.sigkill_at = now + HEALTH_KILL_GRACE_S
+            managed.wedged = True
         else:
-            self.say(f"{why}; it does not respawn, so it is left running", "WARN")
+            self.say(f"{why}; it neither respawns nor is required, so it is left running", "WARN")
 
     # -- ROS launch reactions ------------------------------------------------------------------
     def _event(self, kind: str, managed: Managed, data: bytes = b"") -> None:

@@ -29,6 +29,8 @@ from collections import deque
 from collections.abc import Callable
 from typing import Any
 
+from nodes.core import panic
+
 # How long an in-process hand-off waits for the receiving node's lock before queueing the callback for its
 # spinning thread (a callback of that node is running; longer than any callback should take).
 IN_PROCESS_LOCK_WAIT_S = 0.5
@@ -112,7 +114,11 @@ class Executor:
         """Call ``fn(*args)`` here and now; an exception is reported and swallowed (the node lives on)."""
         try:
             fn(*args)
-        except Exception as exc:  # noqa: BLE001 - a failing callback is reported, the node keeps running
+        except BaseException as exc:  # noqa: BLE001 - a failing callback is reported, the node keeps running
+            if not isinstance(exc, Exception):
+                if panic.is_zenoh_panic(exc):
+                    panic.die(exc, where)
+                raise
             tb = traceback.extract_tb(exc.__traceback__)
             at = f" at {tb[-1].filename}:{tb[-1].lineno}" if tb else ""
             self.report_error(f"exception in {where}: {type(exc).__name__}: {exc}{at}")

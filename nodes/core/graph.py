@@ -107,12 +107,24 @@ class NodeWatch:
 _PROBE_PAYLOAD = msgpack.packb({"names": []})
 
 
+def from_node(reply: zenoh.Reply) -> bool:
+    """Did a node's executor send ``reply``? A data reply, or an error reply in zenroid's layout (a msgpack
+    map) are; a router's own ``Timeout`` error, sent when the node never answered, is not."""
+    if reply.ok is not None:
+        return True
+    try:
+        return isinstance(msgpack.unpackb(reply.err.payload.to_bytes(), raw=False), dict)
+    except Exception:  # noqa: BLE001 - any other bytes: not a node's answer
+        return False
+
+
 def probe_node(session: zenoh.Session, node: str, on_answer: Callable[[], None], timeout: float) -> None:
     """Ask ``node`` (``ns/name``) whether it serves, without waiting: ``on_answer()`` runs on a Zenoh thread
     when any reply comes back, even an error one. Every node serves ``<node>/get_parameters`` from its
     executor, so an answer means its callbacks run, which a liveliness token alone does not say.
     Raises when the session is closed."""
-    def on_reply(_reply: zenoh.Reply) -> None:
-        on_answer()
+    def on_reply(reply: zenoh.Reply) -> None:
+        if from_node(reply):
+            on_answer()
 
     session.get(f"{node}/get_parameters", on_reply, payload=_PROBE_PAYLOAD, timeout=timeout)

@@ -8,6 +8,7 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
+from nodes.core import panic
 from nodes.core.names import parse_assignment
 from nodes.core.params import ParameterError, load_params_file, parse_value
 from nodes.core.session import loopback_endpoint
@@ -64,6 +65,7 @@ def run_node(factory: Callable[..., Any], argv: list[str] | None = None, *,
     parser = parser or argparse.ArgumentParser(description=(factory.__doc__ or "").strip().split("\n")[0] or None)
     add_node_arguments(parser)
     args = parser.parse_args(argv)
+    panic.install()
     default_name = getattr(factory, "default_name", None) or getattr(factory, "__name__", "node")
     try:
         kwargs = node_kwargs(args, default_name)
@@ -91,6 +93,10 @@ def run_node(factory: Callable[..., Any], argv: list[str] | None = None, *,
     signal.signal(signal.SIGTERM, on_signal)
     try:
         node.spin()
+    except BaseException as exc:
+        if panic.is_zenoh_panic(exc):
+            panic.die(exc, "spin")   # before the shutdown below: closing a poisoned session hangs
+        raise
     finally:
         node.executor.run_callback(node.on_process_exit, where="on_process_exit")  # the shutdown hook
         node.destroy()

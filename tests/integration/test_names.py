@@ -12,6 +12,7 @@ from pathlib import Path
 import msgpack
 import pytest
 
+import msgs
 from nodes.core import Node
 from nodes.sim.interfaces import GetModelList, SpawnEntity, StepSimulation
 from tests.conftest import wait_until
@@ -111,5 +112,26 @@ def test_bad_sensor_names_are_refused_and_the_humanoid_camera_keeps_publishing(p
     except BaseException:
         print("--- simulator:\n" + processes.output(sim)[-3000:] + "\n--- renderer:\n" + processes.output(renderer)[-3000:])
         raise
+    finally:
+        node.destroy()
+
+
+def test_a_zenoh_panic_inside_a_node_ends_its_process(processes, router):
+    """After a panic the session is poisoned: the node would keep its pid and serve nothing. It ends instead
+    (status 70), saying why, so that the launcher respawns it."""
+    from nodes.core.panic import PANIC_EXIT
+
+    empty = msgs.get_type("std_srvs/srv/Empty")
+    proc = processes.start("-m", "tests.support.panicking_node", name="panicker")
+    node = Node("panic_test", connect=[router])
+    try:
+        wait_until(lambda: "ready" in processes.output(proc), 30, message="the node up")
+        try:
+            node.create_client(empty, "/panicker/panic").call(empty.Request(), timeout=5)
+        except Exception:  # noqa: BLE001 - no answer: the node is going away
+            pass
+        wait_until(lambda: proc.poll() is not None, 20, message="the panicked node to exit")
+        assert proc.returncode == PANIC_EXIT
+        assert "Zenoh panicked in" in processes.output(proc)
     finally:
         node.destroy()

@@ -2,7 +2,7 @@
 graph liveliness token a real node declares, prints its parameters, and exits when told to.
 
 ``python -m tests.support.dummy_node --name N [--ns NS] [--params-file F] [--exit-after S] [--exit-code C]
-[--ignore-sigint] [--start-delay S] [--child] [--detached-child] [--serve-for S]``
+[--ignore-sigint] [--start-delay S] [--child] [--detached-child] [--serve-for S] [--wedge]``
 """
 
 from __future__ import annotations
@@ -32,6 +32,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="also start a sleeping process in its own session (escapes the node's group)")
     parser.add_argument("--serve-for", type=float, default=None,
                         help="answer <name>/get_parameters (the launcher's health probe) for S seconds, then hang")
+    parser.add_argument("--wedge", action="store_true",
+                        help="with --serve-for: then wedge as a node whose Zenoh session broke does: the probe's "
+                             "callback blocks (its query never ends) and the main thread blocks too")
     args = parser.parse_args(argv)
 
     stop = threading.Event()
@@ -62,13 +65,24 @@ def main(argv: list[str] | None = None) -> int:
     token = session.liveliness().declare_token(graph.node_key(str(session.zid()), "/" + full_name))
     served_until = time.monotonic() + (args.serve_for or 0.0)
 
+    wedged = threading.Event()
+
     def on_query(query) -> None:  # noqa: ANN001 - a zenoh query
         if time.monotonic() < served_until:
             query.reply(query.key_expr, b"\x80")  # an empty msgpack map
+        elif args.wedge:
+            wedged.set()
+            threading.Event().wait()   # holds the query: only the router's timeout ends it
         # afterwards: no reply, as from a node whose loop is stuck
 
     queryable = session.declare_queryable(f"{full_name}/get_parameters", on_query) if args.serve_for else None
     print(f"ready {full_name}", flush=True)
+    if args.wedge:
+        wedged.wait()
+        print(f"wedged {full_name}", flush=True)
+        stuck = threading.Lock()
+        stuck.acquire()
+        stuck.acquire()   # a signal handler runs, and the main thread waits on: only SIGKILL ends it
     try:
         stop.wait(args.exit_after)
     finally:

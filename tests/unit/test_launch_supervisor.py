@@ -72,14 +72,46 @@ def test_a_node_that_stops_answering_is_restarted_and_one_that_never_served_is_l
 """, zenoh_port)
     try:
         launch.wait_output("[hangs] ready hangs")
-        launch.wait_output("'hangs' has not answered for", 40)
+        launch.wait_output("'hangs' stopped answering for", 40)
         launch.wait_output("started 'hangs' [pid", 10)
         wait_until(lambda: len(launch.node_pids("hangs")) == 2, 20, 0.05, "hangs respawned")
         out = launch.output()
-        assert "killing it to respawn it" in out and "'hangs' [pid" in out and "exited with signal 9" in out
-        assert len(launch.node_pids("mute")) == 1 and "'mute' has not answered" not in out
+        assert "stopped answering for" in out and ": killed" in out and "'hangs' [pid" in out
+        assert "killed for not answering" in out
+        assert len(launch.node_pids("mute")) == 1 and "'mute' stopped answering" not in out
     finally:
         assert launch.close() == 0
+
+
+def test_a_wedged_node_and_a_stopped_one_are_killed_and_respawned_saying_why(tmp_path: Path,
+                                                                            zenoh_port: int) -> None:
+    """A node whose callbacks and main thread block (as after a Zenoh panic) holds its probe's query until the
+    router's timeout answers it with an error: that error is no answer. The node is killed (SIGTERM, then
+    SIGKILL: it ignores SIGTERM) and respawned, and the log says why. A node stopped with SIGSTOP likewise."""
+    launch = YamlLaunch(tmp_path, HEADER + """
+  - node: {name: wedges, module: tests.support.dummy_node, respawn: true, respawn_delay: 0.2, respawn_max: 1,
+           health_timeout: 3.0, args: [--serve-for, "2.0", --wedge]}
+  - node: {name: stops, module: tests.support.dummy_node, respawn: true, respawn_delay: 0.2, respawn_max: 1,
+           health_timeout: 3.0, args: [--serve-for, "100000"]}
+""", zenoh_port)
+    try:
+        launch.wait_output("[wedges] wedged wedges", 30)
+        launch.wait_output("[stops] ready stops")
+        os.kill(launch.node_pids("stops")[0], signal.SIGSTOP)
+        launch.wait_match(r"'wedges' stopped answering for \d+\.\d s \(hung, or its Zenoh link is lost\): killed", 40)
+        launch.wait_output("'wedges' still running 2 s after SIGTERM: sending SIGKILL", 20)
+        wait_until(lambda: len(launch.node_pids("wedges")) == 2, 20, 0.05, "wedges respawned")
+        launch.wait_match(r"'stops' stopped answering for \d+\.\d s .*: killed", 40)
+        wait_until(lambda: len(launch.node_pids("stops")) == 2, 20, 0.05, "stops respawned")
+        out = launch.output()
+        assert "exited with signal 9, killed for not answering" in out, out[-3000:]
+    finally:
+        for pid in launch.node_pids("stops"):
+            try:
+                os.kill(pid, signal.SIGCONT)
+            except ProcessLookupError:
+                pass
+        launch.close()
 
 
 def test_respawn_count_is_reset_after_a_long_run(monkeypatch) -> None:
