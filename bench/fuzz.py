@@ -1,6 +1,7 @@
 """Hostile input at scale: malformed payloads on every input of the running main job, then a health check.
 
     python bench/fuzz.py [--payloads 10000] [--seconds 300] [--seed 1] [--big 60]
+                         [--classes names,meshes,accumulation,fan-out | all | none] [--no-random]
 
 Starts ``python -m launch humanoid.yaml gui:=false commander:=none`` (realtime) on a free port, finds every
 input of the job on its graph (our ``@graph`` tokens: subscriptions, services, actions; rmw_zenoh's
@@ -22,6 +23,11 @@ Then it checks: every process alive and never restarted (crashes), every service
 and joint_states never silent for a second (hangs), the robot standing, the controllers, entities and physics
 as before and a valid trajectory still followed (state lost), RSS growth per process under 10 %, and every
 target's rejections logged on rosout naming the key and the field. Prints a table, then a JSON line.
+
+Then the classes of ``bench/fuzz_classes.py`` (long and wildcard names, mesh contents, accumulation, include
+fan-out), each on a job started with a model path of hostile files: per class, what was refused well (declined
+with the limit, field or file named) and what broke (accepted, unanswered, refused without its reason, or the
+job hurt: a process restarted, joint_states stopped, the camera blinded).
 """
 
 from __future__ import annotations
@@ -51,6 +57,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 import msgs  # noqa: E402 - after the path is set (bench scripts run from anywhere)
+from bench import fuzz_classes  # noqa: E402
 from bench.common import MAIN_JOB_CONTROLLERS, Launch  # noqa: E402
 from msgs import cdr  # noqa: E402
 from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES  # noqa: E402
@@ -897,10 +904,33 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--big", type=int, default=60, help="1e6-element / multi-MB payloads among them (default 60)")
     parser.add_argument("--mode", default="realtime", choices=["realtime", "lockstep"])
+    parser.add_argument("--classes", default="all",
+                        help=f"classes of hostile input after the random fuzz: all, none, or some of "
+                             f"{','.join(fuzz_classes.CLASSES)}")
+    parser.add_argument("--no-random", action="store_true", help="only the classes")
     args = parser.parse_args(argv)
+    classes = (list(fuzz_classes.CLASSES) if args.classes == "all" else
+               [] if args.classes == "none" else [c.strip() for c in args.classes.split(",") if c.strip()])
+    unknown = [c for c in classes if c not in fuzz_classes.CLASSES]
+    if unknown:
+        parser.error(f"unknown class(es) {unknown}: choose from {', '.join(fuzz_classes.CLASSES)}")
+
+    def progress(line: str) -> None:
+        print(line, file=sys.stderr, flush=True)
+
+    report: dict[str, Any] = {"pass": True}
     with tempfile.TemporaryDirectory(prefix="zenroid-fuzz-") as tmp:
-        report = run(args.payloads, args.seconds, args.seed, args.big, Path(tmp), args.mode,
-                     progress=lambda s: print(s, file=sys.stderr, flush=True))
+        if not args.no_random:
+            report = run(args.payloads, args.seconds, args.seed, args.big, Path(tmp) / "random", args.mode,
+                         progress=progress)
+        class_reports = fuzz_classes.run_classes(classes, Path(tmp) / "classes", progress) if classes else []
+    if class_reports:
+        report["classes"] = fuzz_classes.summary(class_reports)
+        report["pass"] = report.get("pass", True) and not any(r.broke for r in class_reports)
+        print(fuzz_classes.table(class_reports))
+    if args.no_random:
+        print(json.dumps(report, default=str))
+        return 0 if report["pass"] else 1
     print(table(report))
     if report.get("state_lost"):
         print("state lost: " + "; ".join(report["state_lost"])[:2000])

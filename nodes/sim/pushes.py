@@ -10,11 +10,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-# Each pending push is applied again before every physics step (two DART calls a wrench), so their number is
-# the physics loop's cost: capped per link or joint and in total, pending ones counted (active or still to
-# start). A start further ahead than the horizon is refused: it would only be held, unseen, until then.
-MAX_PER_TARGET = 16
-MAX_PENDING = 128
+# Each pending push is applied again before every physics step (two DART calls, ~5 us, a push), so their
+# number is the physics loop's cost: capped per link or joint and in total (wrenches and efforts together),
+# pending ones counted (active or still to start). A start further ahead than the horizon is refused: it would
+# only be held, unseen, until then.
+MAX_PER_TARGET = 8
+MAX_PENDING = 32
 START_HORIZON_S = 3600.0
 
 
@@ -69,27 +70,26 @@ class Pushes:
             raise PushLimitError(f"{field}: {start:.6g} s is {start - now:.6g} s ahead of the sim time "
                                  f"{now:.3f} s, beyond the {START_HORIZON_S:g} s horizon")
 
-    @staticmethod
-    def _check_room(pending: list, target: str, now: float, what: str, per: str) -> None:
-        live = [p for p in pending if p.end > now]
-        on_target = sum(1 for p in live if getattr(p, per) == target)
+    def _check_room(self, pending: list, target: str, now: float, what: str, per: str) -> None:
+        on_target = sum(1 for p in pending if p.end > now and getattr(p, per) == target)
         if on_target >= MAX_PER_TARGET:
-            raise PushLimitError(f"{target!r} already has {on_target} pending {what}s, the limit per {per} is "
+            raise PushLimitError(f"{target!r} already has {on_target} pending {what}, the limit per {per} is "
                                  f"{MAX_PER_TARGET} (clear them first)")
-        if len(live) >= MAX_PENDING:
-            raise PushLimitError(f"{len(live)} {what}s are pending, the limit in total is {MAX_PENDING} "
+        live = sum(1 for p in (*self.wrenches, *self.efforts) if p.end > now)
+        if live >= MAX_PENDING:
+            raise PushLimitError(f"{live} wrenches and efforts are pending, the limit in total is {MAX_PENDING} "
                                  "(clear some first)")
 
     def add_wrench(self, wrench: LinkWrench, now: float) -> None:
         """Add a wrench; raises PushLimitError over a cap (the world unchanged)."""
         self.check_start(now, wrench.start)
-        self._check_room(self.wrenches, wrench.link, now, "wrench", "link")
+        self._check_room(self.wrenches, wrench.link, now, "wrenches", "link")
         self.wrenches.append(wrench)
 
     def add_effort(self, effort: JointEffort, now: float) -> None:
         """Add an effort; raises PushLimitError over a cap (the world unchanged)."""
         self.check_start(now, effort.start)
-        self._check_room(self.efforts, effort.joint, now, "effort", "joint")
+        self._check_room(self.efforts, effort.joint, now, "efforts", "joint")
         self.efforts.append(effort)
 
     def clear_link(self, link: str) -> int:

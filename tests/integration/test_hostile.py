@@ -69,3 +69,15 @@ def _cli_switch(router: str, name: str):  # noqa: ANN202 - a CompletedProcess
     env = dict(os.environ, ZENOH_CONNECT=router, PYTHONPATH=str(ROOT))
     return subprocess.run([sys.executable, "-m", "nodes.tools", "control", "spawner", name, "--ns", "simple_robot"],
                           capture_output=True, text=True, env=env, timeout=60, cwd=ROOT)
+
+
+def test_fuzz_classes_accumulation_and_include_fan_out_are_refused_well(tmp_path: Path) -> None:
+    """``bench/fuzz.py``'s accumulation and fan-out classes against the real main job: every case refused with
+    its limit named, and the job whole after each class (nothing restarted, joint_states and the camera on)."""
+    from bench import fuzz_classes
+
+    reports = fuzz_classes.run_classes(["accumulation", "fan-out"], tmp_path, progress=lambda _: None)
+    summary = fuzz_classes.table(reports)
+    assert [r.name for r in reports] == ["accumulation", "fan-out", "fan-out (world:=)"], summary
+    for report in reports:
+        assert report.outcomes and not report.broke, summary

@@ -87,7 +87,9 @@ def test_pending_wrenches_and_efforts_are_capped_per_target_and_in_total(process
     assert not reply.success and f"beyond the {START_HORIZON_S:g} s horizon" in reply.status_message, reply
     assert call(node, ApplyLinkWrench, "/sim/apply_link_wrench", wrench("box_small", start_sec=60)).success
 
-    # efforts: the same caps per joint
+    # efforts: the same caps per joint (the total counts wrenches and efforts together: room made first)
+    for i in range(boxes):
+        call(node, LinkRequest, "/sim/clear_link_wrenches", LinkRequest.Request(link_name=f"cap_box_{i}::link"))
     assert call(node, SpawnEntity, "/sim/spawn_entity",
                 SpawnEntity.Request(name="arm", xml=ARM, fixed=True), timeout=30).success
     effort = ApplyJointEffort.Request(joint_name="arm::shoulder", effort=0.0)
