@@ -164,7 +164,8 @@ class NodeSpec:
             argv += ["--params-file", file]
         for src, dst in self.remaps:
             argv += ["-r", f"{src}:={dst}"]
-        return argv + self.ros_args
+        argv += self.ros_args
+        return argv if len(argv) > 1 else []
 
     def describe(self) -> dict[str, Any]:
         out: dict[str, Any] = {"name": self.name, "namespace": self.namespace}
@@ -239,6 +240,9 @@ class LaunchPlan:
             "nodes": [n.describe() for n in self.nodes],
             "on_exit": [{"node": h.node, "log": h.log, "shutdown": h.shutdown} for h in self.on_exit],
             "on_shutdown": list(self.on_shutdown),
+            **({"log": [text for _, text in self.logs]} if self.logs else {}),
+            **({"reactions": [f"{t.kind}{f' after {t.after:g} s' if t.kind == 'timer' else ''} ({t.source})"
+                              for t in self.triggers]} if self.triggers else {}),
         }
 
 

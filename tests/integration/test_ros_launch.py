@@ -1,0 +1,298 @@
+"""ROS launch files (Python, XML, ROS YAML) run by our launcher as real processes on a free port: the seeds'
+files, event handlers, conditions, timers, namespaces, and the errors bad files get."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import msgpack
+import pytest
+
+from bench.common import ROOT, Launch, child_env
+
+SEEDS = Path("/work/shared/seed-code")
+needs_seeds = pytest.mark.skipif(not SEEDS.is_dir(), reason="the seed listings are not on this machine")
+
+SMALL_URDF = """<?xml version="1.0"?>
+<robot name="tiny">
+  <link name="base"/>
+  <link name="arm"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>
+  </inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="arm"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>
+"""
+
+
+def launch_cli(*argv: str, env: dict[str, str] | None = None, timeout: float = 60) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "launch", *argv], capture_output=True, text=True, timeout=timeout,
+                          env=child_env(env), cwd=ROOT)
+
+
+def wait_output(launch: Launch, pattern: str, timeout: float = 60.0) -> re.Match[str]:
+    return launch.wait_match(pattern, timeout)
+
+
+def node_list(port: int) -> str:
+    done = subprocess.run([sys.executable, "-m", "nodes.tools", "node", "list", "--zenoh-port", str(port)],
+                          capture_output=True, text=True, timeout=30, env=child_env(), cwd=ROOT)
+    return done.stdout
+
+
+# -- the Python front end: handlers, timers, conditions, groups ---------------------------------------------
+CHAIN = """
+import sys
+from launch import LaunchDescription
+from launch.actions import (DeclareLaunchArgument, ExecuteProcess, GroupAction, LogInfo, OpaqueFunction,
+                            RegisterEventHandler, SetLaunchConfiguration, TimerAction)
+from launch.conditions import IfCondition, UnlessCondition, LaunchConfigurationEquals
+from launch.event_handlers import OnProcessExit, OnProcessStart, OnProcessIO, OnShutdown
+from launch.substitutions import (AndSubstitution, EqualsSubstitution, LaunchConfiguration, NotSubstitution,
+                                  PathJoinSubstitution, PythonExpression, TextSubstitution, ThisLaunchFileDir)
+from launch_ros.actions import Node, PushRosNamespace
+
+def late(context):
+    return [LogInfo(msg='opaque: word=' + context.launch_configurations['word'])]
+
+def generate_launch_description():
+    first = ExecuteProcess(cmd=[sys.executable, '-c', 'print("first says " + __import__("sys").argv[1])',
+                                LaunchConfiguration('word')], name='first', output='screen')
+    second = ExecuteProcess(cmd=['python3', '-c', 'print("second ran")'], name='second', output='screen')
+    return LaunchDescription([
+        DeclareLaunchArgument('word', default_value='hello'),
+        DeclareLaunchArgument('flag', default_value='true'),
+        SetLaunchConfiguration('double', PythonExpression(['2 * ', '21'])),
+        LogInfo(msg=['double is ', LaunchConfiguration('double')]),
+        LogInfo(msg='if ok', condition=IfCondition(AndSubstitution(LaunchConfiguration('flag'), 'true'))),
+        LogInfo(msg='unless shown', condition=UnlessCondition(NotSubstitution(LaunchConfiguration('flag')))),
+        LogInfo(msg='never shown', condition=IfCondition(EqualsSubstitution(LaunchConfiguration('word'), 'nope'))),
+        LogInfo(msg='equals ok', condition=LaunchConfigurationEquals('word', 'chained')),
+        LogInfo(msg=PathJoinSubstitution([ThisLaunchFileDir(), 'x', TextSubstitution(text='y')])),
+        OpaqueFunction(function=late),
+        GroupAction([
+            PushRosNamespace('team'),
+            SetLaunchConfiguration('word', 'inner'),
+            Node(package='robot_state_publisher', executable='robot_state_publisher', name='rsp',
+                 parameters=[{'robot_description': open(__file__.replace('chain.launch.py', 'tiny.urdf')).read()}]),
+        ]),
+        LogInfo(msg=['after group word=', LaunchConfiguration('word')]),
+        RegisterEventHandler(OnProcessStart(target_action=first, on_start=[LogInfo(msg='first started')])),
+        RegisterEventHandler(OnProcessIO(target_action=first,
+                                         on_stdout=lambda event: [LogInfo(msg='io saw ' + event.text.decode().strip())])),
+        RegisterEventHandler(OnProcessExit(target_action=first, on_exit=[LogInfo(msg='first exited'), second])),
+        RegisterEventHandler(OnProcessExit(target_action=second,
+                                           on_exit=lambda event, context: [LogInfo(msg=f'second status {event.returncode}')])),
+        TimerAction(period=1.0, actions=[LogInfo(msg='timer fired')]),
+        RegisterEventHandler(OnShutdown(on_shutdown=[LogInfo(msg='goodbye from OnShutdown')])),
+        first,
+    ])
+"""
+
+
+def test_python_launch_handlers_timer_group_namespace(tmp_path: Path, zenoh_port: int) -> None:
+    (tmp_path / "chain.launch.py").write_text(CHAIN)
+    (tmp_path / "tiny.urdf").write_text(SMALL_URDF)
+    launch = Launch(str(tmp_path / "chain.launch.py"), "word:=chained", log_dir=tmp_path / "run", port=zenoh_port)
+    try:
+        wait_output(launch, r"second status 0")
+        wait_output(launch, r"timer fired")
+        launch.wait(lambda: "/team/rsp" in node_list(zenoh_port), 30, "/team/rsp on the graph")
+    finally:
+        launch.close()
+    out = launch.output()
+    for line in ("double is 42", "if ok", "unless shown", "equals ok", "opaque: word=chained", f"{tmp_path}/x/y",
+                 "after group word=chained", "first started", "io saw first says chained", "first exited",
+                 "[second] second ran", "goodbye from OnShutdown"):
+        assert line in out, f"{line!r} missing from:\n{out}"
+    assert "never shown" not in out
+    order = [out.index(s) for s in ("first started", "first exited", "[second] second ran", "second status 0")]
+    assert order == sorted(order), out
+
+
+# -- the ROS XML and YAML front ends ------------------------------------------------------------------------
+XML = """<?xml version="1.0"?>
+<launch>
+  <arg name="ns" default="xmlbot"/>
+  <let name="greeting" value="hi $(var ns)"/>
+  <log message="$(var greeting) from $(dirname)"/>
+  <group>
+    <push_ros_namespace namespace="$(var ns)"/>
+    <node pkg="robot_state_publisher" exec="robot_state_publisher" name="rsp">
+      <param name="robot_description" value="$(command 'cat $(dirname)/tiny.urdf')"/>
+      <remap from="joint_states" to="js"/>
+    </node>
+  </group>
+  <executable cmd="python3 -c 'print(40 + 2)'" name="calc" output="screen" if="$(eval '1 + 1 == 2')"/>
+  <executable cmd="python3 -c 'print(13)'" name="never" unless="true"/>
+</launch>
+"""
+
+ROS_YAML = """launch:
+- arg: {name: ns, default: yamlbot}
+- let: {name: greeting, value: "hello $(var ns)"}
+- log: {message: "$(var greeting)"}
+- group:
+  - push_ros_namespace: {namespace: "$(var ns)"}
+  - node:
+      pkg: robot_state_publisher
+      exec: robot_state_publisher
+      name: rsp
+      param:
+      - {name: robot_description, value: "$(command 'cat $(dirname)/tiny.urdf')"}
+- executable: {cmd: "python3 -c 'print(6 * 7)'", name: calc, output: screen}
+"""
+
+
+@pytest.mark.parametrize("name, text, ns", [("bot.launch.xml", XML, "xmlbot"), ("bot.launch.yaml", ROS_YAML, "yamlbot")])
+def test_ros_xml_and_yaml_launch_files(tmp_path: Path, zenoh_port: int, name: str, text: str, ns: str) -> None:
+    (tmp_path / name).write_text(text)
+    (tmp_path / "tiny.urdf").write_text(SMALL_URDF)
+    launch = Launch(str(tmp_path / name), log_dir=tmp_path / "run", port=zenoh_port)
+    try:
+        wait_output(launch, r"\[calc\] 42")
+        launch.wait(lambda: f"/{ns}/rsp" in node_list(zenoh_port), 30, f"/{ns}/rsp on the graph")
+    finally:
+        launch.close()
+    out = launch.output()
+    assert f"hi {ns}" in out or f"hello {ns}" in out
+    assert "[never]" not in out
+
+
+# -- the launcher's own arguments with every format; errors ---------------------------------------------
+def test_launcher_arguments_accepted_undeclared(tmp_path: Path) -> None:
+    (tmp_path / "bot.launch.xml").write_text(XML)
+    (tmp_path / "tiny.urdf").write_text(SMALL_URDF)
+    done = launch_cli(str(tmp_path / "bot.launch.xml"), "zenoh_port:=7999", "gui:=false", "mode:=lockstep", "--print")
+    assert done.returncode == 0, done.stderr
+    assert "tcp/127.0.0.1:7999" in done.stdout and "xmlbot" in done.stdout
+
+
+def test_bad_launch_files_named(tmp_path: Path) -> None:
+    raising = tmp_path / "raises.launch.py"
+    raising.write_text("from launch import LaunchDescription\n\ndef generate_launch_description():\n"
+                       "    value = {}['missing']\n    return LaunchDescription([])\n")
+    done = launch_cli(str(raising), "--print")
+    assert done.returncode == 1 and f"{raising}:4" in done.stderr and "KeyError" in done.stderr, done.stderr
+
+    missing_pkg = tmp_path / "pkg.launch.py"
+    missing_pkg.write_text("from launch import LaunchDescription\nfrom launch_ros.actions import Node\n\n"
+                           "def generate_launch_description():\n"
+                           "    return LaunchDescription([Node(package='no_such_pkg', executable='x')])\n")
+    done = launch_cli(str(missing_pkg), "--print")
+    assert done.returncode == 2 and "no_such_pkg" in done.stderr and "searched" in done.stderr, done.stderr
+
+    cycle = tmp_path / "cycle.launch.py"
+    cycle.write_text("from launch import LaunchDescription\nfrom launch.actions import IncludeLaunchDescription\n"
+                     "from launch.launch_description_sources import PythonLaunchDescriptionSource\n\n"
+                     "def generate_launch_description():\n"
+                     "    return LaunchDescription([IncludeLaunchDescription(PythonLaunchDescriptionSource(__file__))])\n")
+    done = launch_cli(str(cycle), "--print")
+    assert done.returncode == 2 and "include cycle refused" in done.stderr, done.stderr
+
+    unknown_exe = tmp_path / "exe.launch.py"
+    unknown_exe.write_text("from launch import LaunchDescription\nfrom launch.actions import ExecuteProcess\n\n"
+                           "def generate_launch_description():\n"
+                           "    return LaunchDescription([ExecuteProcess(cmd=['no-such-program-zr', '-x'])])\n")
+    done = launch_cli(str(unknown_exe), "--print")
+    assert done.returncode == 2 and "'no-such-program-zr' not found" in done.stderr and "exe.launch.py:5" in done.stderr
+
+    required = tmp_path / "req.launch.py"
+    required.write_text("from launch import LaunchDescription\nfrom launch.actions import DeclareLaunchArgument\n\n"
+                        "def generate_launch_description():\n"
+                        "    return LaunchDescription([DeclareLaunchArgument('robot_name')])\n")
+    done = launch_cli(str(required), "--print")
+    assert done.returncode == 2 and "missing required argument 'robot_name'" in done.stderr, done.stderr
+
+    junk = tmp_path / "notes.txt"
+    junk.write_text("just: [some, text\n")
+    done = launch_cli(str(junk), "--print")
+    assert done.returncode == 2 and "tried Python" in done.stderr and "ROS XML" in done.stderr, done.stderr
+
+
+# -- the seeds' files ----------------------------------------------------------------------------------------
+@needs_seeds
+@pytest.mark.slow
+def test_seed000_spawn_launch_puts_humanoid_at_z(tmp_path: Path, zenoh_port: int) -> None:
+    """Seed 000's launch file, only its placeholder URDF path pointed at our humanoid: gazebo_ros's
+    gazebo.launch.py (our simulator, paused so the pose stays), robot_state_publisher, spawn_entity.py."""
+    text = (SEEDS / "000/launch/000_spawn_humanoid.launch.py").read_text()
+    assert "/path/to/humanoid.urdf" in text
+    (tmp_path / "spawn_humanoid.launch.py").write_text(text.replace("/path/to/humanoid.urdf",
+                                                                    str(ROOT / "robots/humanoid.urdf")))
+    launch = Launch(str(tmp_path / "spawn_humanoid.launch.py"), "world:=simple_lab.world", "z:=1.5", "pause:=true",
+                    "sensors:=false", log_dir=tmp_path / "run", port=zenoh_port)
+    try:
+        session = launch.peer()
+        states: list[dict] = []
+        session.declare_subscriber("sim/model_states", lambda s: states.append(msgpack.unpackb(s.payload.to_bytes())))
+
+        wait_output(launch, r"'spawn_entity' \[pid \d+\] exited with status 0", 90)
+        # paused, the world publishes nothing: unpause, and the first state is where the humanoid was put
+        subprocess.run([sys.executable, "-m", "nodes.tools", "sim", "unpause", "--zenoh-port", str(zenoh_port)],
+                       check=True, capture_output=True, timeout=30, env=child_env(), cwd=ROOT)
+        first = launch.wait(lambda: next((m for m in states if "humanoid" in m["name"]), None), 60,
+                            "the humanoid in sim/model_states")
+        assert "table" in first["name"], f"simple_lab.world's models missing: {first['name']}"
+        z = first["pose"][first["name"].index("humanoid")]["position"]["z"]
+        assert abs(z - 1.5) < 0.01, z
+    finally:
+        launch.close()
+
+
+@needs_seeds
+def test_seed002_examples_fail_as_on_ros(tmp_path: Path) -> None:
+    """The listings the README says fail on ROS fail here the same way, naming the file and line."""
+    launch_dir = SEEDS / "002/launch"
+    done = launch_cli(str(launch_dir / "002_humanoid_complete.launch.py"), "--print")
+    assert done.returncode == 1 and "NameError" in done.stderr and "002_humanoid_complete.launch.py:21" in done.stderr
+    done = launch_cli(str(launch_dir / "002_shutdown_handler.fragment.launch.py"), "--print")
+    assert done.returncode == 1 and "NameError" in done.stderr and "LaunchDescription" in done.stderr
+    done = launch_cli(str(launch_dir / "002_humanoid_system.launch.py"), "--print")
+    assert done.returncode == 1 and "perception_package" in done.stderr and "searched" in done.stderr
+    done = launch_cli(str(launch_dir / "002_camera_driver.launch.py"), "--print")
+    assert done.returncode == 2 and "camera_package" in done.stderr
+    done = launch_cli(str(launch_dir / "002_camera_driver.launch.xml"), "--print")
+    assert done.returncode == 2 and "camera_package" in done.stderr
+
+
+MOTOR_NODE = """#!/usr/bin/env python3
+import signal, sys, time
+print('motor_node argv: ' + ' '.join(sys.argv[1:]), flush=True)
+signal.signal(signal.SIGINT, lambda *a: sys.exit(0))
+while True:
+    time.sleep(0.1)
+"""
+
+
+@needs_seeds
+def test_seed002_examples_do_what_they_say(tmp_path: Path, zenoh_port: int) -> None:
+    """The camera launch (Python and XML) and the OnShutdown fragment, with their packages made real and the
+    fragment's imports added: parameters, remappings, names reach the node as ROS passes them; OnShutdown logs."""
+    for package, executable in (("camera_package", "camera_node"), ("motor_controller", "motor_node")):
+        folder = tmp_path / "src" / package
+        (folder / "scripts").mkdir(parents=True)
+        (folder / "package.xml").write_text(f"<package format='3'><name>{package}</name><version>0.0.0</version>"
+                                            "<description>t</description><maintainer email='a@b.c'>a</maintainer>"
+                                            "<license>MIT</license></package>")
+        script = folder / "scripts" / executable
+        script.write_text(MOTOR_NODE)
+        script.chmod(0o755)
+    env = child_env({"ROS_PACKAGE_PATH": str(tmp_path / "src")})
+    for name in ("002_camera_driver.launch.py", "002_camera_driver.launch.xml"):
+        done = launch_cli(str(SEEDS / "002/launch" / name), "--print", env={"ROS_PACKAGE_PATH": str(tmp_path / "src")})
+        assert done.returncode == 0, done.stderr
+        assert "__node:=camera_driver" in done.stdout and "/camera/image:=/perception/camera/rgb" in done.stdout
+    fragment = (SEEDS / "002/launch/002_shutdown_handler.fragment.launch.py").read_text()
+    fixed = "from launch import LaunchDescription\nfrom launch_ros.actions import Node\n" + fragment
+    (tmp_path / "shutdown.launch.py").write_text(fixed)
+    launch = Launch(str(tmp_path / "shutdown.launch.py"), log_dir=tmp_path / "run", port=zenoh_port, env=env)
+    try:
+        wait_output(launch, r"motor_node argv")
+        time.sleep(0.5)
+    finally:
+        launch.close()
+    assert "Shutting down motor controller..." in launch.output()
