@@ -14,13 +14,10 @@ import shutil
 import sys
 from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from launch.context import Action, Condition, LaunchContext, LaunchDescription, caller_source, normalize
 from launch.yaml_source import LaunchError
-
-if TYPE_CHECKING:
-    from launch.frontend import Entity
 
 __all__ = [
     "Action", "AppendEnvironmentVariable", "DeclareLaunchArgument", "EmitEvent", "ExecuteProcess", "GroupAction",
@@ -29,7 +26,7 @@ __all__ = [
 ]
 
 
-class _Located(Action):
+class LocatedAction(Action):
     """An action that remembers the launch-file line that built it (errors name it)."""
 
     def __init__(self, *, condition: Condition | None = None, **unknown: Any) -> None:
@@ -39,7 +36,7 @@ class _Located(Action):
         self.source = caller_source()
 
 
-class DeclareLaunchArgument(_Located):
+class DeclareLaunchArgument(LocatedAction):
     def __init__(self, name: str, *, default_value: Any = None, description: str | None = None,
                  choices: list[str] | None = None, **kwargs: Any) -> None:
         super().__init__(**kwargs)
@@ -49,7 +46,7 @@ class DeclareLaunchArgument(_Located):
         self.choices = None if choices is None else [str(c) for c in choices]
 
     @classmethod
-    def parse(cls, entity: Entity) -> DeclareLaunchArgument:
+    def parse(cls, entity: Any) -> DeclareLaunchArgument:
         choices = [c.get("value") for c in entity.children_of("choice")] or None
         return cls(entity.get("name", text=True), default_value=entity.sub("default", optional=True),
                    description=entity.get("description", optional=True, text=True), choices=choices,
@@ -59,13 +56,13 @@ class DeclareLaunchArgument(_Located):
         resolver.declare_value(self.name, self.default_value, self.choices, scope, self.source)
 
 
-class SetLaunchConfiguration(_Located):
+class SetLaunchConfiguration(LocatedAction):
     def __init__(self, name: Any, value: Any, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.name, self.value = normalize(name), normalize(value)
 
     @classmethod
-    def parse(cls, entity: Entity) -> SetLaunchConfiguration:
+    def parse(cls, entity: Any) -> SetLaunchConfiguration:
         return cls(entity.sub("name"), entity.sub("value"), **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
@@ -73,13 +70,13 @@ class SetLaunchConfiguration(_Located):
         scope.variables[name] = resolver.perform(self.value, scope, self.source, f"SetLaunchConfiguration {name}")
 
 
-class SetEnvironmentVariable(_Located):
+class SetEnvironmentVariable(LocatedAction):
     def __init__(self, name: Any, value: Any, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.name, self.value = normalize(name), normalize(value)
 
     @classmethod
-    def parse(cls, entity: Entity) -> SetEnvironmentVariable:
+    def parse(cls, entity: Any) -> SetEnvironmentVariable:
         return cls(entity.sub("name"), entity.sub("value"), **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
@@ -101,46 +98,46 @@ class AppendEnvironmentVariable(SetEnvironmentVariable):
         scope.env[name] = self.separator.join(p for p in parts if p)
 
 
-class UnsetEnvironmentVariable(_Located):
+class UnsetEnvironmentVariable(LocatedAction):
     def __init__(self, name: Any, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.name = normalize(name)
 
     @classmethod
-    def parse(cls, entity: Entity) -> UnsetEnvironmentVariable:
+    def parse(cls, entity: Any) -> UnsetEnvironmentVariable:
         return cls(entity.sub("name"), **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
         scope.env[resolver.perform(self.name, scope, self.source, "environment variable name")] = None
 
 
-class LogInfo(_Located):
+class LogInfo(LocatedAction):
     def __init__(self, *, msg: Any, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.msg = normalize(msg)
 
     @classmethod
-    def parse(cls, entity: Entity) -> LogInfo:
+    def parse(cls, entity: Any) -> LogInfo:
         return cls(msg=entity.sub("message"), **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
         resolver.log(resolver.perform(self.msg, scope, self.source, "LogInfo msg"))
 
 
-class Shutdown(_Located):
+class Shutdown(LocatedAction):
     def __init__(self, *, reason: Any = "reason not given", **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.reason = normalize(reason)
 
     @classmethod
-    def parse(cls, entity: Entity) -> Shutdown:
+    def parse(cls, entity: Any) -> Shutdown:
         return cls(reason=entity.sub("reason", optional=True) or "reason not given", **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
         resolver.shutdown(f"Shutdown action ({resolver.perform(self.reason, scope, self.source, 'reason')})")
 
 
-class EmitEvent(_Located):
+class EmitEvent(LocatedAction):
     """Only ``Shutdown`` is an event this launcher acts on; any other is reported and ignored."""
 
     def __init__(self, *, event: Any, **kwargs: Any) -> None:
@@ -157,7 +154,7 @@ class EmitEvent(_Located):
                          "ignored", level="WARN")
 
 
-class OpaqueFunction(_Located):
+class OpaqueFunction(LocatedAction):
     """``function(context, *args, **kwargs)`` is called when the launch is resolved; the actions it returns
     are resolved in the same scope (ROS's way to compute values from launch configurations in Python)."""
 
@@ -175,7 +172,7 @@ class OpaqueFunction(_Located):
             resolver.walk(list(returned), scope)
 
 
-class TimerAction(_Located):
+class TimerAction(LocatedAction):
     def __init__(self, *, period: Any, actions: Iterable[Any], cancel_on_shutdown: Any = True,
                  **kwargs: Any) -> None:
         super().__init__(**kwargs)
@@ -183,7 +180,7 @@ class TimerAction(_Located):
         self.actions = list(actions)
 
     @classmethod
-    def parse(cls, entity: Entity) -> TimerAction:
+    def parse(cls, entity: Any) -> TimerAction:
         return cls(period=entity.sub("period"), actions=entity.actions(), **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
@@ -195,7 +192,7 @@ class TimerAction(_Located):
         resolver.add_timer(period, self.actions, scope, self.source)
 
 
-class GroupAction(_Located):
+class GroupAction(LocatedAction):
     """Actions in a scope of their own: launch configurations, environment, namespace, parameters and
     remappings set inside stay inside (``scoped``); ``forwarding=False`` starts from ``launch_configurations``
     only."""
@@ -208,13 +205,8 @@ class GroupAction(_Located):
         self.launch_configurations = dict(launch_configurations or {})
 
     @classmethod
-    def parse(cls, entity: Entity) -> GroupAction:
-        from launch_ros.actions import PushRosNamespace
-
+    def parse(cls, entity: Any) -> GroupAction:
         actions = entity.actions()
-        namespace = entity.sub("ns", optional=True)
-        if namespace is not None:
-            actions.insert(0, PushRosNamespace(namespace))
         scoped = entity.get("scoped", optional=True, text=True)
         return cls(actions, scoped=scoped is None or scoped.lower() == "true", **entity.condition())
 
@@ -231,7 +223,7 @@ class GroupAction(_Located):
         return list(self.actions)
 
 
-class IncludeLaunchDescription(_Located):
+class IncludeLaunchDescription(LocatedAction):
     def __init__(self, launch_description_source: Any, *, launch_arguments: Iterable[Any] | None = None,
                  **kwargs: Any) -> None:
         super().__init__(**kwargs)
@@ -246,7 +238,7 @@ class IncludeLaunchDescription(_Located):
         self.launch_arguments = [(normalize(k), normalize(v)) for k, v in pairs]
 
     @classmethod
-    def parse(cls, entity: Entity) -> IncludeLaunchDescription:
+    def parse(cls, entity: Any) -> IncludeLaunchDescription:
         from launch.launch_description_sources import AnyLaunchDescriptionSource
 
         args = [(a.sub("name"), a.sub("value")) for a in entity.children_of("arg")]
@@ -263,7 +255,7 @@ class IncludeLaunchDescription(_Located):
         resolver.include_path(location, given, scope, self.source)
 
 
-class ExecuteProcess(_Located):
+class ExecuteProcess(LocatedAction):
     """A program (no shell): ``cmd`` is its argv, each item one argument (``shell=True`` splits the text as
     a POSIX shell would, still without a shell)."""
 
@@ -287,7 +279,7 @@ class ExecuteProcess(_Located):
         self.labels: list[str] = []   # the process names this action became (for event handlers)
 
     @classmethod
-    def parse(cls, entity: Entity) -> ExecuteProcess:
+    def parse(cls, entity: Any) -> ExecuteProcess:
         cmd = entity.sub("cmd")
         return cls(cmd=[cmd], shell=True, name=entity.sub("name", optional=True), cwd=entity.sub("cwd", optional=True),
                    additional_env={e.sub("name"): e.sub("value") for e in entity.children_of("env")},
@@ -331,7 +323,7 @@ def find_program(program: str, source: Any) -> str:
     return found
 
 
-class RegisterEventHandler(_Located):
+class RegisterEventHandler(LocatedAction):
     def __init__(self, event_handler: Any, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.event_handler = event_handler
@@ -340,7 +332,7 @@ class RegisterEventHandler(_Located):
         self.event_handler.register(resolver, scope, self.source)
 
 
-class UnregisterEventHandler(_Located):
+class UnregisterEventHandler(LocatedAction):
     def __init__(self, event_handler: Any, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.event_handler = event_handler

@@ -14,10 +14,10 @@ from pathlib import Path
 import yaml
 
 from launch import interrupts
+from launch.code_errors import LaunchCodeError
 from launch.description import LaunchDeprecationWarning
 from launch.formats import load_description
 from launch.resolve import LaunchPlan, find_launch_file, resolve
-from launch.ros_resolve import LaunchCodeError
 from launch.yaml_source import LaunchError, Source
 from nodes.tools.cli import UsageError
 

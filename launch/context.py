@@ -114,9 +114,7 @@ class LaunchDescription(LaunchDescriptionEntity):
         self.entities.append(entity)
 
     def get_launch_arguments(self, conditional_inclusion: bool = False) -> list[Any]:
-        from launch.actions import DeclareLaunchArgument
-
-        return [e for e in self.entities if isinstance(e, DeclareLaunchArgument)]
+        return [e for e in self.entities if type(e).__name__ == "DeclareLaunchArgument"]
 
     def describe_sub_entities(self) -> list[Any]:
         return list(self.entities)

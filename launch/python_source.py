@@ -8,9 +8,9 @@ import itertools
 import sys
 from pathlib import Path
 
+from launch.code_errors import launch_code_error
 from launch.context import LaunchDescription as RosLaunchDescription
 from launch.description import LaunchDescription
-from launch.ros_resolve import launch_code_error
 from launch.yaml_source import LaunchError, Source
 
 _counter = itertools.count()

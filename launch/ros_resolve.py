@@ -5,43 +5,28 @@ plan. The actions (``launch.actions``, ``launch_ros.actions``) decide what they 
 from __future__ import annotations
 
 import shlex
-import traceback
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from launch.code_errors import launch_code_error
 from launch.context import LaunchDescription as RosLaunchDescription
 from launch.context import Substitution, normalize, perform_substitutions
+from launch.plan import (
+    CONTAINER_MODULE,
+    ComposedNodeSpec,
+    Expansion,
+    LaunchPlan,
+    NodeSpec,
+    Trigger,
+    check_module,
+    check_namespace,
+    join_namespace,
+    parse_bool,
+    typed_value,
+)
 from launch.substitutions import SubstitutionFailure
 from launch.yaml_source import LaunchError, Source
-
-
-class LaunchCodeError(LaunchError):
-    """A launch file's own code raised: the message names the innermost launch-file frame (file:line)."""
-
-    def __init__(self, message: str, source: Source | None, details: str) -> None:
-        super().__init__(message, source)
-        self.details = details   # the traceback, for the launcher to print
-
-
-def launch_code_error(exc: BaseException, fallback: Source | None, what: str = "") -> LaunchCodeError:
-    frames = traceback.extract_tb(exc.__traceback__)
-    # the innermost frame in a launch file (or in any file that is not the launcher's own code)
-    ours = (str(Path(__file__).resolve().parent), str(Path(__file__).resolve().parent.parent / "launch_ros"))
-    where = fallback
-    for frame in reversed(frames):
-        if frame.filename.endswith(".launch.py") or not frame.filename.startswith(ours):
-            where = Source(Path(frame.filename), frame.lineno or 0)
-            break
-    details = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
-    prefix = f"{what}: " if what else ""
-    return LaunchCodeError(f"{prefix}{type(exc).__name__}: {exc}", where, details)
-
-
-def _typed(text: str) -> Any:
-    from launch.resolve import _typed as typed
-
-    return typed(text)
 
 
 def _label(text: str) -> str:
@@ -137,6 +122,10 @@ class RosResolution:
         child.variables.update(given)
         self.walk(description.entities, child)
 
+    def push_namespace(self, scope: Any, namespace: str, source: Source) -> None:
+        scope.namespace = join_namespace(scope.namespace, namespace)
+        check_namespace(scope.namespace, source)
+
     # -- processes ------------------------------------------------------------------------------
     def unique_label(self, wanted: str) -> str:
         label, n = wanted, 2
@@ -145,7 +134,6 @@ class RosResolution:
         return label
 
     def process_options_ros(self, action: Any, scope: Any) -> dict[str, Any]:
-        from launch.resolve import parse_bool
 
         source = action.source
         env = {k: v for k, v in scope.env.items() if v is not None}
@@ -161,7 +149,6 @@ class RosResolution:
                         style: str, namespace: str = "", params: dict[str, Any] | None = None,
                         param_files: list[str] | None = None, remaps: list[tuple[str, str]] | None = None,
                         ros_args: list[str] | None = None) -> Any:
-        from launch.resolve import NodeSpec
 
         label = self.unique_label(_label(label))
         cwd = None
@@ -186,7 +173,6 @@ class RosResolution:
 
     def add_ros_node(self, node: Any, scope: Any) -> None:
         from launch.actions import find_program
-        from launch.resolve import _check_namespace, join_namespace
 
         source = node.source
         executable = self.perform(node.executable, scope, source, "Node executable")
@@ -194,7 +180,7 @@ class RosResolution:
         given_ns = self.perform(node.node_namespace, scope, source, "Node namespace") \
             if node.node_namespace is not None else None
         namespace = join_namespace(scope.namespace, given_ns)
-        _check_namespace(namespace, source)
+        check_namespace(namespace, source)
         if node.package is None:
             argv, style = [find_program(executable, source)], "ros"
         else:
@@ -222,12 +208,12 @@ class RosResolution:
                 return self.perform(value.value, scope, source, "ParameterValue")
             inner = self.parameter_value(value.value, scope, source)
             if value.value_type in (int, float, bool) and isinstance(inner, str):
-                return _typed(inner)
+                return typed_value(inner)
             return inner
         if isinstance(value, Substitution) or (isinstance(value, (list, tuple)) and value
                                                and any(isinstance(v, Substitution) for v in value)
                                                and all(isinstance(v, (str, Substitution)) for v in value)):
-            return _typed(self.perform(value, scope, source, "parameter"))
+            return typed_value(self.perform(value, scope, source, "parameter"))
         if isinstance(value, (list, tuple)):
             return [self.parameter_value(v, scope, source) for v in value]
         if isinstance(value, Path):
@@ -267,13 +253,12 @@ class RosResolution:
 
     # -- containers -----------------------------------------------------------------------------
     def add_ros_container(self, container: Any, scope: Any) -> None:
-        from launch.resolve import CONTAINER_MODULE, NodeSpec, _check_namespace, join_namespace
 
         source = container.source
         name = self.perform(container.node_name, scope, source, "container name")
         namespace = join_namespace(scope.namespace, self.perform(container.node_namespace, scope, source,
                                                                  "container namespace"))
-        _check_namespace(namespace, source)
+        check_namespace(namespace, source)
         options = self.process_options_ros(container, scope)
         label = self.unique_label(_label(name))
         spec = NodeSpec(name=label, namespace=namespace, module=CONTAINER_MODULE, executable=None, args=[],
@@ -288,21 +273,20 @@ class RosResolution:
         self.plan.nodes.append(spec)
 
     def ros_composable(self, description: Any, scope: Any, container_namespace: str, source: Source) -> Any:
-        from launch.resolve import ComposedNodeSpec, _check_module, _check_namespace, join_namespace
 
         plugin = self.perform(description.plugin, scope, source, "ComposableNode plugin")
         module, separator, _ = plugin.partition("::")
         if not separator:
             raise LaunchError(f"ComposableNode plugin '{plugin}' must be python.module::NodeClass (this launcher "
                               "composes Python nodes)", source)
-        _check_module(module, source)
+        check_module(module, source)
         name = self.perform(description.name, scope, source, "ComposableNode name") \
             if description.name is not None else plugin.rpartition("::")[2].lower()
         namespace = container_namespace
         if description.namespace is not None:
             namespace = join_namespace(scope.namespace, self.perform(description.namespace, scope, source,
                                                                      "ComposableNode namespace"))
-        _check_namespace(namespace, source)
+        check_namespace(namespace, source)
         params, files = self.ros_parameters(description.parameters, scope, source)
         remaps = [*scope.remaps, *((self.perform(normalize(a), scope, source, "remapping"),
                                     self.perform(normalize(b), scope, source, "remapping"))
@@ -332,7 +316,6 @@ class RosResolution:
 
     def expand(self, produce: Callable[[Any], list[Any]], scope: Any) -> Any:
         """Resolve actions now (a trigger fired): a fresh plan collects what they yield."""
-        from launch.resolve import Expansion, LaunchPlan
 
         saved = self.plan
         self.plan = LaunchPlan(file=saved.file, args=saved.args)
@@ -345,7 +328,6 @@ class RosResolution:
             self.plan = saved
 
     def add_timer(self, period: float, actions: Any, scope: Any, source: Source) -> None:
-        from launch.resolve import Trigger
 
         snapshot = scope.child()
         if callable(actions):
@@ -358,7 +340,6 @@ class RosResolution:
                                           fire=lambda event: self.expand(produce, snapshot)))
 
     def add_handler(self, handler: Any, scope: Any, source: Source) -> None:
-        from launch.resolve import Trigger
 
         snapshot = scope.child()
 

@@ -46,14 +46,14 @@ class TextSubstitution(Substitution):
         return repr(self.text)
 
 
-class _PathOps:
+class PathOperators:
     """``/`` joins paths, as ROS's PathSubstitution and PathJoinSubstitution do."""
 
     def __truediv__(self, other: Any) -> PathJoinSubstitution:
         return PathJoinSubstitution([self, other])
 
 
-class PathJoinSubstitution(_PathOps, Substitution):
+class PathJoinSubstitution(PathOperators, Substitution):
     def __init__(self, substitutions: Any) -> None:
         # each item is one path component (itself a string, a substitution or a list of them)
         self.substitutions = [normalize(item) for item in substitutions]
@@ -66,7 +66,7 @@ class PathJoinSubstitution(_PathOps, Substitution):
         return f"PathJoin({self.substitutions!r})"
 
 
-class PathSubstitution(_PathOps, Substitution):
+class PathSubstitution(PathOperators, Substitution):
     def __init__(self, path: Any) -> None:
         self.path = normalize(str(path) if isinstance(path, Path) else path)
 
@@ -107,7 +107,7 @@ class EnvironmentVariable(Substitution):
         raise SubstitutionFailure(f"environment variable '{name}' is not set and no default_value was given")
 
 
-class ThisLaunchFileDir(_PathOps, Substitution):
+class ThisLaunchFileDir(PathOperators, Substitution):
     def perform(self, context: LaunchContext) -> str:
         return context.locals.current_launch_file_directory
 

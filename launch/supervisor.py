@@ -21,8 +21,8 @@ from typing import IO, Any, Protocol
 
 import yaml
 
+from launch.plan import ComposedNodeSpec, Expansion, LaunchPlan, NodeSpec, Trigger
 from launch.reaper import Reaper
-from launch.resolve import ComposedNodeSpec, Expansion, LaunchPlan, NodeSpec, Trigger
 from launch.yaml_source import LaunchError
 from nodes.core.cpu import EXCLUSIVE_CPU_ENV
 

@@ -4,19 +4,16 @@ spelling (``parse``) and what it resolves to (``resolve``), as ``launch.actions`
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from launch.actions import _Located
+from launch.actions import LocatedAction
 from launch.context import normalize
-
-if TYPE_CHECKING:
-    from launch.frontend import Entity
 
 __all__ = ["ComposableNodeContainer", "LifecycleNode", "LoadComposableNodes", "Node", "PushROSNamespace",
            "PushRosNamespace", "SetParameter", "SetParametersFromFile", "SetRemap"]
 
 
-class Node(_Located):
+class Node(LocatedAction):
     def __init__(self, *, executable: Any, package: Any = None, name: Any = None, namespace: Any = None,
                  exec_name: Any = None, parameters: list[Any] | None = None, remappings: list[Any] | None = None,
                  ros_arguments: list[Any] | None = None, arguments: list[Any] | None = None,
@@ -46,7 +43,7 @@ class Node(_Located):
         self.labels: list[str] = []
 
     @classmethod
-    def parse(cls, entity: Entity) -> Node:
+    def parse(cls, entity: Any) -> Node:
         params: list[Any] = []
         for param in entity.children_of("param"):
             if param.has("from"):
@@ -75,27 +72,24 @@ class LifecycleNode(Node):
         super().__init__(name=name, namespace=namespace, **kwargs)
 
 
-class PushRosNamespace(_Located):
+class PushRosNamespace(LocatedAction):
     def __init__(self, namespace: Any, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.namespace = normalize(namespace)
 
     @classmethod
-    def parse(cls, entity: Entity) -> PushRosNamespace:
+    def parse(cls, entity: Any) -> PushRosNamespace:
         return cls(entity.sub("namespace"), **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
-        from launch.resolve import _check_namespace, join_namespace
-
-        scope.namespace = join_namespace(scope.namespace, resolver.perform(self.namespace, scope, self.source,
-                                                                           "PushRosNamespace namespace"))
-        _check_namespace(scope.namespace, self.source)
+        resolver.push_namespace(scope, resolver.perform(self.namespace, scope, self.source, "PushRosNamespace"),
+                                self.source)
 
 
 PushROSNamespace = PushRosNamespace
 
 
-class SetParameter(_Located):
+class SetParameter(LocatedAction):
     """A parameter every node resolved after it in this scope gets."""
 
     def __init__(self, name: Any, value: Any, **kwargs: Any) -> None:
@@ -103,7 +97,7 @@ class SetParameter(_Located):
         self.name, self.value = normalize(name), value
 
     @classmethod
-    def parse(cls, entity: Entity) -> SetParameter:
+    def parse(cls, entity: Any) -> SetParameter:
         return cls(entity.sub("name"), entity.value("value"), **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
@@ -111,7 +105,7 @@ class SetParameter(_Located):
         scope.params[name] = resolver.parameter_value(self.value, scope, self.source)
 
 
-class SetParametersFromFile(_Located):
+class SetParametersFromFile(LocatedAction):
     def __init__(self, filename: Any, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.filename = normalize(filename)
@@ -120,13 +114,13 @@ class SetParametersFromFile(_Located):
         scope.param_files.append(resolver.perform(self.filename, scope, self.source, "SetParametersFromFile"))
 
 
-class SetRemap(_Located):
+class SetRemap(LocatedAction):
     def __init__(self, src: Any, dst: Any, **kwargs: Any) -> None:
         super().__init__(**kwargs)
         self.src, self.dst = normalize(src), normalize(dst)
 
     @classmethod
-    def parse(cls, entity: Entity) -> SetRemap:
+    def parse(cls, entity: Any) -> SetRemap:
         return cls(entity.sub("from"), entity.sub("to"), **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
@@ -147,7 +141,7 @@ class ComposableNodeContainer(Node):
         resolver.add_ros_container(self, scope)
 
 
-class LoadComposableNodes(_Located):
+class LoadComposableNodes(LocatedAction):
     """Nodes added to a container this launch starts (``target_container``: the container or its name)."""
 
     def __init__(self, *, composable_node_descriptions: list[Any], target_container: Any, **kwargs: Any) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from launch.context import LaunchContext, Substitution, normalize, perform_substitutions
-from launch.substitutions import LaunchConfiguration, PathJoinSubstitution, SubstitutionFailure, _PathOps
+from launch.substitutions import LaunchConfiguration, PathJoinSubstitution, PathOperators, SubstitutionFailure
 
 __all__ = ["ExecutableInPackage", "FindPackage", "FindPackagePrefix", "FindPackageShare", "LaunchConfiguration",
            "PathJoinSubstitution"]
@@ -20,7 +20,7 @@ def package_share(name: str) -> str:
         raise SubstitutionFailure(str(exc).strip('"')) from None
 
 
-class FindPackageShare(_PathOps, Substitution):
+class FindPackageShare(PathOperators, Substitution):
     def __init__(self, package: Any) -> None:
         self.package = normalize(package)
 

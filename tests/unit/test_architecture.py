@@ -60,7 +60,7 @@ def test_the_zenoh_check_sees_a_zenoh_import() -> None:
 
 
 # ------------------------------------------------------------------------------------------ imports
-PACKAGES = ("ament_index_python", "launch", "msgs", "nodes")
+PACKAGES = ("ament_index_python", "launch", "launch_ros", "msgs", "nodes")
 
 
 def project_modules() -> dict[str, Path]:
@@ -68,7 +68,8 @@ def project_modules() -> dict[str, Path]:
     found: dict[str, Path] = {}
     for path in tracked_python_files():
         relative = path.relative_to(ROOT)
-        if relative.parts[0] not in PACKAGES or path.name == "__main__.py":
+        # a ROS launch file shipped as data (nodes/share/packages/*/launch/*.launch.py) is not a module
+        if relative.parts[0] not in PACKAGES or path.name == "__main__.py" or path.name.endswith(".launch.py"):
             continue
         parts = list(relative.with_suffix("").parts)
         if parts[-1] == "__init__":
