@@ -631,7 +631,7 @@ class Viewer(Node):
         self.add_rendered_sensors(robot, xml_text)
         count = scene.log_model(self.sim_now)
         if scene.skipped_meshes:
-            self.logger.warn(f"robot '{robot.namespace}': meshes not found, not drawn: {scene.skipped_meshes[:3]}")
+            self.logger.warn(f"robot '{robot.namespace}': meshes not drawn: {'; '.join(scene.skipped_meshes[:3])}")
         if robot.last_positions:
             scene.positions.update(robot.last_positions)
         if robot.pending_static:

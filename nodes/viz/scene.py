@@ -248,12 +248,41 @@ def visual_archetype(visual: Visual, mesh_root: Path | None = None) -> rr.AsComp
     if visual.kind == "sphere":
         return rr.Ellipsoids3D(half_sizes=[[visual.radius] * 3], centers=center, quaternions=quat,
                                colors=color, fill_mode=SOLID)
-    path = Path(visual.filename.removeprefix("file://"))
-    if not path.is_absolute() and mesh_root is not None:
-        path = mesh_root / path
-    if visual.filename.startswith("package://") or not path.is_file():
-        return None
-    return rr.Asset3D(path=path, albedo_factor=color[0])
+    return mesh_archetype(visual, mesh_root)[0]
+
+
+def mesh_archetype(visual: Visual, mesh_root: Path | None = None) -> tuple[rr.AsComponents | None, str]:
+    """A mesh visual as a ``Mesh3D`` in its visual frame (scale applied, shaded, each material in its colour:
+    the URDF's where the file gives none), read through ``nodes.meshes`` as the simulator reads it, so every
+    format it takes (DAE too) is drawn; ``(None, reason)`` for one that resolves nowhere or is refused."""
+    from nodes.meshes import MeshError, load_mesh  # noqa: PLC0415 - only robots with meshes pay for it
+    from nodes.meshes.paths import resolve_mesh  # noqa: PLC0415
+
+    try:
+        mesh = load_mesh(resolve_mesh(visual.filename, mesh_root / "robot.urdf" if mesh_root else None))
+    except MeshError as exc:
+        return None, str(exc)
+    scale = np.asarray(visual.scale, dtype=np.float64)
+    positions, indices, colours, offset = [], [], [], 0
+    for part in mesh.parts:
+        positions.append(part.vertices * scale)
+        indices.append(part.faces + offset)
+        colours.append(np.tile(rgba8(part.rgba or visual.rgba), (len(part.vertices), 1)))
+        offset += len(part.vertices)
+    vertices, faces = np.concatenate(positions), np.concatenate(indices)
+    return rr.Mesh3D(vertex_positions=vertices.astype(np.float32), triangle_indices=faces.astype(np.uint32),
+                     vertex_normals=vertex_normals(vertices, faces), vertex_colors=np.concatenate(colours)), ""
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted vertex normals (Rerun draws a mesh without normals unlit)."""
+    corners = vertices[faces]
+    face_normals = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    normals = np.zeros_like(vertices)
+    for k in range(3):
+        np.add.at(normals, faces[:, k], face_normals)
+    lengths = np.linalg.norm(normals, axis=1, keepdims=True)
+    return np.divide(normals, lengths, out=np.zeros_like(normals), where=lengths > 0).astype(np.float32)
 
 
 def shape_fields(visuals: Sequence[tuple[str, Visual]]) -> dict[str, np.ndarray]:
@@ -328,9 +357,9 @@ class RobotScene:
                 if visual.kind in SHAPES:
                     self.shapes.setdefault(visual.kind, []).append((link, visual))
                     continue
-                archetype = visual_archetype(visual, mesh_root)
+                archetype, reason = mesh_archetype(visual, mesh_root)
                 if archetype is None:
-                    self.skipped_meshes.append(visual.filename)
+                    self.skipped_meshes.append(f"{visual.filename} ({reason})")
                     continue
                 self.meshes.append((link, visual.origin, f"{self.world}/links/{link}/visual_{index}", archetype))
         self.shape_fields = {kind: shape_fields(visuals) for kind, visuals in self.shapes.items()}

@@ -162,3 +162,25 @@ def test_a_urdfs_meshes_become_converted_files(tmp_path: Path) -> None:
     M.binary_stl(tmp_path / "meshes" / "inf.stl", M.with_bad_vertex())
     with pytest.raises(MeshError, match=r"link 'body' collision mesh 'meshes/inf.stl': .*inf.stl: vertex 2 is not"):
         prepare_urdf(xml.replace("body.stl", "inf.stl"), robot, "robot 'r'")
+
+
+def test_the_viewer_draws_a_mesh_visual_in_its_files_colours(tmp_path: Path) -> None:
+    from nodes.urdf.model import parse_urdf
+    from nodes.viz.scene import mesh_archetype
+
+    M.obj(tmp_path / "meshes" / "paint.obj", M.CUBE_VERTICES * [1, 2, 3], rgb=(0.0, 0.0, 1.0))
+    M.dae(tmp_path / "meshes" / "part.dae", M.CUBE_VERTICES * 1000, unit=0.001, rgb=(1.0, 0.0, 0.0))
+    xml = URDF.replace("VISUAL", "paint.obj").replace("COLLISION", "body.stl")
+    xml = xml.replace("<collision><geometry><mesh", "<visual><geometry><mesh filename='meshes/part.dae'/>"
+                      "</geometry></visual><collision><geometry><mesh")
+    visuals = parse_urdf(xml).links["body"].visuals
+    painted, reason = mesh_archetype(visuals[0], tmp_path)
+    assert reason == "" and painted is not None
+    positions = np.asarray(painted.vertex_positions.as_arrow_array().to_pylist())
+    assert np.ptp(positions, axis=0) == pytest.approx([0.5, 1.0, 1.5])          # scale 0.5 applied
+    colours = painted.vertex_colors.as_arrow_array().to_pylist()
+    assert set(colours) == {0x0000FFFF}                                           # the MTL's blue, opaque
+    part, _ = mesh_archetype(visuals[1], tmp_path)                                # a DAE, in metres
+    assert np.ptp(np.asarray(part.vertex_positions.as_arrow_array().to_pylist()), axis=0) == pytest.approx([1, 1, 1])
+    gone, reason = mesh_archetype(visuals[0], tmp_path / "elsewhere")
+    assert gone is None and "does not exist" in reason
