@@ -36,7 +36,7 @@ from nodes.sim.services import TIME_STEP_RANGE, SimServices, gravity_problem
 from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import Pacer
 from nodes.sim.urdf_info import UrdfError
-from nodes.sim.world import COLLISION_DETECTORS, PhysicsWorld
+from nodes.sim.world import COLLISION_DETECTORS, GROUND_NAME, PhysicsWorld
 
 STARTUP_SPAWN_RETRY_S = 0.5
 # Paused, each robot's hardware/heartbeat goes out this often (wall s): well within a controller manager's
@@ -119,6 +119,7 @@ class SimulatorNode(Node):
         self.world_spec: WorldSpec | None = None
         if world_file:
             self._load_world(world_file, ground_size, ground_friction)
+        self._check_startup_names(world_file)
         self.robots: dict[str, RobotLink] = {}
         self.outputs = SimOutputs(self, self.sim, self.robots, clock_rate=clock_rate, state_rate=state_rate)
         self.render = RenderFrames(self, self.sim, self._idle, enabled=sensors,
@@ -138,6 +139,17 @@ class SimulatorNode(Node):
                          f"{list(self.world.gravity)}, ground {'on' if self.world.has_ground else 'off'}, "
                          f"detector {detector}" + (f", world {self.world_spec.name!r}" if self.world_spec else "")
                          + (", paused" if self.paused else ""))
+
+    def _check_startup_names(self, world_file: str) -> None:
+        """An entity to spawn at start named like a model the world already has could never be spawned: the
+        robot would be missing and its controllers wait for ever. A configuration error instead (status 2)."""
+        for item in self._startup:
+            if item.name in self.sim.entities or (item.name == GROUND_NAME and self.world.has_ground):
+                where = f"world {world_file!r}" if world_file else "the ground plane"
+                message = (f"{where} has a model named {item.name!r}, the name of an entity to spawn at start "
+                           f"(parameter 'entities'): rename the world's model or the entity")
+                self.logger.error(message)
+                raise ValueError(message)
 
     def _load_world(self, name: str, ground_size: float, ground_friction: float) -> None:
         """The world file's physics, gravity, ground and models; a file that cannot be used is logged with the

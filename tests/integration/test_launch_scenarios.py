@@ -159,3 +159,22 @@ def test_arm_viz_publishes_moving_tf(tmp_path: Path, zenoh_port: int) -> None:
         frames = {t["child_frame_id"] for m in scenario.snapshot("humanoid_simplified/tf") for t in m["transforms"]}
         assert {"left_upper_arm", "left_forearm", "left_hand", "right_upper_arm", "right_forearm",
                 "right_hand"} <= frames
+
+
+@pytest.mark.slow
+def test_a_world_model_named_like_the_robot_ends_the_launch_naming_the_clash(tmp_path: Path, zenoh_port: int) -> None:
+    """The robot could never be spawned into that world: the launch exits 1 at once instead of waiting for ever
+    for a robot that is not there."""
+    world = tmp_path / "clash.world"
+    world.write_text("<?xml version='1.0'?><sdf version='1.7'><world name='clash'><model name='humanoid'>"
+                     "<static>true</static><link name='l'><collision name='c'><geometry><box><size>1 1 1</size>"
+                     "</box></geometry></collision></link></model></world></sdf>")
+    launch = Launch("humanoid.yaml", f"world:={world}", log_dir=tmp_path, port=zenoh_port)
+    try:
+        status = launch.proc.wait(90)
+    finally:
+        launch.close()
+    output = launch.output()
+    assert status == 1, output[-3000:]
+    assert f"world '{world}' has a model named 'humanoid', the name of an entity to spawn at start" in output
+    assert "'simulator' refused its configuration (status 2)" in output
