@@ -21,6 +21,8 @@ TOOLS = "nodes.tools"
 SERVED: dict[str, dict[str, Served]] = {
     "controller_manager": {
         "spawner": Served(TOOLS, ("control", "spawner"), what="zenroid control spawner"),
+        "ros2_control_node": Served("nodes.ros2_control_node", ros_node=True,
+                                    what="our controller manager; hardware: the simulator or GenericSystem"),
         "unspawner": Served(TOOLS, ("control",), what="zenroid control set_controller_state + unload_controller"),
     },
     "robot_state_publisher": {

@@ -144,3 +144,58 @@ def test_joint_state_publisher_gui_page_moves_a_joint(processes, zenoh_port, ses
         # beyond the limits is clamped, as the slider itself does
         browser.evaluate("fetch('/joint', {method: 'POST', body: JSON.stringify({name: 'rail', position: 7})})")
         wait_until(lambda: (p := states.positions()) and p["rail"] == 0.5, timeout=30, message="rail clamped at 0.5")
+
+
+MOCK_CART = """<robot name="cart">
+  <link name="base"/><link name="slider"/>
+  <joint name="rail" type="prismatic"><parent link="base"/><child link="slider"/><axis xyz="1 0 0"/>
+    <limit lower="-1" upper="1" effort="10" velocity="2"/></joint>
+  <ros2_control name="cart" type="system">
+    <hardware><plugin>mock_components/GenericSystem</plugin>{params}</hardware>
+    <joint name="rail">
+      <command_interface name="{command}"/>
+      <state_interface name="position"><param name="initial_value">0.3</param></state_interface>
+      <state_interface name="velocity"/>
+    </joint>
+  </ros2_control>
+</robot>"""
+
+MOCK_CONTROLLERS = """controller_manager:
+  ros__parameters:
+    update_rate: 100
+    joint_state_broadcaster:
+      type: joint_state_broadcaster/JointStateBroadcaster
+    forward_controller:
+      type: forward_command_controller/ForwardCommandController
+forward_controller:
+  ros__parameters:
+    joints: [rail]
+    interface_name: {command}
+"""
+
+
+@pytest.mark.parametrize(("command", "params", "value", "expect"), [
+    ("position", "", 0.7, lambda p, v: p == pytest.approx(0.7)),
+    ("velocity", '<param name="calculate_dynamics">true</param>', 0.5,
+     lambda p, v: v == pytest.approx(0.5) and p > 0.45),   # integrated: moving from 0.3 at 0.5 m/s
+])
+def test_ros2_control_node_with_mock_hardware(processes, zenoh_port, session, tmp_path, command, params, value,
+                                              expect) -> None:
+    Float64MultiArray = msgs.get_type("std_msgs/msg/Float64MultiArray")
+    config = tmp_path / "controllers.yaml"
+    config.write_text(MOCK_CONTROLLERS.format(command=command))
+    states = Latest(session, "joint_states", JointState)
+    serve(processes, zenoh_port, "controller_manager", "ros2_control_node",
+          "--ros-args", "-p", f"robot_description:={MOCK_CART.format(command=command, params=params)}",
+          "--params-file", str(config))
+    spawner = serve(processes, zenoh_port, "controller_manager", "spawner", "joint_state_broadcaster",
+                    "forward_controller", "--controller-manager-timeout", "60")
+    assert spawner.wait(timeout=120) == 0, processes.output(spawner)
+    # the state interface's initial_value is where the joint starts
+    first = wait_until(states.positions, timeout=30, message="joint_states from the mock hardware's broadcaster")
+    assert first["rail"] == pytest.approx(0.3)
+    velocities = lambda: dict(zip(states.msg.name, states.msg.velocity))  # noqa: E731
+    payload = msgs.encode(Float64MultiArray(data=[value]))
+    wait_until(lambda: session.put("forward_controller/commands", payload) or
+               expect(states.positions()["rail"], velocities()["rail"]),
+               timeout=30, interval=0.1, message=f"the {command} command mirrored into joint_states")
