@@ -122,9 +122,10 @@ class Simulation:
         taken = sum(self._sample_rate(sensor.spec) for suite in self.sensors.values() for sensor in suite.sensors
                     if sensor.spec.type in ("imu", "force_torque"))
         if rate + taken > MAX_SENSOR_SAMPLES:
+            others_part = f"; with the {taken:g} of the robots already here, {rate + taken:g}" if taken else ""
             raise SpawnError(f"its {len(sampled)} IMU and force/torque sensors take {rate:g} samples a simulated "
-                             f"second; with the {taken:g} of the robots already here that is over the limit of "
-                             f"{MAX_SENSOR_SAMPLES} (lower their <update_rate>)")
+                             f"second{others_part}, over the limit of {MAX_SENSOR_SAMPLES} (lower their "
+                             "<update_rate>)")
 
     def add_model(self, model: WorldModel) -> WorldModel:
         """Add a world file's (or an SDF spawn request's) model; raises SpawnError on a name already taken."""

@@ -222,7 +222,7 @@ def test_sensors_are_capped_per_robot_in_total_and_in_samples_and_their_memory_c
         reply = spawn_robot(node, f"imu{i}", probe_robot(f"imu{i}", imus=per_robot))
         assert reply.success, reply.status_message
     reply = spawn_robot(node, "one_more", probe_robot("one_more", imus=per_robot))
-    assert not reply.success and "with the 20000 of the robots already here" in reply.status_message, reply
+    assert not reply.success and "with the 20000 of the robots already here, 30000" in reply.status_message, reply
 
     # sensors in total: slow ones, until the simulator has MAX_SENSORS (room for their samples made first)
     assert call(node, DeleteEntity, "/sim/delete_entity", DeleteEntity.Request(name="imu0")).success
