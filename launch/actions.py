@@ -302,6 +302,27 @@ class ExecuteProcess(LocatedAction):
         name = resolver.perform(self.name, scope, self.source, "name") if self.name is not None else None
         resolver.add_ros_process(self, scope, argv=argv, label=name or Path(argv[0]).name, node_name=None,
                                  style="plain")
+        register_on_exit(self, resolver, scope)
+
+
+class _OnOwnExit:
+    """``on_exit=`` of a process action: its own exit handler (OnProcessExit targeting it)."""
+
+    kind = "exit"
+
+    def __init__(self, action: Any) -> None:
+        self.target_action = action
+
+    def matches(self, action: Any) -> bool:
+        return action is self.target_action
+
+    def actions_for(self, event: Any, context: LaunchContext) -> list[Any]:
+        return run_callable_or_actions(self.target_action.on_exit, event, context)
+
+
+def register_on_exit(action: Any, resolver: Any, scope: Any) -> None:
+    if getattr(action, "on_exit", None) is not None:
+        resolver.add_handler(_OnOwnExit(action), scope, action.source)
 
 
 def find_program(program: str, source: Any) -> str:

@@ -160,8 +160,9 @@ def _launch_file(args: argparse.Namespace) -> Path:
     try:
         return find_launch_file(args.file)
     except FileNotFoundError:
-        if args.arguments and ":=" not in args.arguments[0]:
-            package, name = args.file, args.arguments.pop(0)
+        names = [i for i, item in enumerate(args.arguments) if ":=" not in item]
+        if names:
+            package, name = args.file, args.arguments.pop(names[0])
             return package_launch_file(package, name)
         raise _usage_error(f"launch file not found: {args.file} (bare names are looked up in launch/; a package's "
                            "launch file: PKG FILE)") from None

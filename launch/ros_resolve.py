@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from launch.actions import find_program, register_on_exit
 from launch.code_errors import launch_code_error
 from launch.context import LaunchDescription as RosLaunchDescription
 from launch.context import Substitution, normalize, perform_substitutions
@@ -172,7 +173,6 @@ class RosResolution:
             raise LaunchError(str(exc).strip('"'), source) from None
 
     def add_ros_node(self, node: Any, scope: Any) -> None:
-        from launch.actions import find_program
 
         source = node.source
         executable = self.perform(node.executable, scope, source, "Node executable")
@@ -198,6 +198,7 @@ class RosResolution:
                     for word in shlex.split(self.perform(item, scope, source, "ros_arguments"))]
         self.add_ros_process(node, scope, argv=argv, label=name or executable, node_name=name, style=style,
                              namespace=namespace, params=params, param_files=files, remaps=remaps, ros_args=ros_args)
+        register_on_exit(node, self, scope)
 
     # -- parameters -----------------------------------------------------------------------------
     def parameter_value(self, value: Any, scope: Any, source: Source) -> Any:

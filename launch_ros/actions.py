@@ -39,6 +39,7 @@ class Node(LocatedAction):
         self.respawn_delay = respawn_delay
         self.additional_env = [(normalize(k), normalize(v)) for k, v in (additional_env or {}).items()]
         self.env = None if env is None else [(normalize(k), normalize(v)) for k, v in env.items()]
+        self.on_exit = on_exit
         self.split_arguments = split_arguments   # the front ends' `args` text, split as a shell would
         self.labels: list[str] = []
 

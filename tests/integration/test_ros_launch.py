@@ -296,3 +296,38 @@ def test_seed002_examples_do_what_they_say(tmp_path: Path, zenoh_port: int) -> N
     finally:
         launch.close()
     assert "Shutting down motor controller..." in launch.output()
+
+
+@needs_seeds
+def test_seed003_launch_runs(tmp_path: Path, zenoh_port: int) -> None:
+    """Seed 003's launch file in its package (run as `ros2 launch robot_controller_lab simple_robot.launch.py`):
+    as printed, xacro refuses the file (a comment before <?xml ?>, as on ROS); with that line removed,
+    robot_state_publisher serves the xacro's robot_description and the two spawners run."""
+    package = tmp_path / "src" / "robot_controller_lab"
+    (package / "urdf").mkdir(parents=True)
+    (package / "launch").mkdir()
+    (package / "package.xml").write_text("<package format='3'><name>robot_controller_lab</name><version>0.0.0</version>"
+                                         "<description>t</description><maintainer email='a@b.c'>a</maintainer>"
+                                         "<license>MIT</license></package>")
+    xacro = (SEEDS / "003/urdf/003_simple_robot.urdf.xacro").read_text()
+    (package / "urdf/simple_robot.urdf.xacro").write_text(xacro)
+    (package / "launch/simple_robot.launch.py").write_text((SEEDS / "003/launch/003_simple_robot.launch.py").read_text())
+    env = {"ROS_PACKAGE_PATH": str(tmp_path / "src")}
+    done = launch_cli("robot_controller_lab", "simple_robot.launch.py", "--print", env=env)
+    assert done.returncode == 2 and "simple_robot.launch.py:14" in done.stderr, done.stderr
+    assert "XML or text declaration not at start of entity" in done.stderr, done.stderr
+
+    first, rest = xacro.split("\n", 1)
+    assert first.startswith("<!--")
+    (package / "urdf/simple_robot.urdf.xacro").write_text(rest)
+    launch = Launch("robot_controller_lab", "simple_robot.launch.py", log_dir=tmp_path / "run", port=zenoh_port,
+                    env=child_env(env))
+    try:
+        launch.wait(lambda: "/robot_state_publisher" in node_list(zenoh_port), 60, "robot_state_publisher")
+        echo = subprocess.run([sys.executable, "-m", "nodes.tools", "topic", "echo", "/robot_description", "--once",
+                               "--zenoh-port", str(zenoh_port)], capture_output=True, text=True, timeout=60,
+                              env=child_env(), cwd=ROOT)
+        assert "joint1" in echo.stdout and "simple_robot" in echo.stdout, echo.stdout + echo.stderr
+        assert len(launch.node_pids("spawner")) == 1 and len(launch.node_pids("spawner_2")) == 1
+    finally:
+        launch.close()
