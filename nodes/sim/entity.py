@@ -31,15 +31,24 @@ class EntitySpec:
     base_uri: str = ""            # where relative mesh paths resolve (the URDF file's path)
 
 
-def sensor_key_problems(info: RobotInfo, xml: str, namespace: str) -> list[str]:
-    """The keys the robot's sensors will publish on in ``namespace``, each checked as the full topic name it
-    is (a long namespace and a long remapping may be valid alone and too long together)."""
-    keys = [(sensor.name, sensor.plugin.key(namespace)) for sensor in info.sensors if sensor.plugin is not None]
+def sensor_keys(info: RobotInfo, xml: str, namespace: str) -> list[tuple[str, str, str]]:
+    """(sensor, key, frame id) of every topic the robot's sensors publish on in ``namespace``."""
+    keys = []
+    for sensor in info.sensors:
+        if sensor.plugin is not None:
+            frame = sensor.plugin.frame_name or (sensor.link if sensor.type != "contact" else "world")
+            keys.append((sensor.name, sensor.plugin.key(namespace), frame))
     if info.rendered_sensors:
-        keys += [(spec.name, key) for spec in parse_rendered_sensors(parse_xml(xml.encode()), namespace)
+        keys += [(spec.name, key, spec.frame_id) for spec in parse_rendered_sensors(parse_xml(xml.encode()), namespace)
                  for key in spec.keys.values()]
+    return keys
+
+
+def sensor_key_problems(keys: list[tuple[str, str, str]]) -> list[str]:
+    """Each key checked as the full topic name it is (a long namespace and a long remapping may be valid
+    alone and too long together)."""
     return [f"sensor {names.shown(sensor)} publishes on {names.shown('/' + key)}: {problem}"
-            for sensor, key in keys if (problem := names.topic_problem("/" + key)) is not None]
+            for sensor, key, _ in keys if (problem := names.topic_problem("/" + key)) is not None]
 
 
 class Entity(Model):
@@ -56,7 +65,8 @@ class Entity(Model):
         # "/" is the root namespace: the layout the ROS tutorials' programs expect (/joint_states ...)
         self.namespace = (spec.namespace or spec.name).strip("/")
         self.info: RobotInfo = parse_urdf(spec.xml, spec.base_uri or None)
-        problems = sensor_key_problems(self.info, spec.xml, self.namespace)
+        self.sensor_keys = sensor_keys(self.info, spec.xml, self.namespace)
+        problems = sensor_key_problems(self.sensor_keys)
         if problems:
             raise SpawnError("; ".join(problems[:5]))
         self.pose = spec.pose.validated()

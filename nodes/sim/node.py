@@ -22,7 +22,7 @@ from nodes.core.session import max_payload_bytes
 from nodes.meshes import MeshError
 from nodes.meshes.convert import set_collision_policy
 from nodes.sim.config import DEFAULT_CONFIG, StartupEntity, parse_entities, parse_gains
-from nodes.sim.entity import EntitySpec, Pose, SpawnError
+from nodes.sim.entity import Entity, EntitySpec, Pose, SpawnError
 from nodes.sim.entity_services import EntityServices
 from nodes.sim.interfaces import MODES
 from nodes.sim.outputs import SimOutputs
@@ -121,6 +121,8 @@ class SimulatorNode(Node):
             self._load_world(world_file, ground_size, ground_friction)
         self._check_startup_names(world_file)
         self.robots: dict[str, RobotLink] = {}
+        self._sensor_keys: dict[str, tuple[str, str, str]] = {}   # key -> entity, sensor, frame id
+        self._warned_keys: set[tuple[str, str]] = set()
         self.outputs = SimOutputs(self, self.sim, self.robots, clock_rate=clock_rate, state_rate=state_rate)
         self.render = RenderFrames(self, self.sim, self._idle, enabled=sensors,
                                    camera_pose=self.world_spec.camera_pose if self.world_spec else None)
@@ -187,11 +189,30 @@ class SimulatorNode(Node):
             self.sim.delete(entity.name)
             raise
         self._publish_scene_or_undo(entity.name)
+        self._note_sensor_keys(entity)
         joints = len(entity.info.joints)
         base = "fixed" if spec.fixed else "floating"
         pos = entity.pose.position
         return (f"spawned {entity.name!r} ({joints} joints, {base} base) at "
                 f"({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}) in namespace {entity.namespace!r}")
+
+    def _note_sensor_keys(self, entity: Entity) -> None:
+        """Say once, on rosout, when a new robot's sensor publishes on a key another sensor already does with
+        another frame id (a lidar remapped onto the humanoid's scan): the key's readers get both, mixed."""
+        for sensor, key, frame in entity.sensor_keys:
+            other = self._sensor_keys.get(key)
+            if other is None:
+                self._sensor_keys[key] = (entity.name, sensor, frame)
+                continue
+            if other[2] != frame and (key, entity.name) not in self._warned_keys:
+                self._warned_keys.add((key, entity.name))
+                self.logger.warn(f"sensor {entity.name}::{sensor} publishes on '/{key}' with frame id {frame!r}, "
+                                 f"as {other[0]}::{other[1]} does with frame id {other[2]!r}: its readers get "
+                                 "both, mixed")
+
+    def _forget_sensor_keys(self, name: str) -> None:
+        self._sensor_keys = {k: v for k, v in self._sensor_keys.items() if v[0] != name}
+        self._warned_keys = {w for w in self._warned_keys if w[1] != name}
 
     def _publish_scene_or_undo(self, name: str) -> None:
         """The new scene out, or, when the renderer could not be given it (a mesh over its triangle cap), the
@@ -258,6 +279,7 @@ class SimulatorNode(Node):
             if link is not None:
                 link.destroy()
         deleted = self.sim.delete(name)
+        self._forget_sensor_keys(name)
         self.render.refresh_scene()
         return deleted
 

@@ -311,6 +311,8 @@ class _Reader:
         self.where = where
         self.folder = folder
         self.model_path = models
+        # where file:// and local includes may point: the model path and the world file's folder
+        self.roots = [Path(os.path.realpath(p)) for p in [*models, *([folder] if folder else [])]]
         self.not_simulated: Counter = Counter()
         self.budget = budget if budget is not None else _Budget(where)
 
@@ -465,6 +467,7 @@ class _Reader:
             raise WorldError(f"{sdf_path}: expected exactly one <model> under <sdf>, found {len(models)}")
         inner = _Reader(str(sdf_path), folder, self.model_path, self.budget)
         inner.not_simulated = self.not_simulated
+        inner.roots = self.roots
         name_element = element.find("name")
         name = (name_element.text or "").strip() if name_element is not None else None
         model = inner.model(models[0], np.eye(4), name, [*stack, folder],
@@ -496,9 +499,18 @@ class _Reader:
             if base is None:
                 raise self.error(element, f"{uri!r}: a relative path has no folder to resolve in here")
             path = base / path
-        if not path.is_dir():
+        # outside its roots, one answer whether the host has that folder or not: nothing about the host leaks
+        outside = self.error(element, f"{uri!r}: not in the model path or the world's folder (a file:// or local "
+                             "include is read only there)")
+        path = Path(os.path.normpath(path))
+        if not any(path.is_relative_to(root) for root in self.roots):
+            raise outside
+        resolved = Path(os.path.realpath(path))
+        if not any(resolved.is_relative_to(root) for root in self.roots):   # a symbolic link out of them
+            raise outside
+        if not resolved.is_dir():
             raise self.error(element, f"{uri!r}: no model folder at {path}")
-        return path.resolve()
+        return resolved
 
     def model_sdf(self, folder: Path, element: etree._Element) -> Path:
         """The model file a ``model.config`` names (the newest SDF version listed), else ``model.sdf``."""

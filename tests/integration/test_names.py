@@ -14,7 +14,7 @@ import pytest
 
 import msgs
 from nodes.core import Node
-from nodes.sim.interfaces import GetModelList, SpawnEntity, StepSimulation
+from nodes.sim.interfaces import DeleteEntity, GetModelList, SpawnEntity, StepSimulation
 from tests.conftest import wait_until
 from tests.integration.test_sim_helpers import ModelStatesProbe, call, start_sim, wait_ready
 
@@ -55,6 +55,15 @@ def test_a_huge_robot_namespace_is_refused_and_the_simulator_keeps_serving(proce
         reply = call(node, SpawnEntity, "/sim/spawn_entity", SpawnEntity.Request(name="b" * 100_000, xml=BOX),
                      timeout=20)
         assert not reply.success and re.search(r"name .*over the limit", reply.status_message)
+        # a file:// include outside the model path: one answer whether the host has the folder or not
+        answers = set()
+        for folder in ("/etc", "/no_such_folder_here", "/tmp/../etc/ssl"):
+            xml = (f"<?xml version='1.0'?><sdf version='1.7'><model name='m'><link name='l'/><include>"
+                   f"<uri>file://{folder}</uri></include></model></sdf>")
+            reply = call(node, SpawnEntity, "/sim/spawn_entity", SpawnEntity.Request(name="probe", xml=xml))
+            assert not reply.success
+            answers.add(reply.status_message.replace(folder, "FOLDER"))
+        assert len(answers) == 1 and "not in the model path" in answers.pop()
         # still serving: a service answers, the model states keep coming, a good spawn goes through
         assert call(node, GetModelList, "/sim/get_model_list").success
         count = probe.count
@@ -103,6 +112,23 @@ def test_bad_sensor_names_are_refused_and_the_humanoid_camera_keeps_publishing(p
                          SpawnEntity.Request(name="cam", xml=camera_robot(**options)), timeout=20)
             assert not reply.success, (case, reply.status_message)
             assert re.search(reason, reply.status_message), (case, reply.status_message)
+        # a lidar remapped onto the humanoid's scan with another frame: accepted, and said once on rosout
+        lidar = camera_robot().replace("type='camera'", "type='ray'").replace(
+            "libgazebo_ros_camera.so", "libgazebo_ros_ray_sensor.so").replace(
+            "<ros></ros>", "<ros><remapping>~/out:=/humanoid/scan</remapping></ros>"
+            "<output_type>sensor_msgs/LaserScan</output_type>")
+        lidar = re.sub(r"<camera>.*</camera>", "<ray><scan><horizontal><samples>10</samples><min_angle>-0.5"
+                       "</min_angle><max_angle>0.5</max_angle></horizontal></scan><range><min>0.1</min><max>5</max>"
+                       "</range></ray>", lidar)
+        warnings: list[str] = []
+        node.create_subscription(None, "/rosout", lambda p: warnings.append(msgpack.unpackb(p)["msg"]), inline=True,
+                                 raw=True)
+        reply = call(node, SpawnEntity, "/sim/spawn_entity", SpawnEntity.Request(name="lidar", xml=lidar))
+        assert reply.success, reply.status_message
+        wait_until(lambda: any("publishes on '/humanoid/scan' with frame id 'base'" in w for w in warnings), 10,
+                   message="the shared key on rosout")
+        assert sum("'/humanoid/scan' with frame id" in w for w in warnings) == 1
+        assert call(node, DeleteEntity, "/sim/delete_entity", DeleteEntity.Request(name="lidar")).success
         for _ in range(3):
             reply = call(node, StepSimulation, "/sim/step", StepSimulation.Request(steps=300), timeout=120)
             assert reply.success, reply.status_message

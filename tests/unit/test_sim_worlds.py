@@ -321,3 +321,20 @@ def test_links_and_models_reached_through_includes_are_counted_while_expanding(t
     refused(world(tens), rf"more than {sdf.MAX_MODELS} models \(nested and included ones counted in", env)
     within = "".join(f"<include><uri>model://block</uri><name>b{k}</name></include>" for k in range(3))
     assert len(parse_world(world(within), Path("/tmp/test.world"), env).models) == 3   # within the caps
+
+
+def test_a_file_include_outside_the_model_path_gets_one_answer_whether_the_folder_exists_or_not(
+        tmp_path: Path) -> None:
+    (tmp_path / "here").mkdir()
+    answers = set()
+    for folder in (tmp_path / "here", tmp_path / "absent", Path("/etc")):
+        with pytest.raises(WorldError) as caught:
+            parse_world(world(f"<include><uri>file://{folder}</uri></include>"),
+                        environ={"ZENROID_MODEL_PATH": str(tmp_path / "models")})
+        answers.add(str(caught.value).replace(str(folder), "FOLDER"))
+    assert len(answers) == 1 and "not in the model path or the world's folder" in answers.pop()
+    # inside the model path a folder is read as before
+    make_model(tmp_path / "models", "inside", box_model())
+    spec = parse_world(world(f"<include><uri>file://{tmp_path / 'models' / 'inside'}</uri></include>"),
+                       environ={"ZENROID_MODEL_PATH": str(tmp_path / "models")})
+    assert len(spec.models) == 1
