@@ -1,5 +1,6 @@
 """Text substitutions of launch files: ours (``$(var NAME)``, ``$(env NAME [default])``, ``$(dirname)``,
-``$(robot NAME)``, ``$(config NAME)``) and, for ROS's XML and YAML launch formats, ROS's frontend ones
+``$(robot NAME)``, ``$(config NAME)``, ``$(robot_controllers ROBOT FILE)``: the controllers file derived from a
+robot, ``$(broadcasters CONTROLLERS_FILE)``: its sensor broadcasters, space-separated) and, for ROS's XML and YAML launch formats, ROS's frontend ones
 (``$(find-pkg-share PKG)``, ``$(find-pkg-prefix PKG)``, ``$(find-exec NAME)``, ``$(exec-in-pkg EXE PKG)``,
 ``$(command 'CMD')``, ``$(eval 'EXPR')``, ``$(and A B)``, ``$(or A B)``, ``$(not A)``, ``$(equals A B)``,
 ``$(not-equals A B)``, ``$(anon NAME)``, ``$(filename)``), which call ``launch.substitutions``.
@@ -20,7 +21,7 @@ from typing import Any
 
 from launch.yaml_source import LaunchError, Source
 
-KINDS = ("var", "env", "dirname", "robot", "config")
+KINDS = ("var", "env", "dirname", "robot", "config", "robot_controllers", "broadcasters")
 ROS_KINDS = ("find-pkg-share", "find-pkg-prefix", "find-exec", "exec-in-pkg", "command", "eval", "and", "or", "not",
              "equals", "not-equals", "anon", "filename")
 
@@ -82,9 +83,40 @@ def _evaluate(kind: str, words: list[str], ctx: SubstitutionContext, source: Sou
             return str(config_file(words[0]))
         except FileNotFoundError as exc:
             raise LaunchError(f"$(config {words[0]}): {exc}", source) from None
+    if kind in ("robot_controllers", "broadcasters"):
+        return _robot_setup(kind, words, source)
     if kind in ROS_KINDS:
         return _evaluate_ros(kind, words, ctx, source)
     raise LaunchError(f"unknown substitution '$({kind})' (known: {', '.join(KINDS + ROS_KINDS)})", source)
+
+
+def _robot_setup(kind: str, words: list[str], source: Source) -> str:
+    """A robot's controllers: the file (written when derived, said on the log) or its sensor broadcasters.
+    A robot that cannot run (xacro error, a mesh resolving nowhere, ...) fails the launch here, named."""
+    import sys
+
+    import yaml
+
+    from nodes.sim.robot_files import ConfigError, controllers_for
+    from nodes.urdf.control_setup import broadcasters
+
+    if kind == "robot_controllers":
+        if len(words) != 2:
+            raise LaunchError("$(robot_controllers ROBOT FILE) takes a robot name and its file", source)
+        try:
+            path, generated = controllers_for(*words)
+        except ConfigError as exc:
+            raise LaunchError(f"robot {words[1]}: {exc}", source) from None
+        if generated:
+            print(f"[launch] [INFO] {generated}", file=sys.stderr, flush=True)
+        return str(path)
+    if len(words) != 1:
+        raise LaunchError("$(broadcasters CONTROLLERS_FILE) takes one file", source)
+    try:
+        config = yaml.safe_load(Path(words[0]).read_text()) or {}
+    except (OSError, yaml.YAMLError) as exc:
+        raise LaunchError(f"$(broadcasters {words[0]}): {exc}", source) from None
+    return " ".join(broadcasters(config)) if isinstance(config, dict) else ""
 
 
 _ARITY = {"find-pkg-share": 1, "find-pkg-prefix": 1, "find-exec": 1, "exec-in-pkg": 2, "command": 1, "eval": 1,

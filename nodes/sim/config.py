@@ -26,8 +26,6 @@ class Gains:
     kd: float
 
 
-# Used when no pattern matches: stiff enough to hold the humanoid's legs (FACTS: Kp ~1000+ on legs).
-FALLBACK_GAINS = Gains(kp=2000.0, kd=20.0)
 
 
 def _number(where: str, value: Any, minimum: float = 0.0) -> float:
@@ -38,8 +36,9 @@ def _number(where: str, value: Any, minimum: float = 0.0) -> float:
     return float(value)
 
 
-def parse_gains(table: Mapping[str, Any] | None) -> Callable[[str], Gains]:
-    """``{pattern: {p: .., d: ..}}`` → a lookup; the first pattern (fnmatch) matching a joint wins."""
+def parse_gains(table: Mapping[str, Any] | None) -> Callable[[str], Gains | None]:
+    """``{pattern: {p: .., d: ..}}`` → a lookup; the first pattern (fnmatch) matching a joint wins; None when
+    none does (the gains then come from the physics: nodes.sim.servo_gains)."""
     rules: list[tuple[str, Gains]] = []
     for pattern, entry in (table or {}).items():
         where = f"gains.{pattern}"
@@ -52,11 +51,11 @@ def parse_gains(table: Mapping[str, Any] | None) -> Callable[[str], Gains]:
             raise ConfigError(f"{where}: missing p")
         rules.append((str(pattern), Gains(_number(f"{where}.p", entry["p"]), _number(f"{where}.d", entry.get("d", 0.0)))))
 
-    def gains_for(joint: str) -> Gains:
+    def gains_for(joint: str) -> Gains | None:
         for pattern, gains in rules:
             if fnmatch.fnmatchcase(joint, pattern):
                 return gains
-        return FALLBACK_GAINS
+        return None
 
     return gains_for
 
@@ -73,9 +72,12 @@ class StartupEntity:
     rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
     fixed: bool = False
     joints: dict[str, float] = field(default_factory=dict)
+    auto_z: bool = False           # z: auto: the lowest collision geometry on the ground
+    initial_pose: str = ""         # an SRDF group_state of the robot
 
 
-ENTITY_KEYS = {"name", "file", "topic", "namespace", "x", "y", "z", "R", "P", "Y", "fixed", "joints"}
+ENTITY_KEYS = {"name", "file", "topic", "namespace", "x", "y", "z", "R", "P", "Y", "fixed", "joints",
+               "initial_pose"}
 
 
 def parse_entities(items: Any) -> list[StartupEntity]:
@@ -97,7 +99,9 @@ def parse_entities(items: Any) -> list[StartupEntity]:
         file, topic = str(item.get("file") or ""), str(item.get("topic") or "")
         if bool(file) == bool(topic):
             raise ConfigError(f"{where}: give exactly one of file and topic")
-        coords = [_number(f"{where}.{k}", item.get(k, 0.0), -math.inf) for k in ("x", "y", "z", "R", "P", "Y")]
+        auto_z = item.get("z") in ("auto", "")
+        coords = [_number(f"{where}.{k}", 0.0 if k == "z" and auto_z else item.get(k, 0.0), -math.inf)
+                  for k in ("x", "y", "z", "R", "P", "Y")]
         joints = item.get("joints") or {}
         if not isinstance(joints, Mapping):
             raise ConfigError(f"{where}.joints: expected a map joint -> position, got {joints!r}")
@@ -108,5 +112,6 @@ def parse_entities(items: Any) -> list[StartupEntity]:
             name=name, file=file, topic=topic, namespace=str(item.get("namespace") or ""),
             xyz=tuple(coords[:3]), rpy=tuple(coords[3:]), fixed=fixed,  # type: ignore[arg-type]
             joints={str(k): _number(f"{where}.joints.{k}", v, -math.inf) for k, v in joints.items()},
+            auto_z=auto_z, initial_pose=str(item.get("initial_pose") or ""),
         ))
     return result

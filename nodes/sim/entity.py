@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass, field
 
 import dartpy as dart
+import numpy as np
 
 from nodes.core import names
 from nodes.meshes import MeshError
@@ -13,9 +14,12 @@ from nodes.meshes.convert import collision_policy
 from nodes.meshes.urdf import base_path, prepare_urdf
 from nodes.sim.model import Model
 from nodes.sim.pose import Pose, SpawnError
+from nodes.sim.servo_gains import lowest_points
 from nodes.sim.urdf_info import RobotInfo, parse_urdf
 from nodes.urdf.rendered_sensors import parse_rendered_sensors
 from nodes.urdf.xml_safety import parse_xml
+
+GROUND_CLEARANCE = 0.001   # m between the lowest collision geometry and the ground at an automatic spawn height
 
 
 @dataclass
@@ -29,6 +33,7 @@ class EntitySpec:
     fixed: bool = False
     initial_positions: dict[str, float] = field(default_factory=dict)
     base_uri: str = ""            # where relative mesh paths resolve (the URDF file's path)
+    auto_z: bool = False          # a floating base: lowered (or raised) until its lowest collision touches z = 0
 
 
 def sensor_keys(info: RobotInfo, xml: str, namespace: str) -> list[tuple[str, str, str]]:
@@ -84,6 +89,8 @@ class Entity(Model):
             self.dof_index[joint.name] = int(dart_joint.getIndexInSkeleton(0))
         self._place(self.pose)
         self._apply_initial_positions(spec.initial_positions)
+        if spec.auto_z and self.floating:
+            self._stand_on_ground()
         self.remember_spawn()
 
     def _load_skeleton(self, spec: EntitySpec, info: RobotInfo) -> dart.dynamics.Skeleton:
@@ -117,6 +124,18 @@ class Entity(Model):
         else:
             # fixed base: the weld joint's offset from the world is the spawn pose
             root.setTransformFromParentBodyNode(iso)
+
+    def _stand_on_ground(self) -> None:
+        """The spawn pose moved up or down so the lowest collision geometry (in the initial joint positions)
+        is at z = 0 plus a hair of clearance: the robot lands without a drop."""
+        lows = lowest_points(self.skeleton)
+        if not lows:
+            return
+        lift = GROUND_CLEARANCE - min(lows.values())
+        matrix = np.array(self.pose.to_isometry().matrix())
+        matrix[2, 3] += lift
+        self.pose = Pose.from_matrix(matrix)
+        self._place(self.pose)   # the root's free joint only: the joint positions stay
 
     def _apply_initial_positions(self, positions: dict[str, float]) -> None:
         for joint_name, value in positions.items():

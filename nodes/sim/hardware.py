@@ -26,6 +26,7 @@ import numpy as np
 
 from nodes.sim.config import Gains
 from nodes.sim.entity import Entity
+from nodes.sim.servo_gains import physics_gains
 from nodes.sim.urdf_info import INTERFACES
 
 # Stand-in for an infinite effort limit where DART needs a number (SERVO force bounds).
@@ -71,7 +72,7 @@ class _Plan:
 class HardwareInterface:
     """Joints of one entity in URDF order, their active command interface and current command."""
 
-    def __init__(self, entity: Entity, gains_for: Callable[[str], Gains],
+    def __init__(self, entity: Entity, gains_for: Callable[[str], Gains | None],
                  warn_once: Callable[[str], None] | None = None) -> None:
         self.entity = entity
         self.skeleton = entity.skeleton
@@ -80,7 +81,10 @@ class HardwareInterface:
         self.index = {name: i for i, name in enumerate(self.names)}
         self.dofs = np.array([entity.dof_index[name] for name in self.names], dtype=np.intp)
         self.dart_joints = [self.skeleton.getJoint(name) for name in self.names]
-        self.gains = [gains_for(name) for name in self.names]
+        overrides = [gains_for(name) for name in self.names]
+        physics = (physics_gains(self.skeleton, [n for n, g in zip(self.names, overrides, strict=True) if g is None],
+                                 entity.floating) if None in overrides else {})
+        self.gains = [g if g is not None else physics[n] for n, g in zip(self.names, overrides, strict=True)]
         self._warn_once = warn_once or (lambda message: None)
         self._warned: set[str] = set()
         n = len(self.names)

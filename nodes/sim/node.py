@@ -89,7 +89,7 @@ class SimulatorNode(Node):
         self.command_timeout = p("command_timeout", 0.5, description="realtime: hold position after this many "
                                  "wall s without commands", min_value=0.01)
         self.paused = p("paused", False, description="start paused")
-        gains_table = p("gains", {"*": {"p": 2000.0, "d": 20.0}}, description="joint pattern -> {p, d}",
+        gains_table = p("gains", {}, description="joint pattern -> {p, d} (other joints: from the physics)",
                         type=dict)
         entities = p("entities", [], description="entities spawned at start", type=list)
         sensor_seed = int(p("sensor_seed", 0, type=int, min_value=0, max_value=2**63 - 1,
@@ -255,15 +255,32 @@ class SimulatorNode(Node):
                     continue
                 self.logger.error(f"cannot spawn {item.name!r}: {exc}")
                 continue
-            spec = EntitySpec(name=item.name, xml=xml, namespace=item.namespace, fixed=item.fixed,
-                              pose=Pose.from_xyz_rpy(*item.xyz, *item.rpy), initial_positions=item.joints,
-                              base_uri=base_uri)
             try:
+                joints = {**self._named_pose(item, xml), **item.joints}
+                spec = EntitySpec(name=item.name, xml=xml, namespace=item.namespace, fixed=item.fixed,
+                                  pose=Pose.from_xyz_rpy(*item.xyz, *item.rpy), initial_positions=joints,
+                                  base_uri=base_uri, auto_z=item.auto_z)
                 self.logger.info(self.spawn_entity(spec))
             except (SpawnError, UrdfError, WorldError) as exc:
                 self.logger.error(f"cannot spawn {item.name!r}: {exc}")
         self._startup = pending
         self._next_startup_try = time.monotonic() + STARTUP_SPAWN_RETRY_S
+
+    @staticmethod
+    def _named_pose(item: StartupEntity, xml: str) -> dict[str, float]:
+        """The joint positions of the entity's ``initial_pose`` (an SRDF group_state beside its file), for the
+        joints the robot moves."""
+        if not item.initial_pose:
+            return {}
+        if not item.file:
+            raise UrdfError(f"initial_pose {item.initial_pose!r}: needs the robot's file (its SRDF is beside it)")
+        from nodes.urdf.model import parse_urdf as parse_model
+        from nodes.urdf.srdf import named_pose
+
+        model = parse_model(xml)
+        movable = {j.name for j in model.movable_joints()}
+        pose = named_pose(resolve_robot_file(item.file), model.name, item.initial_pose)
+        return {name: value for name, value in pose.items() if name in movable}
 
     def _startup_xml(self, item: StartupEntity) -> tuple[str, str]:
         if item.file:

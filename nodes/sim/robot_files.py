@@ -62,3 +62,68 @@ def fetch_robot_description(node: Node, key: str, timeout: float = 2.0) -> str:
     if not text.strip():
         raise ServiceError(f"{resolved}: empty robot description")
     return text
+
+
+def checked_robot(path: Path):
+    """A robot file read (xacro expanded) and checked as the simulator will check it at spawn (meshes resolve
+    inside their package, moving links have inertia, sensors make sense), without DART: a launch refuses a
+    bad robot before any process starts. Returns (the URDF model, its text); raises ConfigError naming the
+    file and the reason."""
+    from nodes.sim.urdf_info import parse_urdf as check
+    from nodes.urdf.model import UrdfError
+    from nodes.urdf.model import parse_urdf as parse_model
+
+    xml = read_robot_xml(path)
+    try:
+        check(xml, path.as_uri())
+        return parse_model(xml), xml
+    except UrdfError as exc:
+        raise ConfigError(f"{path}: {exc}") from None
+
+
+def shipped_controllers(robot: str) -> Path | None:
+    """The controllers file that comes with a robot of ``robots/``: config/<robot>_controllers.yaml (our
+    humanoid's is config/controllers.yaml)."""
+    from nodes.share import CONFIG_DIR
+
+    for name in ((["controllers.yaml"] if robot == "humanoid" else []) + [f"{robot}_controllers.yaml"]):
+        if (CONFIG_DIR / name).is_file():
+            return CONFIG_DIR / name
+    return None
+
+
+def _fits(config_file: Path, model) -> bool:
+    """Whether a controllers file only names joints and sensors this robot has (a variant of the robot)."""
+    import yaml
+
+    from nodes.urdf.control_setup import broadcasters
+
+    try:
+        config = yaml.safe_load(config_file.read_text()) or {}
+    except (OSError, yaml.YAMLError):
+        return False
+    movable = {j.name for j in model.movable_joints()}
+    sensors = {s.name for s in model.sensors}
+    for name, section in config.items():
+        params = (section or {}).get("ros__parameters") or {} if isinstance(section, dict) else {}
+        if not set(params.get("joints") or []) <= movable:
+            return False
+        if name in broadcasters(config) and params.get("sensor_name") not in sensors:
+            return False
+    return True
+
+
+def controllers_for(robot: str, file: str) -> tuple[Path, str | None]:
+    """The controllers file a launch of ``robot`` from ``file`` loads: the robot's own from ``config/`` when
+    it fits the file, else one derived from the URDF (its <ros2_control> block, or the block generated for
+    it) and written, with the URDF and the block, to the user's cache. Returns the file and, when something
+    was generated, the line to log. Raises ConfigError (file and reason) for a robot that cannot run."""
+    from nodes.urdf.control_setup import cache_directory, write_setup
+
+    path = resolve_robot_file(file)
+    model, xml = checked_robot(path)
+    shipped = shipped_controllers(robot)
+    if shipped is not None and _fits(shipped, model):
+        return shipped, None
+    written = write_setup(model, xml, cache_directory(xml))
+    return written.controllers, written.describe(model, generated_block=not model.ros2_control)

@@ -33,7 +33,7 @@ MAX_SENSOR_SAMPLES = 20_000
 
 
 class Simulation:
-    def __init__(self, world: PhysicsWorld, gains_for: Callable[[str], Gains],
+    def __init__(self, world: PhysicsWorld, gains_for: Callable[[str], Gains | None],
                  warn: Callable[[str], None] | None = None, mode: str = "lockstep", *, sensor_seed: int = 0,
                  sensors_enabled: bool = True) -> None:
         """``sensor_seed``: the sensors' noise generators start from it; ``sensors_enabled``: False leaves every

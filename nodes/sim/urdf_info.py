@@ -17,6 +17,7 @@ import numpy as np
 from lxml import etree
 
 from nodes.control.interfaces import JointInfo
+from nodes.urdf.control_setup import with_control_block
 from nodes.urdf.frames import Lumped, check_inertias, lump_frames
 from nodes.urdf.model import Joint, RobotModel, UrdfError
 from nodes.urdf.model import parse_urdf as parse_model
@@ -138,6 +139,10 @@ def parse_urdf(xml: str, base: str | None = None) -> RobotInfo:
                         f"{MAX_SENSORS} sensors a robot")
     try:
         model = parse_model(xml)
+        generated = not model.ros2_control
+        if generated:   # the block zenroid setup_robot writes (nodes.urdf.control_setup): what runs is what is written
+            xml = with_control_block(xml, model)
+            model = parse_model(xml)
     except UrdfError as exc:
         raise _error(exc.line, str(exc)) from None
     _check_size(model)
@@ -163,7 +168,8 @@ def parse_urdf(xml: str, base: str | None = None) -> RobotInfo:
     if len(roots) != 1:
         raise _error(model.line, f"robot {model.name!r} must have exactly one root link, found {roots}")
 
-    has_block = _apply_ros2_control(model, joints)
+    _apply_ros2_control(model, joints)
+    has_block = not generated
     problems = sensor_problems(model.sensors, model.ros2_control_sensors, model.links, model.joints)
     problems += rendered_sensor_problems(model.rendered_sensors, model.links, taken={s.name for s in model.sensors})
     if problems:
@@ -175,6 +181,9 @@ def parse_urdf(xml: str, base: str | None = None) -> RobotInfo:
         physics.xml = _with_files(physics.xml, meshes)
     sensors, rendered = _mount_on_bodies(model, physics)
     warnings = list(model.warnings)
+    if generated:
+        warnings.append(f"no <ros2_control> block: generated one ({len(joints)} joints: position command, "
+                        "position and velocity states; python -m nodes.tools.cli setup_robot FILE -o DIR writes it)")
     if physics.frames:
         warnings.append(f"{len(physics.frames)} link(s) without a usable inertia on fixed joints are frames, "
                         f"merged into their parent body for the physics (kept as TF frames and sensor mounts): "

@@ -27,6 +27,7 @@ VERBS: dict[str, tuple[str, str]] = {
     "sim": ("nodes.tools.sim", "pause/unpause/reset/step/gravity"),
     "check_urdf": ("nodes.tools.check_urdf", "validate a URDF and print its tree"),
     "xacro": ("nodes.tools.xacro_cmd", "expand a xacro file to URDF"),
+    "setup_robot": ("nodes.tools.setup_robot", "write a robot's ros2_control block and controllers file"),
     "urdf_to_graphviz": ("nodes.tools.urdf_graph", "draw a URDF's link/joint tree (.gv, and .pdf with Graphviz)"),
     "urdf_to_graphiz": ("nodes.tools.urdf_graph", "the same (ROS's older spelling)"),
     "graph": ("nodes.tools.graph", "print the node graph"),

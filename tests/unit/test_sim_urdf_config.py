@@ -8,7 +8,7 @@ from pathlib import Path
 import msgpack
 import pytest
 
-from nodes.sim.config import FALLBACK_GAINS, parse_entities, parse_gains
+from nodes.sim.config import parse_entities, parse_gains
 from nodes.sim.hardware import CommandError
 from nodes.sim.robot_files import ConfigError
 from nodes.sim.robot_link import parse_command
@@ -102,7 +102,7 @@ def test_gain_patterns_first_match_wins_and_fallback():
     gains_for = parse_gains({"*_knee": {"p": 100, "d": 2}, "left_*": {"p": 50}})
     assert (gains_for("left_knee").kp, gains_for("left_knee").kd) == (100.0, 2.0)
     assert (gains_for("left_hip").kp, gains_for("left_hip").kd) == (50.0, 0.0)
-    assert gains_for("neck") == FALLBACK_GAINS
+    assert gains_for("neck") is None   # from the physics (nodes.sim.servo_gains)
 
 
 @pytest.mark.parametrize("table, where", [
