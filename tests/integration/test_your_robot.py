@@ -6,6 +6,7 @@ it, which are the files written."""
 from __future__ import annotations
 
 import math
+import time
 from importlib.metadata import PackageNotFoundError, distribution
 from pathlib import Path
 
@@ -33,40 +34,38 @@ def stamp(msg: dict) -> float:
     return msg["header"]["stamp"]["sec"] + msg["header"]["stamp"]["nanosec"] * 1e-9
 
 
-def base(scenario: Scenario, since: float = 0.0) -> list[tuple[float, float]]:
+def base(scenario: Scenario, since: float = 0.0, ns: str = "humanoid") -> list[tuple[float, float]]:
     """(height, tilt in degrees) of the robot's base in sim/model_states received after ``since``."""
     out = []
     for m in scenario.snapshot("sim/model_states"):
-        if "humanoid" in m["name"] and m["_received"] >= since:
-            pose = m["pose"][m["name"].index("humanoid")]
+        if ns in m["name"] and m["_received"] >= since:
+            pose = m["pose"][m["name"].index(ns)]
             q = pose["orientation"]
             up_z = 1 - 2 * (q["x"] ** 2 + q["y"] ** 2)    # the base's z axis, seen from the world's
             out.append((pose["position"]["z"], math.degrees(math.acos(max(-1.0, min(1.0, up_z))))))
     return out
 
 
-def sim_time(scenario: Scenario) -> float:
-    states = scenario.snapshot("humanoid/joint_states")
+def sim_time(scenario: Scenario, ns: str = "humanoid") -> float:
+    states = scenario.snapshot(f"{ns}/joint_states")
     return stamp(states[-1]) if states else 0.0
 
 
-def active(scenario: Scenario) -> dict[str, str]:
-    listed = call(scenario.session, "humanoid/controller_manager/list_controllers", {}, timeout=2.0)
+def active(scenario: Scenario, ns: str = "humanoid") -> dict[str, str]:
+    listed = call(scenario.session, f"{ns}/controller_manager/list_controllers", {}, timeout=2.0)
     return {c["name"]: c["state"] for c in (listed or {}).get("controller", [])}
 
 
-def stands(scenario: Scenario, seconds: float) -> tuple[float, list[tuple[float, float]]]:
+def stands(scenario: Scenario, seconds: float, ns: str = "humanoid") -> tuple[float, list[tuple[float, float]]]:
     """Waits ``seconds`` of sim time after the controllers are active; returns the settled height and the
     (height, tilt) samples of that stretch."""
-    scenario.wait_for(lambda: active(scenario).get("joint_trajectory_controller") == "active", 120,
+    scenario.wait_for(lambda: active(scenario, ns).get("joint_trajectory_controller") == "active", 120,
                       "the trajectory controller active")
-    start = sim_time(scenario)
-    scenario.wait_for(lambda: sim_time(scenario) >= start + 1.0, 120, "1 s of sim time")
-    import time
-
+    start = sim_time(scenario, ns)
+    scenario.wait_for(lambda: sim_time(scenario, ns) >= start + 1.0, 120, "1 s of sim time")
     settled_at = time.monotonic()
-    scenario.wait_for(lambda: sim_time(scenario) >= start + 1.0 + seconds, 600, f"{seconds} s of sim time")
-    samples = base(scenario, settled_at)
+    scenario.wait_for(lambda: sim_time(scenario, ns) >= start + 1.0 + seconds, 600, f"{seconds} s of sim time")
+    samples = base(scenario, settled_at, ns)
     assert len(samples) > 10
     return samples[0][0], samples
 
@@ -137,27 +136,31 @@ def test_talos_with_its_frames_merged_stands_half_sitting(tmp_path: Path, zenoh_
 
 @pytest.mark.slow
 def test_a_robot_without_ros2_control_runs_on_the_generated_files(tmp_path: Path, zenoh_port: int) -> None:
-    """Our humanoid with its <ros2_control> block cut out: the launch generates one and a controllers file,
-    and what runs (the hardware's interfaces, the controllers loaded) is what was written."""
+    """Our humanoid with its <ros2_control> block cut out, as robot 'bare' (no config/ file of its own): the
+    launch generates a block and a controllers file, and what runs (the hardware's interfaces, the controllers
+    loaded) is what was written."""
     root = Path(__file__).resolve().parents[2]
     text = (root / "robots" / "humanoid.urdf").read_text()
     bare = text[:text.index("<ros2_control")] + text[text.index("</ros2_control>") + len("</ros2_control>"):]
     urdf = tmp_path / "bare_humanoid.urdf"
     urdf.write_text(bare)
-    scenario = launch(tmp_path, zenoh_port, f"robot_file:={urdf}")
+    scenario = launch(tmp_path, zenoh_port, "robot:=bare", f"robot_file:={urdf}")
     try:
-        scenario.connect("sim/model_states", "humanoid/joint_states")
-        height, samples = stands(scenario, 3.0)
+        scenario.connect("sim/model_states", "bare/joint_states")
+        height, samples = stands(scenario, 3.0, "bare")
         assert max(t for _, t in samples) < 5.0
         (written,) = list((tmp_path / "cache" / "zenroid" / "robots").glob("*/*_controllers.yaml"))
+        assert f"written to {written.parent}" in scenario.output()
         config = yaml.safe_load(written.read_text())
         manager = config["controller_manager"]["ros__parameters"]
-        # every controller written is loaded (the sensor broadcasters too: the humanoid declares its sensors,
-        # which sensors:=false leaves out, so they do not activate)
-        assert set(active(scenario)) == {n for n, v in manager.items() if isinstance(v, dict)}
-        assert {n for n, s in active(scenario).items() if s == "active"} >= {"joint_state_broadcaster",
-                                                                             "joint_trajectory_controller"}
-        info = call(scenario.session, "humanoid/hardware/info", {}, timeout=2.0)
+        # the controller manager runs the file written (the sensor broadcasters in it too: the humanoid declares
+        # its sensors, which sensors:=false leaves out of the simulation, so those do not activate)
+        (line,) = [x for x in scenario.output().splitlines() if "controllers in config:" in x]
+        in_config = yaml.safe_load(line.split("controllers in config:")[1].strip())
+        assert set(in_config) == {n for n, v in manager.items() if isinstance(v, dict)}
+        loaded = active(scenario, "bare")
+        assert loaded["joint_state_broadcaster"] == loaded["joint_trajectory_controller"] == "active"
+        info = call(scenario.session, "bare/hardware/info", {}, timeout=2.0)
         block = (written.parent / "humanoid.ros2_control.xml").read_text()
         for joint in info["joints"]:
             assert f'<joint name="{joint["name"]}">' in block
@@ -165,6 +168,5 @@ def test_a_robot_without_ros2_control_runs_on_the_generated_files(tmp_path: Path
             assert joint["state_interfaces"] == ["position", "velocity"]
         jtc = config["joint_trajectory_controller"]["ros__parameters"]["joints"]
         assert jtc == [j["name"] for j in info["joints"]]
-        assert f"written to {written.parent}" in scenario.output()
     finally:
         scenario.close()
