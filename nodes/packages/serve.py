@@ -101,6 +101,8 @@ def spawn_entity(args: list[str], ros: RosArgs) -> list[str]:
         _take(args, (flag,), valued=False)
     if _take(args, ("-stdin",), valued=False):
         raise ServeError("-stdin is not served: use -file or -topic")
+    if "-robot_namespace" not in args:
+        args += ["-robot_namespace", _namespace(ros) or "/"]  # gazebo_ros2_control's: the node's, else the root
     topics = _take(args, ("-topic",))
     for topic in topics:
         args += ["-topic", topic if (topic or "").startswith("/") or not _namespace(ros)
@@ -125,7 +127,7 @@ def gz_create(args: list[str], ros: RosArgs) -> list[str]:
         raise ServeError("-param is not served: use -topic robot_description")
     for topic in _take(args, ("-topic", "--topic")):
         out += ["-topic", topic or ""]
-    return [*out, *args]
+    return [*out, *args, "-robot_namespace", _namespace(ros) or "/"]
 
 
 def xacro(args: list[str], ros: RosArgs) -> list[str]:

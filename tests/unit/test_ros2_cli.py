@@ -73,15 +73,16 @@ def test_served_executables_map_ros_spellings(tmp_path: Path, monkeypatch: pytes
     _, runs = serve.command("gazebo_ros", "spawn_entity.py",
                             ["-entity", "cart", "-topic", "robot_description", "-x", "1", "-gazebo_namespace", "/g",
                              "-spawn_service_timeout", "5", "-package_to_model", "-unpause"])
-    assert runs == [["spawn", "-entity", "cart", "-x", "1", "-unpause", "-timeout", "5", "-topic", "robot_description"]]
+    assert runs == [["spawn", "-entity", "cart", "-x", "1", "-unpause", "-timeout", "5", "-robot_namespace", "/",
+                     "-topic", "robot_description"]]
     models = tmp_path / "models" / "table"
     models.mkdir(parents=True)
     monkeypatch.setenv("GAZEBO_MODEL_PATH", str(tmp_path / "models"))
     _, runs = serve.command("gazebo_ros", "spawn_entity.py", ["-entity", "t", "-database", "table"])
-    assert runs == [["spawn", "-entity", "t", "-file", str(models / "model.sdf")]]
+    assert runs == [["spawn", "-entity", "t", "-file", str(models / "model.sdf"), "-robot_namespace", "/"]]
     _, runs = serve.command("ros_gz_sim", "create", ["-name", "cart", "-topic", "robot_description", "-z", "0.5",
                                                      "-world", "empty"])
-    assert runs == [["spawn", "-entity", "cart", "-topic", "robot_description", "-z", "0.5"]]
+    assert runs == [["spawn", "-entity", "cart", "-topic", "robot_description", "-z", "0.5", "-robot_namespace", "/"]]
     _, runs = serve.command("robot_state_publisher", "robot_state_publisher",
                             ["--ros-args", "-p", "robot_description:=<robot/>", "-r", "__ns:=/r"])
     assert runs == [["--ns", "r", "--param", "robot_description:=<robot/>"]]
