@@ -3,7 +3,8 @@
 A package's own executables are, first match wins: its ``scripts/`` files, the files in ``<prefix>/lib/<pkg>/``
 (where colcon installs them), and the ``console_scripts`` of its ``setup.py``/``setup.cfg`` that point at a
 module in the package's source (no build step: the module is imported from the source folder). Then the
-executables of the packages the zenroid stack serves (``nodes/packages/stack.py``), each one of our nodes or tools.
+executables of the packages the zenroid stack serves (``nodes/packages/stack.py``), each one of our nodes or tools;
+for those packages ours come first.
 """
 
 from __future__ import annotations
@@ -156,7 +157,10 @@ def executables(package: str) -> dict[str, Executable]:
               for name, item in stack.entries(package).items()}
     if known is None and not served:
         find_package(package)  # raises PackageNotFoundError with the paths searched
-    return {**served, **(_own(known) if known is not None else {})}
+    own = _own(known) if known is not None else {}
+    # a package zenroid serves runs ours even where ROS's is installed too (a sourced ROS 2 on
+    # AMENT_PREFIX_PATH): its scripts would start ROS's own stack, which is not there to talk to
+    return {**own, **served} if served else own
 
 
 def find_executable(package: str, name: str) -> Executable:
