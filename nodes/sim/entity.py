@@ -10,7 +10,7 @@ import numpy as np
 
 from nodes.core import names
 from nodes.meshes import MeshError
-from nodes.meshes.convert import collision_policy
+from nodes.meshes.convert import cache_dir, collision_policy
 from nodes.meshes.urdf import base_path, prepare_urdf
 from nodes.sim.model import Model
 from nodes.sim.pose import Pose, SpawnError
@@ -76,6 +76,7 @@ class Entity(Model):
             raise SpawnError("; ".join(problems[:5]))
         self.pose = spec.pose.validated()
         self.mesh_warnings: list[str] = []     # visual meshes left out (missing files), for the log
+        self.mesh_note = ""                    # how many meshes were converted, how many from the cache
         self.skeleton = self._load_skeleton(spec, self.info)
         self.skeleton.setName(spec.name)
         self.floating = not spec.fixed and isinstance(self.skeleton.getRootJoint(), dart.dynamics.FreeJoint)
@@ -114,6 +115,9 @@ class Entity(Model):
         except MeshError as exc:
             raise SpawnError(str(exc)) from None
         self.mesh_warnings = prepared.warnings
+        if prepared.meshes:
+            self.mesh_note = (f"{prepared.meshes} mesh(es) checked and converted, {prepared.cached} from the "
+                              f"mesh cache {cache_dir()} (collision_mesh {collision_policy()})")
         return prepared.xml
 
     def _place(self, pose: Pose) -> None:

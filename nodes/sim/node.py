@@ -182,6 +182,8 @@ class SimulatorNode(Node):
             self.logger.warn(f"{entity.name!r}: {warning}")
         for warning in entity.mesh_warnings:
             self.logger.warn(warning)
+        if entity.mesh_note:
+            self.logger.info(f"{entity.name!r}: {entity.mesh_note}")
         try:
             self.robots[entity.namespace] = RobotLink(self, self.sim, self.sim.hardware[entity.namespace],
                                                       self.command_timeout)

@@ -243,3 +243,65 @@ def test_the_renderer_leaves_out_a_shape_it_cannot_draw_and_draws_the_rest(proce
         raise
     finally:
         node.destroy()
+
+
+BOT = """<robot name="mesh_bot">
+  <link name="base">
+    <inertial><mass value="50"/><inertia ixx="10" iyy="10" izz="10" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><geometry><mesh filename="package://mesh_bot_description/meshes/body.obj"/></geometry></visual>
+    <collision><geometry><mesh filename="package://mesh_bot_description/meshes/body.stl"/></geometry></collision>
+  </link>
+  <link name="head">
+    <inertial><mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><geometry><mesh filename="package://mesh_bot_description/meshes/head.dae" scale="0.5 0.5 0.5"/>
+    </geometry></visual>
+  </link>
+  <joint name="neck" type="fixed"><parent link="base"/><child link="head"/><origin xyz="0 0 2.5"/></joint>
+</robot>"""
+
+
+def test_a_package_robot_with_stl_dae_and_obj_meshes_is_seen_in_colour_and_cached(processes, router, tmp_path):
+    """A description package found through ROS_PACKAGE_PATH, its URDF sent over the wire with package://
+    meshes in three formats: spawned, seen by the camera in the OBJ's MTL colour; a second simulator takes
+    its converted meshes from the cache."""
+    package = tmp_path / "pkgs" / "mesh_bot_description"
+    (package / "package.xml").parent.mkdir(parents=True)
+    (package / "package.xml").write_text("<package format='3'><name>mesh_bot_description</name><version>1.0.0"
+                                         "</version><description>x</description><maintainer email='a@b.c'>a"
+                                         "</maintainer><license>MIT</license></package>")
+    M.obj(package / "meshes" / "body.obj", M.CUBE_VERTICES * [1, 2, 4], rgb=PAINT)
+    M.binary_stl(package / "meshes" / "body.stl", size=(1, 2, 4))
+    M.dae(package / "meshes" / "head.dae", M.CUBE_VERTICES * 1000, unit=0.001, up="Y_UP")
+    cache = tmp_path / "cache"
+    env = {"ROS_PACKAGE_PATH": str(tmp_path / "pkgs"), "ZENROID_MESH_CACHE": str(cache)}
+    node = Node("mesh_bot_test", connect=[router])
+    try:
+        for run in range(2):
+            sim = processes.start("-m", "nodes.sim", "--params-file", str(ROOT / "config" / "sim.yaml"),
+                                  "--param", "world:=empty.world", "--param", "mode:=lockstep",
+                                  "--param", "paused:=true", "--param",
+                                  "entities:=[{name: humanoid, file: humanoid, z: 0.93}]", name=f"sim{run}", env=env)
+            wait_ready(node, processes, sim)
+            camera = call(node, GetEntityState, "/sim/get_entity_state",
+                          GetEntityState.Request(name="humanoid::camera_link")).state.pose.position.x
+            reply = call(node, SpawnEntity, "/sim/spawn_entity", msgs.from_dict(SpawnEntity.Request, {
+                "name": "mesh_bot", "xml": BOT, "robot_namespace": "mesh_bot",
+                "initial_pose": {"position": {"x": camera + 2.5, "y": 0.0, "z": 2.01}}}), timeout=60)
+            assert reply.success, reply.status_message + processes.output(sim)[-2000:]
+            expected = "3 mesh(es) checked and converted, " + ("0" if run == 0 else "3") + " from the mesh cache"
+            wait_until(lambda s=sim, e=expected: e in processes.output(s), timeout=10, message=expected)
+            if run == 0:
+                renderer = processes.start("-m", "nodes.render", name="renderer", env=env)
+                images = Images(node)
+                wait_until(lambda r=renderer: "sensors humanoid::camera" in processes.output(r), timeout=60,
+                           message="the renderer's scene with the camera")
+                step(node, 300)
+                depth, pixel = centre(images.after(0.2))
+                assert depth == pytest.approx(2.0, abs=0.05)
+                assert pixel / pixel.sum() == pytest.approx(np.array(PAINT) / sum(PAINT), abs=0.03), pixel
+                renderer.terminate()
+                renderer.wait(timeout=30)
+            sim.terminate()
+            sim.wait(timeout=30)
+    finally:
+        node.destroy()
