@@ -103,6 +103,18 @@ class MeshBudget:
                             f"{MAX_ROBOT_TRIANGLES} per robot or model (reached at {mesh.path})")
 
 
+def preload() -> threading.Thread:
+    """Import the readers of text meshes and hulls (trimesh, scipy: seconds on a loaded machine) on a thread
+    of their own, so that the first mesh a request brings does not stall the caller for the import."""
+    def run() -> None:
+        import scipy.spatial  # noqa: F401, PLC0415
+        import trimesh  # noqa: F401, PLC0415
+
+    thread = threading.Thread(target=run, name="mesh-preload", daemon=True)
+    thread.start()
+    return thread
+
+
 def probe(path: Path) -> tuple[str, int, int]:
     """``(format, bytes, triangles)`` of a mesh file from its size and what it declares, reading at most its
     header (binary STL) or its bytes (text formats, under ``MAX_TEXT_MESH_BYTES``); MeshError over a cap.

@@ -21,6 +21,7 @@ from nodes.core.params import ParameterError, load_params_file
 from nodes.core.session import max_payload_bytes
 from nodes.meshes import MeshError
 from nodes.meshes.convert import set_collision_policy
+from nodes.meshes.load import preload as preload_mesh_readers
 from nodes.sim.config import DEFAULT_CONFIG, StartupEntity, parse_entities, parse_gains
 from nodes.sim.entity import Entity, EntitySpec, Pose, SpawnError
 from nodes.sim.entity_services import EntityServices
@@ -141,6 +142,7 @@ class SimulatorNode(Node):
                          f"{list(self.world.gravity)}, ground {'on' if self.world.has_ground else 'off'}, "
                          f"detector {detector}" + (f", world {self.world_spec.name!r}" if self.world_spec else "")
                          + (", paused" if self.paused else ""))
+        preload_mesh_readers()   # the first mesh a spawn brings must not stall the physics for an import
 
     def _check_startup_names(self, world_file: str) -> None:
         """An entity to spawn at start named like a model the world already has could never be spawned: the
