@@ -90,6 +90,11 @@ def _evaluate(kind: str, words: list[str], ctx: SubstitutionContext, source: Sou
     raise LaunchError(f"unknown substitution '$({kind})' (known: {', '.join(KINDS + ROS_KINDS)})", source)
 
 
+class RobotFileError(LaunchError):
+    """The launch's robot cannot run (its file, xacro, meshes, inertias): the launch ends at once with status 1,
+    as a robot that fails to spawn would end it, instead of the usage status 2."""
+
+
 def _robot_setup(kind: str, words: list[str], source: Source) -> str:
     """A robot's controllers: the file (written when derived, said on the log) or its sensor broadcasters.
     A robot that cannot run (xacro error, a mesh resolving nowhere, ...) fails the launch here, named."""
@@ -97,8 +102,8 @@ def _robot_setup(kind: str, words: list[str], source: Source) -> str:
 
     import yaml
 
+    from nodes.share.controllers import broadcasters
     from nodes.sim.robot_files import ConfigError, controllers_for
-    from nodes.urdf.control_setup import broadcasters
 
     if kind == "robot_controllers":
         if len(words) != 2:
@@ -106,7 +111,7 @@ def _robot_setup(kind: str, words: list[str], source: Source) -> str:
         try:
             path, generated = controllers_for(*words)
         except ConfigError as exc:
-            raise LaunchError(f"robot {words[1]}: {exc}", source) from None
+            raise RobotFileError(f"robot {words[1]}: {exc}", source) from None
         if generated:
             print(f"[launch] [INFO] {generated}", file=sys.stderr, flush=True)
         return str(path)

@@ -14,6 +14,7 @@ from pathlib import Path
 import yaml
 
 from launch import interrupts
+from launch._yaml_substitutions import RobotFileError
 from launch.code_errors import LaunchCodeError
 from launch.description import LaunchDeprecationWarning
 from launch.formats import load_description
@@ -177,7 +178,7 @@ def load_plan(args: argparse.Namespace) -> tuple[Path, LaunchPlan | None]:
             return path, None
         with _deprecations_logged():
             return path, resolve(path, values)
-    except LaunchCodeError:
+    except (LaunchCodeError, RobotFileError):
         raise
     except LaunchError as exc:
         raise _usage_error(str(exc)) from None
@@ -316,6 +317,9 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         print(f"launch: error: {exc}", file=sys.stderr)
         return 2
+    except RobotFileError as exc:
+        print(f"launch: error: {exc}", file=sys.stderr)
+        return 1
     except LaunchCodeError as exc:   # the launch file's own code raised: its traceback, then file:line
         print(exc.details, end="", file=sys.stderr)
         print(f"launch: error: {exc}", file=sys.stderr)

@@ -1,17 +1,18 @@
 """Getting a robot's URDF text: from a file (xacro expanded) or a latched ``robot_description`` key.
 
-No DART here: ``zenroid spawn`` uses this too and must start quickly.
+No DART here, and Zenoh only when a description is fetched: ``zenroid spawn`` and the launcher (checking the
+robot before any process starts) use this too and must start quickly.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import msgs
-from msgs.std_msgs import String
-from nodes.core import Node
-from nodes.core.endpoints import ServiceError, call_raw
 from nodes.share import robot_file
+
+if TYPE_CHECKING:
+    from nodes.core import Node
 
 
 class ConfigError(ValueError):
@@ -53,6 +54,10 @@ def read_model_xml(path: Path) -> str:
 
 def fetch_robot_description(node: Node, key: str, timeout: float = 2.0) -> str:
     """The URDF from a latched ``robot_description`` (a queryable answering std_msgs/String)."""
+    import msgs
+    from msgs.std_msgs import String
+    from nodes.core.endpoints import ServiceError, call_raw
+
     resolved = node.resolve(key)
     data = call_raw(node.session, resolved, b"", timeout)
     try:
@@ -96,7 +101,7 @@ def _fits(config_file: Path, model) -> bool:
     """Whether a controllers file only names joints and sensors this robot has (a variant of the robot)."""
     import yaml
 
-    from nodes.urdf.control_setup import broadcasters
+    from nodes.share.controllers import broadcasters
 
     try:
         config = yaml.safe_load(config_file.read_text()) or {}
@@ -118,11 +123,13 @@ def controllers_for(robot: str, file: str) -> tuple[Path, str | None]:
     it fits the file, else one derived from the URDF (its <ros2_control> block, or the block generated for
     it) and written, with the URDF and the block, to the user's cache. Returns the file and, when something
     was generated, the line to log. Raises ConfigError (file and reason) for a robot that cannot run."""
+    path = resolve_robot_file(file)
+    shipped = shipped_controllers(robot)
+    if shipped is not None and path == robot_file(robot):
+        return shipped, None   # a robot of robots/ with its own file: checked by the project's tests
     from nodes.urdf.control_setup import cache_directory, write_setup
 
-    path = resolve_robot_file(file)
     model, xml = checked_robot(path)
-    shipped = shipped_controllers(robot)
     if shipped is not None and _fits(shipped, model):
         return shipped, None
     written = write_setup(model, xml, cache_directory(xml))

@@ -23,6 +23,7 @@ from xml.sax.saxutils import quoteattr
 
 import yaml
 
+from nodes.share.controllers import BROADCASTER_TYPES
 from nodes.urdf.model import RobotModel
 from nodes.urdf.sensors import FORCE_TORQUE_INTERFACES, IMU_INTERFACES
 
@@ -30,8 +31,6 @@ HARDWARE_PLUGIN = "gazebo_ros2_control/GazeboSystem"
 UPDATE_RATE = 1000
 JOINT_STATE_BROADCASTER = "joint_state_broadcaster"
 TRAJECTORY_CONTROLLER = "joint_trajectory_controller"
-BROADCASTER_TYPES = {"imu": "imu_sensor_broadcaster/IMUSensorBroadcaster",
-                     "force_torque": "force_torque_sensor_broadcaster/ForceTorqueSensorBroadcaster"}
 # limb -> joint name patterns (fnmatch, lower case); the first limb matching a joint takes it
 LIMB_PATTERNS: dict[str, tuple[str, ...]] = {
     "left_leg": ("left_*hip*", "left_*knee*", "left_*ankle*", "l_*hip*", "l_*knee*", "l_*ankle*", "leg_left_*"),
@@ -153,13 +152,6 @@ def controllers_config(model: RobotModel, per_limb: bool = False) -> dict:
         manager[name] = {"type": BROADCASTER_TYPES[sensor.type]}
         config[name] = {"ros__parameters": {"sensor_name": sensor.name, "frame_id": sensor.link}}
     return config
-
-
-def broadcasters(config: dict) -> list[str]:
-    """The sensor broadcasters of a controllers file (what the launch spawns after joint_state_broadcaster)."""
-    manager = (config.get("controller_manager") or {}).get("ros__parameters") or {}
-    return [name for name, value in manager.items()
-            if isinstance(value, dict) and value.get("type") in BROADCASTER_TYPES.values()]
 
 
 @dataclass(frozen=True)

@@ -170,3 +170,40 @@ def test_a_robot_without_ros2_control_runs_on_the_generated_files(tmp_path: Path
         assert jtc == [j["name"] for j in info["joints"]]
     finally:
         scenario.close()
+
+
+LINK = ('<link name="base"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" '
+        'iyz="0"/></inertial>{shape}</link>')
+
+
+@pytest.mark.parametrize("name, text, reason", [
+    ("broken.urdf.xacro",
+     '<robot xmlns:xacro="http://www.ros.org/wiki/xacro" name="r"><xacro:undefined_macro/></robot>',
+     "xacro failed on {file}"),
+    ("nowhere.urdf",
+     '<robot name="r">' + LINK.format(shape='<collision><geometry><mesh filename="package://nowhere_pkg/a.stl"/>'
+                                            '</geometry></collision>') + "</robot>",
+     "package 'nowhere_pkg' not found (searched: "),
+    ("escape.urdf",
+     '<robot name="r">' + LINK.format(shape='<collision><geometry><mesh filename="../../../../etc/passwd"/>'
+                                            '</geometry></collision>') + "</robot>",
+     "outside its package root"),
+    ("massless.urdf",
+     '<robot name="r">' + LINK.format(shape="") + '<link name="arm"/><joint name="j" type="revolute">'
+     '<parent link="base"/><child link="arm"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>',
+     "link 'arm' is moved by revolute joint 'j' but has no <inertial>"),
+])
+def test_a_bad_robot_ends_the_launch_at_once_naming_file_and_reason(tmp_path: Path, zenoh_port: int, name: str,
+                                                                     text: str, reason: str) -> None:
+    import subprocess
+    import sys
+
+    robot = tmp_path / "pkg" / "urdf" / name
+    robot.parent.mkdir(parents=True)
+    robot.write_text(text)
+    root = Path(__file__).resolve().parents[2]
+    done = subprocess.run([sys.executable, "-m", "launch", "humanoid.yaml", f"robot_file:={robot}", "gui:=false",
+                           f"zenoh_port:={zenoh_port}"], cwd=root, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert str(robot) in done.stderr and reason.format(file=robot) in done.stderr, done.stderr
+    assert "started '" not in done.stdout + done.stderr     # no process was started

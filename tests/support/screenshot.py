@@ -1,6 +1,7 @@
 """Screenshot of the served web viewer in headless Chromium (regenerates ``docs/viz.png``).
 
-``python -m tests.support.screenshot [--out docs/viz.png] [--settle 6] [--render 15]`` runs a router, the state
+``python -m tests.support.screenshot [--out docs/viz.png] [--settle 6] [--render 15]
+[--source humanoid --launch-arg robot:=g1 --viz-param robots:=[g1]]`` runs a router, the state
 publisher, the viz feeder and ``python -m nodes.viz --serve`` on free loopback ports, lets the robot move,
 then loads the viewer page in headless Chromium and saves the picture. Chromium's ``--screenshot`` fires
 on the page's load event, before the WebAssembly viewer has drawn anything; so the page we load wraps the
@@ -53,7 +54,7 @@ def delayed_page_server(viewer_url: str, render_seconds: float) -> http.server.T
 
 
 def take(out: Path, settle: float, render: float, size: str = "1400,800", source: str = "feeder",
-         viz_params: tuple[str, ...] = ()) -> int:
+         viz_params: tuple[str, ...] = (), launch_args: tuple[str, ...] = ()) -> int:
     browser = find_browser()
     if browser is None:
         print("no Chromium found (Debian: apt-get install chromium)", file=sys.stderr)
@@ -72,7 +73,8 @@ def take(out: Path, settle: float, render: float, size: str = "1400,800", source
         if source == "humanoid":  # the real main job: DART, controller manager, joint commander
             router.close()  # the launcher hosts its own router on the port
             env.pop("ZENOH_CONNECT")
-            launch = start("launch", "humanoid.yaml", "gui:=false", "mode:=realtime", f"zenoh_port:={zenoh_port}")
+            launch = start("launch", "humanoid.yaml", "gui:=false", "mode:=realtime", f"zenoh_port:={zenoh_port}",
+                           *launch_args)
             threading.Thread(target=lambda: launch.stdout.read(), daemon=True).start()
             env["ZENOH_CONNECT"] = loopback_endpoint(zenoh_port)
             time.sleep(8.0)
@@ -127,8 +129,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="feeder: state publisher + viz feeder; humanoid: launch/humanoid.yaml (DART)")
     parser.add_argument("--viz-param", action="append", default=[], metavar="NAME:=VALUE",
                         help="a parameter of the viewer node (repeatable), e.g. plots:=[camera] for the camera tab")
+    parser.add_argument("--launch-arg", action="append", default=[], metavar="NAME:=VALUE",
+                        help="an argument of launch/humanoid.yaml with --source humanoid (repeatable), e.g. robot:=g1 "
+                             "(then --viz-param robots:=[g1])")
     args = parser.parse_args(argv)
-    return take(args.out, args.settle, args.render, source=args.source, viz_params=tuple(args.viz_param))
+    return take(args.out, args.settle, args.render, source=args.source, viz_params=tuple(args.viz_param),
+                launch_args=tuple(args.launch_arg))
 
 
 if __name__ == "__main__":
