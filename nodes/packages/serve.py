@@ -130,6 +130,38 @@ def gz_create(args: list[str], ros: RosArgs) -> list[str]:
     return [*out, *args, "-robot_namespace", _namespace(ros) or "/"]
 
 
+def rviz2(args: list[str], ros: RosArgs) -> list[str]:
+    """rviz2: ``-d FILE.rviz`` read for what maps onto our viewer (printed once, with what does not);
+    ``-f FRAME`` is the fixed frame; the splash screen and Ogre options go."""
+    args = list(args)
+    configs = _take(args, ("-d", "--display-config"))
+    frames = _take(args, ("-f", "--fixed-frame"))
+    _take(args, ("-s", "--splash-screen", "-l", "--ogre-log", "--opengl"))
+    for flag in ("--fullscreen", "--disable-anti-aliasing", "--no-stereo"):
+        _take(args, (flag,), valued=False)
+    from nodes.viz.rviz_config import RvizConfigError, read_rviz  # the viewer package loads Rerun: rviz2 only
+
+    out: list[str] = []
+    mapping = None
+    if configs:
+        try:
+            mapping = read_rviz(configs[-1] or "")
+        except RvizConfigError as exc:
+            print(f"rviz2: {exc}; opening the default view", file=sys.stderr, flush=True)
+    if mapping is not None:
+        if frames:
+            mapping.fixed_frame = frames[-1]
+        print(f"rviz2: {configs[-1]} shown: {', '.join(mapping.mapped) or 'nothing'}", flush=True)
+        if mapping.not_mapped:
+            print(f"rviz2: not shown by our viewer: {', '.join(mapping.not_mapped)}", flush=True)
+        for param in mapping.viewer_params():
+            out += ["--param", param]
+    elif frames:
+        others = ", ".join(f for f in ("world", "map", "odom") if f != frames[-1])
+        out += ["--param", f"world_frames:=[{frames[-1]}, {others}]"]
+    return [*out, *args]
+
+
 def xacro(args: list[str], ros: RosArgs) -> list[str]:
     args = [a for a in args if a not in ("--inorder", "-i", "--legacy")]
     return ["xacro", *args]
@@ -141,6 +173,7 @@ TRANSLATORS: dict[tuple[str, str], Translator] = {
     ("gazebo_ros", "spawn_entity.py"): spawn_entity,
     ("ros_gz_sim", "create"): gz_create,
     ("xacro", "xacro"): xacro,
+    ("rviz2", "rviz2"): rviz2,
 }
 
 
@@ -150,12 +183,11 @@ def command(package: str, executable: str, argv: list[str]) -> tuple[str, list[l
     if entry is None:
         raise ServeError(f"zenroid does not serve '{package} {executable}'")
     rest, ros = split(argv)
-    if entry.ros_node:
-        return entry.module, [[*entry.module_args, *rest, *ros.node_options()]]
     if (package, executable) == ("controller_manager", "unspawner"):
         return entry.module, unspawner(rest, ros)
     translate = TRANSLATORS.get((package, executable))
-    return entry.module, [translate(rest, ros) if translate else [*entry.module_args, *rest]]
+    args = translate(rest, ros) if translate else [*entry.module_args, *rest]
+    return entry.module, [[*args, *ros.node_options()] if entry.ros_node else args]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -199,3 +199,17 @@ def test_ros2_control_node_with_mock_hardware(processes, zenoh_port, session, tm
     wait_until(lambda: session.put("forward_controller/commands", payload) or
                expect(states.positions()["rail"], velocities()["rail"]),
                timeout=30, interval=0.1, message=f"the {command} command mirrored into joint_states")
+
+
+def test_rviz2_opens_our_viewer_with_the_config_mapped(processes, zenoh_port, tmp_path) -> None:
+    config = tmp_path / "view.rviz"
+    config.write_text("Visualization Manager:\n  Displays:\n    - Class: rviz_default_plugins/RobotModel\n"
+                      "      Name: RobotModel\n      Description Topic: {Value: /robot_description}\n"
+                      "    - Class: rviz_default_plugins/Path\n      Name: Path\n      Topic: {Value: /plan}\n"
+                      "  Global Options: {Fixed Frame: map}\n")
+    proc = serve(processes, zenoh_port, "rviz2", "rviz2", "-d", str(config), "--ros-args", "-r", "__node:=rviz2")
+    wait_until(lambda: "Rerun web viewer:" in processes.output(proc), timeout=90, message="the viewer's URL")
+    out = processes.output(proc)
+    assert f"rviz2: {config} shown: fixed frame 'map', RobotModel (/robot_description)" in out
+    assert "rviz2: not shown by our viewer: Path (Path, /plan)" in out
+    assert proc.poll() is None, out

@@ -124,3 +124,72 @@ def test_ros2_run_a_served_executable_and_errors(tmp_path: Path) -> None:
     nopkg = _ros2("run", "your_package", "joint_commander.py")
     assert nopkg.returncode == 1 and "package 'your_package' not found" in nopkg.stderr
     assert "served by zenroid: " in nopkg.stderr
+
+
+RVIZ = """Panels:
+  - Class: rviz_common/Displays
+Visualization Manager:
+  Class: ""
+  Displays:
+    - Class: rviz_default_plugins/Grid
+      Enabled: true
+      Name: Grid
+    - Class: rviz_default_plugins/RobotModel
+      Description Source: Topic
+      Description Topic:
+        Value: /humanoid/robot_description
+      Enabled: true
+      Name: RobotModel
+    - Class: rviz_default_plugins/TF
+      Enabled: true
+      Name: TF
+    - Class: rviz_common/Group
+      Displays:
+        - Class: rviz_default_plugins/MarkerArray
+          Enabled: true
+          Name: Plan
+          Topic:
+            Value: /planned_path
+        - Class: rviz_default_plugins/Map
+          Enabled: true
+          Name: Map
+          Topic:
+            Value: /map
+      Enabled: true
+      Name: Planning
+    - Class: rviz_default_plugins/Image
+      Enabled: true
+      Name: Camera image
+      Topic:
+        Value: /camera/image_raw
+    - Class: rviz_default_plugins/Odometry
+      Enabled: false
+      Name: Odom
+  Global Options:
+    Fixed Frame: odom
+"""
+
+
+def test_rviz_config_maps_onto_the_viewer(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    from nodes.viz.rviz_config import RvizConfigError, read_rviz
+
+    config = tmp_path / "humanoid.rviz"
+    config.write_text(RVIZ)
+    mapping = read_rviz(config)
+    assert mapping.fixed_frame == "odom" and mapping.robots == ["humanoid"]
+    assert mapping.marker_topics == [("planned_path", "MarkerArray")]
+    assert mapping.not_mapped == ["Map (Map, /map)"]   # the disabled Odometry is not mentioned
+    assert mapping.viewer_params() == ["world_frames:=[odom, world, map]", "robots:=[humanoid]"]
+    _, runs = serve.command("rviz2", "rviz2", ["-d", str(config), "--ros-args", "-r", "__node:=rviz"])
+    assert runs == [["--param", "world_frames:=[odom, world, map]", "--param", "robots:=[humanoid]",
+                     "--name", "rviz"]]
+    printed = capsys.readouterr().out
+    assert "shown: fixed frame 'odom', Grid, RobotModel (/humanoid/robot_description), TF, Plan (/planned_path)" \
+        in printed
+    assert "not shown by our viewer: Map (Map, /map)" in printed
+    with pytest.raises(RvizConfigError, match="no 'Visualization Manager'"):
+        (tmp_path / "bad.rviz").write_text("a: 1\n")
+        read_rviz(tmp_path / "bad.rviz")
+    _, runs = serve.command("rviz2", "rviz2", ["-d", str(tmp_path / "missing.rviz"), "-f", "map"])
+    assert runs == [["--param", "world_frames:=[map, world, odom]"]]
+    assert "missing.rviz: cannot read it" in capsys.readouterr().err
