@@ -138,6 +138,16 @@ class ComposableNodeContainer(Node):
         super().__init__(name=name, namespace=namespace, package=package, executable=executable, **kwargs)
         self.composable_node_descriptions = list(composable_node_descriptions or [])
 
+    @classmethod
+    def parse(cls, entity: Any) -> ComposableNodeContainer:
+        from launch_ros.descriptions import ComposableNode
+
+        return cls(name=entity.sub("name"), namespace=entity.sub("namespace", optional=True) or "",
+                   package=entity.sub("pkg", optional=True) or "rclcpp_components",
+                   executable=entity.sub("exec", optional=True) or "component_container",
+                   composable_node_descriptions=[ComposableNode.parse(c) for c in entity.children_of("composable_node")],
+                   output=entity.sub("output", optional=True) or "screen", **entity.condition())
+
     def resolve(self, resolver: Any, scope: Any) -> None:
         resolver.add_ros_container(self, scope)
 
@@ -149,6 +159,14 @@ class LoadComposableNodes(LocatedAction):
         super().__init__(**kwargs)
         self.composable_node_descriptions = list(composable_node_descriptions)
         self.target_container = target_container
+
+    @classmethod
+    def parse(cls, entity: Any) -> LoadComposableNodes:
+        from launch_ros.descriptions import ComposableNode
+
+        return cls(target_container=entity.sub("target"),
+                   composable_node_descriptions=[ComposableNode.parse(c) for c in entity.children_of("composable_node")],
+                   **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
         target = self.target_container

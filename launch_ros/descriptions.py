@@ -21,3 +21,15 @@ class ComposableNode:
         self.remappings = list(remappings or [])
         self.extra_arguments = list(extra_arguments or [])
         self.condition = condition
+
+    @classmethod
+    def parse(cls, entity: Any) -> ComposableNode:
+        params: list[Any] = []
+        for param in entity.children_of("param"):
+            params.append(param.sub("from") if param.has("from") else {param.sub("name"): param.value("value")})
+        entity.children_of("extra_arg")   # in-process hand-off is how our container always runs its nodes
+        node = cls(package=entity.sub("pkg"), plugin=entity.sub("plugin"), name=entity.sub("name", optional=True),
+                   namespace=entity.sub("namespace", optional=True), parameters=params,
+                   remappings=[(r.sub("from"), r.sub("to")) for r in entity.children_of("remap")])
+        entity.check_used()
+        return node

@@ -331,3 +331,71 @@ def test_seed003_launch_runs(tmp_path: Path, zenoh_port: int) -> None:
         assert len(launch.node_pids("spawner")) == 1 and len(launch.node_pids("spawner_2")) == 1
     finally:
         launch.close()
+
+
+HEADER = "from launch import LaunchDescription\nfrom launch_ros.actions import Node\n"
+
+
+def _packages(root: Path, *pairs: tuple[str, str]) -> dict[str, str]:
+    for package, executable in pairs:
+        folder = root / package
+        (folder / "scripts").mkdir(parents=True, exist_ok=True)
+        (folder / "package.xml").write_text(f"<package format='3'><name>{package}</name><version>0.0.0</version>"
+                                            "<description>t</description><maintainer email='a@b.c'>a</maintainer>"
+                                            "<license>MIT</license></package>")
+        script = folder / "scripts" / executable
+        script.write_text(MOTOR_NODE)
+        script.chmod(0o755)
+    return {"ROS_PACKAGE_PATH": str(root)}
+
+
+@needs_seeds
+def test_seed002_snippets_as_on_ros(tmp_path: Path) -> None:
+    """Seed 002's Node snippets (wrapped in a launch file with their imports) and its use_sim fragment: names,
+    namespaces and remappings reach the command line as ROS passes them; parameter_files= and the missing
+    gazebo executable fail as on ROS."""
+    env = _packages(tmp_path / "src", ("my_package", "my_node"), ("planner", "planner_node"),
+                    ("motor_controller", "motor_node"), ("realsense2_camera", "realsense2_camera_node"))
+    snippets = SEEDS / "002/launch/snippets"
+
+    def wrapped(name: str) -> Path:
+        body = "\n".join("        " + line for line in (snippets / name).read_text().splitlines())
+        path = tmp_path / name.replace(".fragment.py", ".launch.py")
+        path.write_text(HEADER + "\ndef generate_launch_description():\n    return LaunchDescription([\n"
+                        + body + "\n    ])\n")
+        return path
+
+    done = launch_cli(str(wrapped("002_node_basic.fragment.py")), "--print", env=env)
+    assert done.returncode == 0, done.stderr
+    assert "__node:=my_node_instance" in done.stdout and "__ns:=/perception" in done.stdout
+    done = launch_cli(str(wrapped("002_node_remapping.fragment.py")), "--print", env=env)
+    assert done.returncode == 0, done.stderr
+    assert "/input/goal:=/navigation/goal" in done.stdout and "/output/path:=/control/path" in done.stdout
+    done = launch_cli(str(wrapped("002_node_parameters.fragment.py")), "--print", env=env)
+    assert done.returncode == 1 and "TypeError" in done.stderr and "parameter_files" in done.stderr, done.stderr
+    assert "002_node_parameters.launch.py:" in done.stderr
+
+    system = tmp_path / "system.launch.py"
+    system.write_text(HEADER + (SEEDS / "002/launch/002_system.fragment.launch.py").read_text())
+    done = launch_cli(str(system), "--print", env=env)
+    assert done.returncode == 0 and "realsense2_camera_node" in done.stdout and "gazebo_ros" not in done.stdout
+    done = launch_cli(str(system), "use_sim:=true", "--print", env=env)
+    assert done.returncode == 2 and "gazebo_ros" in done.stderr and "'gazebo'" in done.stderr, done.stderr
+
+
+def test_xml_container_and_load_composable_node(tmp_path: Path) -> None:
+    (tmp_path / "c.launch.xml").write_text("""<launch>
+  <node_container pkg="rclcpp_components" exec="component_container" name="box" namespace="">
+    <composable_node pkg="nodes.sim" plugin="nodes.sim.node::SimulatorNode" name="simulator">
+      <param name="mode" value="lockstep"/>
+    </composable_node>
+  </node_container>
+  <load_composable_node target="box">
+    <composable_node pkg="nodes.control" plugin="nodes.control.node::ControllerManagerNode" name="controller_manager"
+                     namespace="humanoid"><remap from="a" to="b"/></composable_node>
+  </load_composable_node>
+</launch>
+""")
+    done = launch_cli(str(tmp_path / "c.launch.xml"), "--print")
+    assert done.returncode == 0, done.stderr
+    assert "nodes.core.container" in done.stdout and "ControllerManagerNode" in done.stdout and "a:=b" in done.stdout
