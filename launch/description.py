@@ -18,7 +18,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 from launch.yaml_source import LaunchError, LocatedDict, LocatedList, Source, load_located
 
@@ -39,24 +39,16 @@ CONTAINER_KEYS = (
     "required", "output", "wait_for", "wait_timeout", "health_timeout", "exclusive_cpu", *CONDITION_KEYS,
 )
 COMPOSABLE_KEYS = ("pkg", "plugin", "name", "namespace", "param", "params", "params_file", "remap", "extra_arg")
-ACTION_KINDS = ("arg", "node", "node_container", "include", "group", "on_exit", "on_shutdown")
-ARG_KEYS = ("name", "default", "description", "choices")
-INCLUDE_KEYS = ("file", "args", *CONDITION_KEYS)
-GROUP_KEYS = ("namespace", "actions", *CONDITION_KEYS)
-ON_EXIT_KEYS = ("node", "log", "shutdown", *CONDITION_KEYS)
-ON_SHUTDOWN_KEYS = ("log", *CONDITION_KEYS)
-# action -> (allowed keys, the key it cannot do without, how the error says so)
-_ACTION_KEYS = {
-    "arg": (ARG_KEYS, "name", "a 'name'"),
-    "include": (INCLUDE_KEYS, "file", "a 'file'"),
-    "group": (GROUP_KEYS, "", ""),
-    "on_exit": (ON_EXIT_KEYS, "node", "the 'node' it watches"),
-    "on_shutdown": (ON_SHUTDOWN_KEYS, "", ""),
-}
 
 
 class LaunchDeprecationWarning(UserWarning):
     """An old spelling in a launch file: it still works; the launcher prints the warning with file:line."""
+
+
+# Our YAML format's action kinds: each class below owns its key (``KIND``), its parsing (``parse``) and what
+# it resolves to (``resolve``, using the resolver's services in ``launch.resolve``), so a new kind is one
+# class here; ROS's actions do the same in ``launch.actions`` / ``launch_ros.actions``.
+KINDS: dict[str, type[Action]] = {}
 
 
 @dataclass
@@ -67,6 +59,33 @@ class Action:
     condition_if: Any = None
     condition_unless: Any = None
 
+    KIND: ClassVar[str] = ""
+    KEYS: ClassVar[tuple[str, ...]] = ()
+    REQUIRED: ClassVar[tuple[str, str]] = ("", "")     # (key, how the error names it)
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if cls.__dict__.get("KIND"):
+            KINDS[cls.KIND] = cls
+
+    @classmethod
+    def parse(cls, body: LocatedDict, file: Path, source: Source) -> Action:
+        raise NotImplementedError
+
+    @classmethod
+    def checked(cls, body: LocatedDict, file: Path, source: Source) -> None:
+        """The keys every kind checks the same way: none unknown, the required one present."""
+        _check_keys(body, cls.KEYS, cls.KIND, file)
+        key, needs = cls.REQUIRED
+        if key and key not in body:
+            raise LaunchError(f"{cls.KIND} needs {needs}", source)
+
+    def resolve(self, resolver: Any, scope: Any) -> None:
+        raise NotImplementedError
+
+    def enabled(self, resolver: Any, scope: Any) -> bool:
+        return resolver.condition(self, scope)
+
 
 @dataclass
 class ArgDecl(Action):
@@ -75,6 +94,30 @@ class ArgDecl(Action):
     description: str = ""
     choices: list[str] | None = None
 
+    KIND: ClassVar[str] = "arg"
+    KEYS: ClassVar[tuple[str, ...]] = ("name", "default", "description", "choices")
+    REQUIRED: ClassVar[tuple[str, str]] = ("name", "a 'name'")
+
+    @classmethod
+    def parse(cls, body: LocatedDict, file: Path, source: Source) -> ArgDecl:
+        cls.checked(body, file, source)
+        at = lambda key: Source(file, body.line_of(key))  # noqa: E731 - tiny local helper
+        choices = body.get("choices")
+        if choices is not None:
+            if not isinstance(choices, list) or not choices:
+                raise LaunchError("arg 'choices' must be a non-empty list", at("choices"))
+            choices = [_scalar_text(c, "a choice", at("choices")) for c in choices]
+        return cls(source=source, name=_scalar_text(body["name"], "arg 'name'", at("name")),
+                   default=_scalar_text(body.get("default"), "arg 'default'", at("default"), allow_none=True),
+                   description=_scalar_text(body.get("description", ""), "arg 'description'", at("description")),
+                   choices=choices)
+
+    def enabled(self, resolver: Any, scope: Any) -> bool:
+        return True   # an argument is declared whatever the conditions around it
+
+    def resolve(self, resolver: Any, scope: Any) -> None:
+        resolver.declare(self, scope)
+
 
 @dataclass
 class NodeDecl(Action):
@@ -82,8 +125,17 @@ class NodeDecl(Action):
 
     fields: LocatedDict = field(default_factory=LocatedDict)
 
+    KIND: ClassVar[str] = "node"
+
     def line_source(self, key: str) -> Source:
         return Source(self.source.file, self.fields.line_of(key))
+
+    @classmethod
+    def parse(cls, body: LocatedDict, file: Path, source: Source) -> NodeDecl:
+        return _parse_node(body, file, source)
+
+    def resolve(self, resolver: Any, scope: Any) -> None:
+        resolver.add_node(self, scope)
 
 
 @dataclass
@@ -103,17 +155,63 @@ class ContainerDecl(NodeDecl):
 
     composables: list[ComposableDecl] = field(default_factory=list)
 
+    KIND: ClassVar[str] = "node_container"
+
+    @classmethod
+    def parse(cls, body: LocatedDict, file: Path, source: Source) -> ContainerDecl:
+        return _parse_container(body, file, source)
+
+    def resolve(self, resolver: Any, scope: Any) -> None:
+        resolver.add_container(self, scope)
+
 
 @dataclass
 class IncludeDecl(Action):
     file: str = ""
     args: LocatedDict | None = None
 
+    KIND: ClassVar[str] = "include"
+    KEYS: ClassVar[tuple[str, ...]] = ("file", "args", *CONDITION_KEYS)
+    REQUIRED: ClassVar[tuple[str, str]] = ("file", "a 'file'")
+
+    @classmethod
+    def parse(cls, body: LocatedDict, file: Path, source: Source) -> IncludeDecl:
+        cls.checked(body, file, source)
+        args = body.get("args")
+        if args is not None:
+            _require_mapping(args, "include 'args'", Source(file, body.line_of("args")))
+        return cls(source=source, file=_scalar_text(body["file"], "include 'file'", Source(file, body.line_of("file"))),
+                   args=args, **_conditions(body, file))
+
+    def resolve(self, resolver: Any, scope: Any) -> None:
+        resolver.include(self, scope)
+
 
 @dataclass
 class GroupDecl(Action):
     namespace: Any = None
     actions: list[Action] = field(default_factory=list)
+
+    KIND: ClassVar[str] = "group"
+    KEYS: ClassVar[tuple[str, ...]] = ("namespace", "actions", *CONDITION_KEYS)
+
+    @classmethod
+    def parse(cls, body: LocatedDict, file: Path, source: Source) -> GroupDecl:
+        cls.checked(body, file, source)
+        actions = body.get("actions")
+        if not isinstance(actions, LocatedList):
+            raise LaunchError("group needs 'actions': a list of actions", source)
+        namespace = _scalar_text(body.get("namespace"), "group 'namespace'", Source(file, body.line_of("namespace")),
+                                 allow_none=True)
+        return cls(source=source, namespace=namespace, actions=parse_actions(actions, file), **_conditions(body, file))
+
+    def resolve(self, resolver: Any, scope: Any) -> None:
+        # A group scopes its namespace, not its arguments (like ROS 2's GroupAction).
+        inner = scope.child(variables=scope.variables)
+        namespace = resolver.maybe_text(self.namespace, scope, self.source, "group 'namespace'")
+        if namespace:
+            resolver.push_namespace(inner, namespace, self.source)
+        resolver.walk(self.actions, inner)
 
 
 @dataclass
@@ -122,10 +220,40 @@ class OnExitDecl(Action):
     log: Any = None
     shutdown: Any = False
 
+    KIND: ClassVar[str] = "on_exit"
+    KEYS: ClassVar[tuple[str, ...]] = ("node", "log", "shutdown", *CONDITION_KEYS)
+    REQUIRED: ClassVar[tuple[str, str]] = ("node", "the 'node' it watches")
+
+    @classmethod
+    def parse(cls, body: LocatedDict, file: Path, source: Source) -> OnExitDecl:
+        cls.checked(body, file, source)
+        at = lambda key: Source(file, body.line_of(key))  # noqa: E731 - tiny local helper
+        return cls(source=source, node=_scalar_text(body["node"], "on_exit 'node'", at("node")),
+                   log=_scalar_text(body.get("log"), "'log'", at("log"), allow_none=True),
+                   shutdown=_scalar_text(body.get("shutdown", False), "'shutdown'", at("shutdown")),
+                   **_conditions(body, file))
+
+    def resolve(self, resolver: Any, scope: Any) -> None:
+        resolver.add_exit_handler(self, scope)
+
 
 @dataclass
 class OnShutdownDecl(Action):
     log: Any = None
+
+    KIND: ClassVar[str] = "on_shutdown"
+    KEYS: ClassVar[tuple[str, ...]] = ("log", *CONDITION_KEYS)
+
+    @classmethod
+    def parse(cls, body: LocatedDict, file: Path, source: Source) -> OnShutdownDecl:
+        cls.checked(body, file, source)
+        return cls(source=source, log=_scalar_text(body.get("log"), "'log'", Source(file, body.line_of("log")),
+                                                   allow_none=True), **_conditions(body, file))
+
+    def resolve(self, resolver: Any, scope: Any) -> None:
+        log = resolver.maybe_text(self.log, scope, self.source, "'log'")
+        if log:
+            resolver.plan.on_shutdown.append(log)
 
 
 @dataclass
@@ -298,51 +426,9 @@ def _parse_action(item: Any, file: Path, line: int) -> Action:
         raise LaunchError(f"each launch action must be a mapping with one key ({', '.join(ACTION_KINDS)})", source)
     (kind, body), = item.items()
     source = Source(file, item.line_of(kind))
-    if kind not in ACTION_KINDS:
+    if kind not in KINDS:
         raise LaunchError(f"unknown action '{kind}' (allowed: {', '.join(ACTION_KINDS)})", source)
-    body = _require_mapping(body, f"'{kind}'", source)
-    at = lambda key: Source(file, body.line_of(key))  # noqa: E731 - tiny local helper
-    if kind == "node":
-        return _parse_node(body, file, source)
-    if kind == "node_container":
-        return _parse_container(body, file, source)
-    allowed, required, needs = _ACTION_KEYS[kind]
-    _check_keys(body, allowed, kind, file)
-    if required and required not in body:
-        raise LaunchError(f"{kind} needs {needs}", source)
-    if kind == "arg":
-        choices = body.get("choices")
-        if choices is not None:
-            if not isinstance(choices, list) or not choices:
-                raise LaunchError("arg 'choices' must be a non-empty list", at("choices"))
-            choices = [_scalar_text(c, "a choice", at("choices")) for c in choices]
-        return ArgDecl(
-            source=source,
-            name=_scalar_text(body["name"], "arg 'name'", at("name")),
-            default=_scalar_text(body.get("default"), "arg 'default'", at("default"), allow_none=True),
-            description=_scalar_text(body.get("description", ""), "arg 'description'", at("description")),
-            choices=choices,
-        )
-    if kind == "include":
-        args = body.get("args")
-        if args is not None:
-            _require_mapping(args, "include 'args'", at("args"))
-        return IncludeDecl(source=source, file=_scalar_text(body["file"], "include 'file'", at("file")),
-                           args=args, **_conditions(body, file))
-    if kind == "group":
-        actions = body.get("actions")
-        if not isinstance(actions, LocatedList):
-            raise LaunchError("group needs 'actions': a list of actions", source)
-        namespace = _scalar_text(body.get("namespace"), "group 'namespace'", at("namespace"), allow_none=True)
-        return GroupDecl(source=source, namespace=namespace, actions=parse_actions(actions, file),
-                         **_conditions(body, file))
-    if kind == "on_exit":
-        return OnExitDecl(source=source, node=_scalar_text(body["node"], "on_exit 'node'", at("node")),
-                          log=_scalar_text(body.get("log"), "'log'", at("log"), allow_none=True),
-                          shutdown=_scalar_text(body.get("shutdown", False), "'shutdown'", at("shutdown")),
-                          **_conditions(body, file))
-    return OnShutdownDecl(source=source, log=_scalar_text(body.get("log"), "'log'", at("log"), allow_none=True),
-                          **_conditions(body, file))
+    return KINDS[kind].parse(_require_mapping(body, f"'{kind}'", source), file, source)
 
 
 def parse_actions(items: LocatedList, file: Path) -> list[Action]:
@@ -359,3 +445,6 @@ def parse_file(path: Path) -> LaunchDescription:
     if not isinstance(actions, LocatedList):
         raise LaunchError("'launch' must be a list of actions", Source(path, data.line_of("launch")))
     return LaunchDescription(file=path, actions=parse_actions(actions, path))
+
+
+ACTION_KINDS = tuple(KINDS)   # in the order the classes above are written

@@ -19,12 +19,10 @@ from launch.description import (
     ArgDecl,
     ComposableDecl,
     ContainerDecl,
-    GroupDecl,
     IncludeDecl,
     LaunchDescription,
     NodeDecl,
     OnExitDecl,
-    OnShutdownDecl,
 )
 from launch.plan import (
     CONTAINER_EXECUTABLES,
@@ -145,38 +143,22 @@ class _Resolver(RosResolution):
         self.walk(description.actions, scope)
 
     def walk(self, actions: list[Action], scope: _Scope) -> None:
+        """Each action resolves itself (``launch.description`` for our YAML's, ``launch.actions`` for ROS's)."""
         for action in actions:
-            if not isinstance(action, Action):   # a ROS launch action: it resolves itself
+            if not isinstance(action, Action):   # a ROS launch action
                 self.resolve_ros_action(action, scope)
-            elif isinstance(action, ArgDecl):
-                self.declare(action, scope)
-            elif not self.condition(action, scope):
-                continue
-            elif isinstance(action, ContainerDecl):
-                self.add_container(action, scope)
-            elif isinstance(action, NodeDecl):
-                self.add_node(action, scope)
-            elif isinstance(action, GroupDecl):
-                # A group scopes its namespace, not its arguments (like ROS 2's GroupAction).
-                inner = _Scope(scope.variables, join_namespace(scope.namespace, self.maybe_text(
-                    action.namespace, scope, action.source, "group 'namespace'")), scope.file)
-                check_namespace(inner.namespace, action.source)
-                self.walk(action.actions, inner)
-            elif isinstance(action, IncludeDecl):
-                self.include(action, scope)
-            elif isinstance(action, OnExitDecl):
-                handler = ExitHandler(
-                    node=self.text(action.node, scope, action.source, "on_exit 'node'"),
-                    log=self.maybe_text(action.log, scope, action.source, "'log'"),
-                    shutdown=parse_bool(self.text(action.shutdown, scope, action.source, "'shutdown'"),
-                                        "on_exit 'shutdown'", action.source),
-                    source=str(action.source),
-                )
-                self.pending_exit.append((handler, action.source))
-            elif isinstance(action, OnShutdownDecl):
-                log = self.maybe_text(action.log, scope, action.source, "'log'")
-                if log:
-                    self.plan.on_shutdown.append(log)
+            elif action.enabled(self, scope):
+                action.resolve(self, scope)
+
+    def add_exit_handler(self, action: OnExitDecl, scope: _Scope) -> None:
+        handler = ExitHandler(
+            node=self.text(action.node, scope, action.source, "on_exit 'node'"),
+            log=self.maybe_text(action.log, scope, action.source, "'log'"),
+            shutdown=parse_bool(self.text(action.shutdown, scope, action.source, "'shutdown'"),
+                                "on_exit 'shutdown'", action.source),
+            source=str(action.source),
+        )
+        self.pending_exit.append((handler, action.source))
 
     def maybe_text(self, value: Any, scope: _Scope, source: Source, what: str) -> str | None:
         return None if value is None else self.text(value, scope, source, what)
