@@ -69,6 +69,11 @@ class WorldError(ValueError):
     and the reason."""
 
 
+class _MissingMesh(WorldError):
+    """A mesh path inside its model's folder with no file there: an error for a collision, a note for a
+    visual (the link is drawn without it, as Gazebo does)."""
+
+
 @dataclass
 class ShapeSpec:
     """One ``<collision>`` or ``<visual>``: kind box / cylinder / sphere / plane / mesh, in metres."""
@@ -612,7 +617,10 @@ class _Reader:
             if child.tag == "collision":
                 link.collisions.append(self.shape(child, where, visual=False))
             elif child.tag == "visual":
-                link.visuals.append(self.shape(child, where, visual=True))
+                try:
+                    link.visuals.append(self.shape(child, where, visual=True))
+                except _MissingMesh as exc:
+                    self.note(f"visual {str(exc)}: drawn without it")
             elif child.tag not in _LINK_READ:
                 self.note(f"link/{child.tag}")
         return link
@@ -743,7 +751,7 @@ class _Reader:
         if not resolved.is_relative_to(folder):
             raise self.error(element, f"mesh {uri[:200]!r} leaves the model folder {folder}", where)
         if not resolved.is_file():
-            raise self.error(element, f"mesh {uri[:200]!r}: no file at {resolved}", where)
+            raise _MissingMesh(self.error(element, f"mesh {uri[:200]!r}: no file at {resolved}", where))
         size = resolved.stat().st_size
         if size > MAX_MESH_BYTES:
             raise self.error(element, f"mesh {uri[:200]!r} is {size} bytes, more than the limit of "

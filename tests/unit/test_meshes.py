@@ -184,3 +184,17 @@ def test_the_viewer_draws_a_mesh_visual_in_its_files_colours(tmp_path: Path) -> 
     assert np.ptp(np.asarray(part.vertex_positions.as_arrow_array().to_pylist()), axis=0) == pytest.approx([1, 1, 1])
     gone, reason = mesh_archetype(visuals[0], tmp_path / "elsewhere")
     assert gone is None and "does not exist" in reason
+
+
+def test_a_world_draws_a_link_without_its_missing_visual_mesh_but_refuses_a_missing_collision_mesh(tmp_path):
+    from nodes.sim.sdf import WorldError, parse_world
+
+    def world(part: str) -> str:
+        return (f"<sdf version='1.6'><world name='w'><model name='statue'><static>true</static><link name='l'>"
+                f"<{part} name='x'><geometry><mesh><uri>meshes/gone.stl</uri></mesh></geometry></{part}>"
+                "</link></model></world></sdf>")
+
+    spec = parse_world(world("visual"), tmp_path / "w.world")
+    assert spec.models[0].links[0].visuals == [] and "gone.stl" in spec.not_simulated_line()
+    with pytest.raises(WorldError, match=r"mesh 'meshes/gone.stl': no file at"):
+        parse_world(world("collision"), tmp_path / "w.world")
