@@ -4,13 +4,14 @@ endpoints (the classes ``rclpy.publisher`` & co. export)."""
 from __future__ import annotations
 
 import inspect
+import re
 import threading
 import time as _time
 from concurrent.futures import ThreadPoolExecutor
 from typing import TYPE_CHECKING, Any
 
 import msgs
-from nodes.core.endpoints import ServiceError, call_raw
+from nodes.core.endpoints import MAX_ARRAY_LENGTH, ServiceError, call_raw, decode_limits
 from rclpy.exceptions import not_implemented
 from rclpy.qos import QoSProfile
 from rclpy.task import Future
@@ -25,10 +26,26 @@ def ros_name(key: str) -> str:
 
 
 def check_message(msg: Any, msg_type: Any, where: str) -> bytes:
-    """``msg`` encoded, refused here (TypeError/ValueError naming the field) rather than by a receiver."""
+    """``msg`` encoded and checked as every receiver checks it: a message the codec refuses (a NaN where none
+    is allowed, a string or array over the limits) is refused here, in the sending program, with the field
+    named (``msgs.DecodeError``, a ValueError), instead of being dropped by every receiver."""
     if getattr(msg, "_type", None) != msg_type._type:
         raise TypeError(f"{where}: expected {msg_type._type}, got {type(msg).__module__}.{type(msg).__name__}")
-    return msgs.encode(msg)
+    try:
+        payload = msgs.encode(msg)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise TypeError(f"{where}: {msg_type._type} cannot be encoded: {exc}") from None
+    # Decoding every message would double the cost of a publish: only a payload that may hold what receivers
+    # refuse is decoded here, to name the field. Under MAX_ARRAY_LENGTH bytes no array can be too long, and
+    # a non-finite float shows as a msgpack float whose exponent bits are all ones.
+    if len(payload) >= MAX_ARRAY_LENGTH or _NON_FINITE.search(payload):
+        msgs.decode(msg_type, payload, decode_limits())
+    return payload
+
+
+# msgpack float64 (0xcb) and float32 (0xca) with every exponent bit set: +-inf and NaN (or string bytes that
+# look so, which the decode then clears)
+_NON_FINITE = re.compile(rb"\xcb[\x7f\xff][\xf0-\xff]|\xca[\x7f\xff][\x80-\xff]")
 
 
 class Publisher:
@@ -36,6 +53,7 @@ class Publisher:
                  event_callbacks: Any) -> None:
         self._node, self._core, self.msg_type = node, core, msg_type
         self.qos_profile, self.callback_group, self.event_callbacks = qos, callback_group, event_callbacks
+        self._raw = hasattr(core, "publish_raw")   # checked once encoded: sent as those bytes
 
     @property
     def topic_name(self) -> str:
@@ -51,11 +69,12 @@ class Publisher:
 
     def publish(self, msg: Any) -> None:
         if isinstance(msg, (bytes, bytearray)):   # a serialized message, as rclpy accepts (ours: msgpack)
-            msg = msgs.decode(self.msg_type, bytes(msg))
-        if getattr(msg, "_type", None) != self.msg_type._type:
-            raise TypeError(f"publisher on '{self.topic_name}' expects {self.msg_type._type}, got "
-                            f"{type(msg).__module__}.{type(msg).__name__}")
-        self._core.publish(msg)
+            msg = msgs.decode(self.msg_type, bytes(msg), decode_limits())
+        payload = check_message(msg, self.msg_type, f"publisher on '{self.topic_name}'")
+        if self._raw:
+            self._core.publish_raw(payload)
+        else:
+            self._core.publish(msg)   # a latched publisher keeps the message for late joiners
 
     def get_subscription_count(self) -> int:
         return self._node.count_subscribers(self.topic_name)

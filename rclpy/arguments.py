@@ -48,7 +48,7 @@ class RosArguments:
 
 def _split_node(name: str) -> tuple[str | None, str]:
     """``node:name`` → (node, name): a rule for one node only."""
-    if ":" in name and not name.startswith("/") and ":=" not in name:
+    if ":" in name.split(":=", 1)[0]:   # a ':' before the ':=' ends the node's name
         node, rest = name.split(":", 1)
         return node, rest
     return None, name

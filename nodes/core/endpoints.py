@@ -241,6 +241,7 @@ class Subscription:
         self._watching_until: float | None = None   # the deadline the watchdog thread sleeps until
         self.closed = False
         self.group: CallbackGroup | None = None   # on a spinning thread: its callback group (rclpy's)
+        self._where = f"subscription '{key}'"   # what an error report says (built once, not per message)
         if pulled:
             self._sub = node.session.declare_subscriber(key, zenoh.handlers.RingChannel(backlog))
         elif max_rate is None:
@@ -421,7 +422,7 @@ class Subscription:
         if self.inline or self.pulled:   # pulled: the taking thread is the one the owner chose
             self.node.executor.run_callback(self.callback, *args, where=f"subscription '{self.key}'")
         else:
-            self.node.executor.dispatch(self.callback, *args, where=f"subscription '{self.key}'", group=self.group)
+            self.node.executor.dispatch(self.callback, *args, where=self._where, group=self.group)
 
     def destroy(self) -> None:
         if self._bus is not None:

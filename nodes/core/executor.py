@@ -232,6 +232,9 @@ class Executor:
         """The wall timers due now, each moved to its next deadline (the caller runs them)."""
         now = time.monotonic()
         due: list[Timer] = []
+        timers = self._wall_timers
+        if not timers or timers[0][0] > now:   # a peek without the lock: the common case, nothing due
+            return due
         with self._timer_lock:
             while self._wall_timers and self._wall_timers[0][0] <= now:
                 _, _, timer = heapq.heappop(self._wall_timers)

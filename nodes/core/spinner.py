@@ -8,6 +8,7 @@ several threads may call ``spin_once`` at once and an exclusive group still runs
 
 from __future__ import annotations
 
+import queue
 import threading
 import time
 from collections.abc import Callable
@@ -19,7 +20,10 @@ class Spinner:
     def __init__(self) -> None:
         self._executors: list[Executor] = []
         self._lock = threading.Lock()
-        self._event = threading.Event()
+        # wake-ups: a token in a C queue (a threading.Event costs a Python-level Condition per message);
+        # at most one token waits at a time
+        self._tokens: queue.SimpleQueue = queue.SimpleQueue()
+        self._pending = False
         self._turn = 0
 
     @property
@@ -27,28 +31,30 @@ class Spinner:
         return list(self._executors)
 
     def add(self, executor: Executor) -> None:
-        with self._lock:
+        with self._lock:   # a new list each time: spinning threads read it without the lock
             if executor not in self._executors:
-                self._executors.append(executor)
-        executor.wake = self._event.set
-        self._event.set()
+                self._executors = [*self._executors, executor]
+        executor.wake = self.wake
+        self.wake()
 
     def remove(self, executor: Executor) -> None:
         with self._lock:
             if executor in self._executors:
-                self._executors.remove(executor)
-        if executor.wake == self._event.set:
+                self._executors = [e for e in self._executors if e is not executor]
+        if executor.wake == self.wake:
             executor.wake = None
 
     def wake(self) -> None:
-        self._event.set()
+        if not self._pending:
+            self._pending = True
+            self._tokens.put(None)
 
     def spin_once(self, timeout: float | None = None, stop: Callable[[], bool] | None = None) -> bool:
         """Run due timers and at most one queued callback, waiting up to ``timeout`` s (None: until there is
         work) or until ``stop()`` is true after a ``wake()``. True if a callback ran."""
         end = None if timeout is None else time.monotonic() + max(0.0, timeout)
         while True:
-            self._event.clear()   # before looking: a wake-up after the look is not lost
+            self._pending = False   # before looking: a wake-up after the look is not lost
             if self._run_one():
                 return True
             if stop is not None and stop():
@@ -62,16 +68,19 @@ class Spinner:
                 if end is not None and time.monotonic() >= end:
                     return self._run_one()
                 continue
-            self._event.wait(wait)
+            try:
+                self._tokens.get(timeout=wait)
+            except queue.Empty:
+                pass
             if end is not None and time.monotonic() >= end:
                 return self._run_one()
 
     def _next_deadline(self) -> float | None:
-        deadlines = [d for e in self.executors if (d := e.next_wall_deadline()) is not None]
+        deadlines = [d for e in self._executors if (d := e.next_wall_deadline()) is not None]
         return min(deadlines) if deadlines else None
 
     def _run_one(self) -> bool:
-        executors = self.executors
+        executors = self._executors
         ran = False
         for executor in executors:
             for timer in executor.due_wall_timers():
@@ -80,6 +89,8 @@ class Spinner:
         for i in range(count):
             executor = executors[(self._turn + i) % count]
             while (item := executor.take()) is not None:
+                if not executor.idle:
+                    self.wake()   # more is queued: another spinning thread may take it meanwhile
                 if executor.run_item(item):
                     self._turn = (self._turn + i + 1) % max(1, count)
                     return True

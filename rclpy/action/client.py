@@ -6,8 +6,7 @@ from __future__ import annotations
 import time
 from typing import Any
 
-import msgs
-from rclpy._entities import CALL_TIMEOUT_S, _calls
+from rclpy._entities import CALL_TIMEOUT_S, _calls, check_message
 from rclpy.task import Future
 
 
@@ -82,10 +81,7 @@ class ActionClient:
                 return False
 
     def send_goal_async(self, goal: Any, feedback_callback: Any = None, goal_uuid: Any = None) -> Future:
-        goal_type = self._action_type.Goal
-        if getattr(goal, "_type", None) != goal_type._type:
-            raise TypeError(f"send_goal_async: expected {goal_type._type}, got {type(goal).__name__}")
-        msgs.encode(goal)   # a message the codec refuses is refused here, naming the field
+        check_message(goal, self._action_type.Goal, f"goal of action '{self._core.key}'")
         future = Future()
         executor = self._node._zr.executor
         feedback_type = self._action_type.FeedbackMessage
