@@ -7,7 +7,6 @@ import inspect
 import re
 import threading
 import time as _time
-from concurrent.futures import ThreadPoolExecutor
 from typing import TYPE_CHECKING, Any
 
 import msgs
@@ -136,9 +135,16 @@ class Service:
         self._node.destroy_service(self)
 
 
-# Service calls and goals wait for their answer here, not on the spinning thread: the answer is then handed
-# to the node's executor, so done callbacks run where rclpy runs them.
-_calls = ThreadPoolExecutor(max_workers=16, thread_name_prefix="rclpy-call")
+class _Calls:
+    """Service calls and goals wait for their answer on a thread of their own, not on the spinning thread: the
+    answer is then handed to the node's executor, so done callbacks run where rclpy runs them. Daemon
+    threads: a call still waiting (a goal's result) never keeps the program from ending."""
+
+    def submit(self, work: Any) -> None:
+        threading.Thread(target=work, daemon=True, name="rclpy-call").start()
+
+
+_calls = _Calls()
 # A call never answered (no server ever came) gives up after this long, silently as in ROS 2.
 CALL_TIMEOUT_S = 3600.0
 

@@ -15,6 +15,19 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 import msgs
+
+# As rclpy.node does, import the modules programs then reach as ``rclpy.executors.ExternalShutdownException``
+# & co. after ``from rclpy.node import Node`` alone.
+import rclpy.client  # noqa: E402, F401
+import rclpy.constants  # noqa: E402, F401
+import rclpy.event_handler  # noqa: E402, F401
+import rclpy.executors  # noqa: E402, F401
+import rclpy.guard_condition  # noqa: E402, F401
+import rclpy.publisher  # noqa: E402, F401
+import rclpy.service  # noqa: E402, F401
+import rclpy.subscription  # noqa: E402, F401
+import rclpy.timer  # noqa: E402, F401
+import rclpy.utilities  # noqa: E402, F401
 from nodes.core import graph
 from nodes.core.latched import fetch_latched
 from nodes.core.names import NameError_

@@ -12,10 +12,30 @@ from rclpy.exceptions import InvalidParameterTypeException
 PARAMETER_SEPARATOR_STRING = "."
 
 
+_FIELDS = {
+    "ParameterValue": dict(type=0, bool_value=False, integer_value=0, double_value=0.0, string_value="",
+                           byte_array_value=[], bool_array_value=[], integer_array_value=[],
+                           double_array_value=[], string_array_value=[]),
+    "Parameter": dict(name="", value=None),
+}
+
+
 def _msg(name: str) -> Any:
+    """An rcl_interfaces message class, or a stand-in with its fields when the definitions lack it."""
     import msgs
 
-    return msgs.get_type(f"rcl_interfaces/msg/{name}")
+    try:
+        return msgs.get_type(f"rcl_interfaces/msg/{name}")
+    except Exception:  # noqa: BLE001 - older definitions
+        defaults = _FIELDS[name]
+
+        def make(**fields: Any) -> Any:
+            import copy
+            from types import SimpleNamespace
+
+            return SimpleNamespace(**{**copy.deepcopy(defaults), **fields})
+
+        return make
 
 
 class Parameter:

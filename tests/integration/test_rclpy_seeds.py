@@ -7,7 +7,6 @@ exception type; then it runs with the one-line fix a user would make."""
 
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 import threading
@@ -18,7 +17,7 @@ import pytest
 import msgs
 from nodes.core import Node
 from tests.conftest import ROOT, wait_until
-from tests.support.ros_shim import shim_path
+from tests.support.ros_shim import shim_env
 
 pytestmark = pytest.mark.slow
 
@@ -29,12 +28,9 @@ GoalStatusArray = msgs.get_type("action_msgs/msg/GoalStatusArray")
 
 @pytest.fixture
 def ros_env(tmp_path: Path) -> dict[str, str]:
-    extra = shim_path(tmp_path / "shim")
-    if extra is None:
-        return {}
     from bench.common import child_env
 
-    return {"PYTHONPATH": os.pathsep.join([extra, child_env()["PYTHONPATH"]])}
+    return shim_env(tmp_path / "shim", child_env()["PYTHONPATH"])
 
 
 def start_robot(processes, robot: str, namespace: str, controllers_yaml: str, controllers: list[str]) -> None:
