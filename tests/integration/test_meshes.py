@@ -305,3 +305,11 @@ def test_a_package_robot_with_stl_dae_and_obj_meshes_is_seen_in_colour_and_cache
             sim.wait(timeout=30)
     finally:
         node.destroy()
+
+
+def test_an_unknown_collision_mesh_mode_is_a_configuration_error(processes, router):
+    sim = processes.start("-m", "nodes.sim", "--params-file", str(ROOT / "config" / "sim.yaml"),
+                          "--param", "collision_mesh:=hull,left_hand=convex", name="sim")
+    wait_until(lambda: sim.poll() is not None, timeout=60, message="the simulator to refuse its configuration")
+    assert sim.returncode == 2
+    assert "collision_mesh: 'convex' is not one of hull, decompose, exact" in processes.output(sim)

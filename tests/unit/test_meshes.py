@@ -198,3 +198,15 @@ def test_a_world_draws_a_link_without_its_missing_visual_mesh_but_refuses_a_miss
     assert spec.models[0].links[0].visuals == [] and "gone.stl" in spec.not_simulated_line()
     with pytest.raises(WorldError, match=r"mesh 'meshes/gone.stl': no file at"):
         parse_world(world("collision"), tmp_path / "w.world")
+
+
+def test_a_link_named_in_the_policy_is_decomposed(tmp_path: Path) -> None:
+    posts = [M.CUBE_VERTICES * [0.2, 0.2, 1.0] + [x, 0, 0.6] for x in (-0.4, 0.4)]
+    vertices = np.concatenate([M.CUBE_VERTICES * [1.0, 0.2, 0.2], *posts])
+    faces = np.concatenate([M.CUBE_FACES + 8 * i for i in range(3)])
+    M.binary_stl(tmp_path / "meshes" / "u.stl", vertices, faces)
+    M.binary_stl(tmp_path / "meshes" / "body.stl")
+    xml = URDF.replace("VISUAL", "body.stl").replace("COLLISION", "u.stl")
+    hulls = prepare_urdf(xml, tmp_path / "r.urdf", "robot 'r'", CollisionPolicy.parse("hull")).xml
+    parts = prepare_urdf(xml, tmp_path / "r.urdf", "robot 'r'", CollisionPolicy.parse("hull,body=decompose")).xml
+    assert hulls.count("<collision>") == 2 and parts.count("<collision>") >= 4   # 3+ parts and the box
