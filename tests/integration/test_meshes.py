@@ -313,3 +313,47 @@ def test_an_unknown_collision_mesh_mode_is_a_configuration_error(processes, rout
     wait_until(lambda: sim.poll() is not None, timeout=60, message="the simulator to refuse its configuration")
     assert sim.returncode == 2
     assert "collision_mesh: 'convex' is not one of hull, decompose, exact" in processes.output(sim)
+
+
+def test_the_viewer_records_a_package_robots_meshes_in_their_colours(processes, router, tmp_path):
+    """A robot_description whose visuals are package:// OBJ (MTL colour) and DAE (millimetres, y up) meshes:
+    the viewer's recording has each as a Mesh3D, in its file's colour, in metres."""
+    import signal
+
+    from tests.support.rrd import load
+
+    package = tmp_path / "pkgs" / "mesh_bot_description"
+    package.mkdir(parents=True)
+    (package / "package.xml").write_text("<package format='3'><name>mesh_bot_description</name></package>")
+    M.obj(package / "meshes" / "body.obj", M.CUBE_VERTICES * [1, 2, 4], rgb=PAINT)
+    M.binary_stl(package / "meshes" / "body.stl", size=(1, 2, 4))
+    M.dae(package / "meshes" / "head.dae", M.CUBE_VERTICES * [1000, 2000, 3000], unit=0.001, up="Y_UP",
+          rgb=(0.9, 0.1, 0.1))
+    rrd = tmp_path / "meshes.rrd"
+    viz = processes.start("-m", "nodes.viz", "--save", str(rrd), "--robots", "mesh_bot", "--param", "ground:=false",
+                          name="viz", env={"ROS_PACKAGE_PATH": str(tmp_path / "pkgs")})
+    wait_until(lambda: "showing robot 'mesh_bot'" in processes.output(viz), 30, message="the visualiser")
+    String = msgs.get_type("std_msgs/msg/String")
+    node = Node("mesh_viz_test", connect=[router])
+    try:
+        description = node.create_publisher(String, "/mesh_bot/robot_description")
+        time.sleep(1.0)   # the visualiser's subscription meets ours through the router
+        description.publish(String(data=BOT))
+        wait_until(lambda: "model 'mesh_bot' with 2 links, 2 visuals" in processes.output(viz), 30,
+                   message="the mesh robot in the visualiser")
+    finally:
+        node.destroy()
+    viz.send_signal(signal.SIGINT)
+    viz.wait(20)
+    assert "not drawn" not in processes.output(viz)
+    data = load(rrd)
+    body = {**data["world/mesh_bot/links/base/visual_0"].static,
+            **{k: v for row in data["world/mesh_bot/links/base/visual_0"].rows for k, v in row.items()}}
+    head = {**data["world/mesh_bot/links/head/visual_0"].static,
+            **{k: v for row in data["world/mesh_bot/links/head/visual_0"].rows for k, v in row.items()}}
+    paint = int("".join(f"{round(c * 255):02x}" for c in PAINT) + "ff", 16)
+    assert set(body["Mesh3D:vertex_colors"]) == {paint}
+    assert np.ptp(np.asarray(body["Mesh3D:vertex_positions"]), axis=0) == pytest.approx([1, 2, 4], abs=1e-5)
+    # the DAE: millimetres to metres, y up to z up (y and z swap), then the URDF's scale of 0.5
+    assert np.ptp(np.asarray(head["Mesh3D:vertex_positions"]), axis=0) == pytest.approx([0.5, 1.5, 1.0], abs=1e-5)
+    assert set(head["Mesh3D:vertex_colors"]) == {0xE61A1AFF}
