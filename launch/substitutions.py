@@ -15,6 +15,7 @@ import os
 import shlex
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -124,8 +125,11 @@ class FindExecutable(Substitution):
     def perform(self, context: LaunchContext) -> str:
         name = perform_substitutions(context, self.name)
         found = shutil.which(name, path=context.environment.get("PATH"))
+        beside = Path(sys.executable).parent / name   # this environment's console scripts (ros2, xacro)
+        if found is None and beside.is_file() and os.access(beside, os.X_OK):
+            found = str(beside)
         if found is None:
-            raise SubstitutionFailure(f"executable '{name}' not found on the PATH")
+            raise SubstitutionFailure(f"executable '{name}' not found on the PATH or in {beside.parent}")
         return found
 
 

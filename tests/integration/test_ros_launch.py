@@ -399,3 +399,62 @@ def test_xml_container_and_load_composable_node(tmp_path: Path) -> None:
     done = launch_cli(str(tmp_path / "c.launch.xml"), "--print")
     assert done.returncode == 0, done.stderr
     assert "nodes.core.container" in done.stdout and "ControllerManagerNode" in done.stdout and "a:=b" in done.stdout
+
+
+CHAINED = """
+import os
+from ament_index_python.packages import get_package_share_directory
+from launch import LaunchDescription
+from launch.actions import ExecuteProcess, IncludeLaunchDescription, RegisterEventHandler
+from launch.event_handlers import OnProcessExit
+from launch.launch_description_sources import PythonLaunchDescriptionSource
+from launch_ros.actions import Node
+
+def generate_launch_description():
+    share = get_package_share_directory('zenroid_description')
+    gazebo = IncludeLaunchDescription(PythonLaunchDescriptionSource(
+        [os.path.join(get_package_share_directory('gazebo_ros'), 'launch'), '/gazebo.launch.py']))
+    with open(os.path.join(share, 'urdf', 'humanoid.urdf')) as file:
+        params = {'robot_description': file.read()}
+    rsp = Node(package='robot_state_publisher', executable='robot_state_publisher', output='screen',
+               parameters=[params])
+    spawn_entity = Node(package='gazebo_ros', executable='spawn_entity.py',
+                        arguments=['-topic', 'robot_description', '-entity', 'humanoid', '-z', '0.93'], output='screen')
+    # stands for the <gazebo> plugin's controller manager
+    manager = Node(package='controller_manager', executable='ros2_control_node',
+                   parameters=[os.path.join(share, 'config', 'controllers.yaml')], output='screen')
+    load_jsb = ExecuteProcess(cmd=['ros2', 'control', 'load_controller', '--set-state', 'active',
+                                   'joint_state_broadcaster'], output='screen')
+    load_jtc = ExecuteProcess(cmd=['ros2', 'control', 'load_controller', '--set-state', 'active',
+                                   'joint_trajectory_controller'], output='screen')
+    return LaunchDescription([
+        RegisterEventHandler(event_handler=OnProcessExit(target_action=spawn_entity, on_exit=[load_jsb])),
+        RegisterEventHandler(event_handler=OnProcessExit(target_action=load_jsb, on_exit=[load_jtc])),
+        gazebo, rsp, manager, spawn_entity,
+    ])
+"""
+
+
+@pytest.mark.slow
+def test_gazebo_ros2_control_style_chain(tmp_path: Path, zenoh_port: int) -> None:
+    """gazebo_ros2_control's demo pattern at the root namespace: gazebo.launch.py included, spawn_entity.py from
+    /robot_description, then `ros2 control load_controller --set-state active` for the JSB and the JTC chained
+    with OnProcessExit; /joint_states flows and both controllers are active."""
+    (tmp_path / "chain.launch.py").write_text(CHAINED)
+    launch = Launch(str(tmp_path / "chain.launch.py"), "sensors:=false", log_dir=tmp_path / "run", port=zenoh_port)
+    try:
+        session = launch.peer()
+        states: list[bytes] = []
+        session.declare_subscriber("joint_states", lambda s: states.append(s.payload.to_bytes()))
+        launch.wait(lambda: len(states) > 10, 120, "/joint_states")
+        wait_output(launch, r"'ros2_2' \[pid \d+\] exited with status 0", 120)
+        listed = subprocess.run([sys.executable, "-m", "nodes.tools", "control", "list_controllers", "--ns", "/",
+                                 "--zenoh-port", str(zenoh_port)], capture_output=True, text=True, timeout=60,
+                                env=child_env(), cwd=ROOT)
+        assert re.search(r"joint_state_broadcaster\s.*active", listed.stdout), listed.stdout + listed.stderr
+        assert re.search(r"joint_trajectory_controller\s.*active", listed.stdout), listed.stdout
+    finally:
+        launch.close()
+    out = launch.output()
+    order = [out.index(s) for s in ("'spawn_entity' [pid", "started 'ros2' [pid", "'ros2' [pid", "started 'ros2_2'")]
+    assert order == sorted(order), out
