@@ -16,7 +16,7 @@ from typing import Any
 # launcher's own start (python -m launch humanoid.yaml) does not import the ROS API.
 _FROM_CONTEXT = ("LaunchContext", "LaunchDescription", "LaunchDescriptionEntity", "Action", "Condition", "Substitution")
 _SUBMODULES = ("actions", "conditions", "event_handlers", "events", "launch_description_sources", "substitutions",
-               "utilities", "frontend")
+               "frontend")
 
 
 def __getattr__(name: str) -> Any:
