@@ -91,6 +91,11 @@ def _wait_and_trim() -> None:
     release_now()
 
 
+def release_soon() -> None:
+    """Schedule a trim after work that freed much memory outside a payload (a deleted model, a mesh read)."""
+    after_payload(LARGE_BYTES)
+
+
 def trim_periodically(period_s: float = 5.0) -> None:
     """A process that relays payloads without seeing them in Python (the launcher's embedded router): trim
     every ``period_s`` s on a daemon thread."""

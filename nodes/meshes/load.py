@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from nodes.core import memory
+
 MAX_MESH_BYTES = 64 * 1024 * 1024        # any mesh file
 MAX_TEXT_MESH_BYTES = 16 * 1024 * 1024   # ASCII STL, OBJ, DAE: parsing text costs ~10x its size in memory
 MAX_MESH_TRIANGLES = 200_000             # one file (the renderer's per-mesh cap)
@@ -179,7 +181,9 @@ def _text_triangles(kind: str, data: bytes) -> int:
 
 
 _CACHE: OrderedDict[tuple, MeshData] = OrderedDict()
-_CACHE_SIZE = 64
+# the meshes read last, kept while they fit: a scene rebuilt on every spawn re-reads its files, but a big
+# robot's meshes must not stay in the simulator's memory after it is gone
+_CACHE_BYTES = 32 * 1024 * 1024
 _LOCK = threading.Lock()
 
 
@@ -193,17 +197,24 @@ def load_mesh(path: Path | str) -> MeshData:
             _CACHE.move_to_end(key)
             return _CACHE[key]
     data = _read(path)
-    if kind == "stl-binary":
-        parts = [_binary_stl(data)]
-    else:
-        parts = _with_trimesh(path, kind, data)
-    mesh = MeshData(path=path, format=kind, digest=hashlib.sha256(data).hexdigest(), parts=tuple(parts))
-    _check(mesh)
+    try:
+        if kind == "stl-binary":
+            parts = [_binary_stl(data)]
+        else:
+            parts = _with_trimesh(path, kind, data)
+        mesh = MeshData(path=path, format=kind, digest=hashlib.sha256(data).hexdigest(), parts=tuple(parts))
+        _check(mesh)
+    finally:
+        memory.release_soon()   # a parser's temporaries (a refused file's above all) go back to the system
     with _LOCK:
         _CACHE[key] = mesh
-        while len(_CACHE) > _CACHE_SIZE:
+        while len(_CACHE) > 1 and sum(_nbytes(m) for m in _CACHE.values()) > _CACHE_BYTES:
             _CACHE.popitem(last=False)
     return mesh
+
+
+def _nbytes(mesh: MeshData) -> int:
+    return sum(part.vertices.nbytes + part.faces.nbytes for part in mesh.parts)
 
 
 def _binary_stl(data: bytes) -> MeshPart:

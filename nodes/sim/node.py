@@ -14,7 +14,7 @@ import gc
 import time
 from typing import Any
 
-from nodes.core import Node
+from nodes.core import Node, memory
 from nodes.core.cpu import ExclusiveCpu
 from nodes.core.endpoints import ServiceError
 from nodes.core.params import ParameterError, load_params_file
@@ -302,6 +302,7 @@ class SimulatorNode(Node):
         deleted = self.sim.delete(name)
         self._forget_sensor_keys(name)
         self.render.refresh_scene()
+        memory.release_soon()   # a skeleton's meshes and DART's copies of them leave the heap fragmented
         return deleted
 
     # ------------------------------------------------------------------------------------- world control
