@@ -281,7 +281,9 @@ class ExecuteProcess(LocatedAction):
     @classmethod
     def parse(cls, entity: Any) -> ExecuteProcess:
         cmd = entity.sub("cmd")
+        entity.get("shell", optional=True)   # the text is always split as a shell would (never run by one)
         return cls(cmd=[cmd], shell=True, name=entity.sub("name", optional=True), cwd=entity.sub("cwd", optional=True),
+                   prefix=entity.sub("launch-prefix", optional=True),
                    additional_env={e.sub("name"): e.sub("value") for e in entity.children_of("env")},
                    output=entity.sub("output", optional=True) or "screen",
                    respawn=entity.sub("respawn", optional=True) or "false", **entity.condition())

@@ -187,6 +187,9 @@ class RosResolution:
             found = self.package_executable(self.perform(node.package, scope, source, "Node package"), executable,
                                             source)
             argv, style = list(found.argv), "node" if found.ros_node else "ros"
+        if node.prefix is not None:   # launch-prefix: a wrapper program (gdb -ex run --args, nice, ...)
+            argv = shlex.split(self.perform(node.prefix, scope, source, "prefix")) + argv
+            argv[0] = find_program(argv[0], source)
         for item in node.arguments:
             text = self.perform(item, scope, source, "Node arguments")
             argv += shlex.split(text) if node.split_arguments else [text]

@@ -8,6 +8,7 @@ from typing import Any
 
 from launch.actions import LocatedAction
 from launch.context import normalize
+from launch.yaml_source import LaunchError
 
 __all__ = ["ComposableNodeContainer", "LifecycleNode", "LoadComposableNodes", "Node", "PushROSNamespace",
            "PushRosNamespace", "SetParameter", "SetParametersFromFile", "SetRemap"]
@@ -40,6 +41,8 @@ class Node(LocatedAction):
         self.additional_env = [(normalize(k), normalize(v)) for k, v in (additional_env or {}).items()]
         self.env = None if env is None else [(normalize(k), normalize(v)) for k, v in env.items()]
         self.on_exit = on_exit
+        self.prefix = None if prefix is None else normalize(prefix)
+        self.cwd = None if cwd is None else normalize(cwd)
         self.split_arguments = split_arguments   # the front ends' `args` text, split as a shell would
         self.labels: list[str] = []
 
@@ -59,11 +62,22 @@ class Node(LocatedAction):
                    arguments=[args] if args is not None else None, ros_arguments=[ros_args] if ros_args else None,
                    output=entity.sub("output", optional=True) or "screen",
                    respawn=entity.sub("respawn", optional=True) or "false",
+                   respawn_delay=_seconds(entity.get("respawn_delay", optional=True, text=True), entity),
+                   prefix=entity.sub("launch-prefix", optional=True),
                    additional_env={e.sub("name"): e.sub("value") for e in entity.children_of("env")},
                    split_arguments=args is not None, **entity.condition())
 
     def resolve(self, resolver: Any, scope: Any) -> None:
         resolver.add_ros_node(self, scope)
+
+
+def _seconds(text: str | None, entity: Any) -> float | None:
+    if text is None:
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise LaunchError(f"respawn_delay must be a number of seconds, got '{text}'", entity.source) from None
 
 
 class LifecycleNode(Node):
