@@ -125,10 +125,11 @@ def test_the_stack_packages_and_our_robots(clean_env: Path) -> None:
         assert found[name].source == "zenroid", name
     share = find_share("zenroid_description")
     assert share == (ROOT / "robots").resolve()
-    for folder in ("urdf", "config", "worlds"):
+    for folder in ("urdf", "config", "worlds", "launch"):
         assert (share / folder).is_dir(), folder
     assert (share / "urdf" / "humanoid.urdf").is_file() and (share / "worlds" / "simple_lab.world").is_file()
     assert (share / "config" / "controllers.yaml").is_file()
+    assert (share / "launch" / "spawn_humanoid.launch.py").is_file()
 
 
 def test_a_missing_package_names_itself_and_every_path_searched(clean_env: Path, tmp_path: Path,
