@@ -80,6 +80,10 @@ class Entity(Model):
         self.skeleton = self._load_skeleton(spec, self.info)
         self.skeleton.setName(spec.name)
         self.floating = not spec.fixed and isinstance(self.skeleton.getRootJoint(), dart.dynamics.FreeJoint)
+        if self.floating and self.info.physics is not None and self.info.physics.massless_root:
+            raise SpawnError(f"root link {self.info.physics.massless_root!r} of a floating base has no mass or "
+                             "inertia, even with its fixed children (a physics engine would invent them): give it "
+                             "an <inertial>, or spawn it fixed")
         # DART's DOF order differs from the URDF: map every movable joint by name once.
         self.dof_index: dict[str, int] = {}
         for joint in self.info.joints:

@@ -62,6 +62,7 @@ class Lumped:
     xml: str
     # merged link -> (the body it is part of, the link's pose in that body's frame)
     frames: dict[str, tuple[str, np.ndarray]] = field(default_factory=dict)
+    massless_root: str = ""   # the root link when it is left without mass (fine welded to the world only)
 
     def body_of(self, link: str) -> tuple[str, np.ndarray]:
         """The physics body carrying ``link`` and the link's pose in it (itself and identity if not merged)."""
@@ -180,7 +181,8 @@ def lump_frames(xml: str, model: RobotModel | None = None) -> Lumped:
         frames += [j.child for j in model.joints.values()
                    if j.parent == root_name and j.type == "fixed" and j.child not in frames]
     if not frames:
-        return Lumped(xml)
+        return Lumped(xml, massless_root=root_name if root_name != WORLD_LINK and not has_inertia(model, root_name)
+                      else "")
     root = parse_xml(xml)
     links = {el.get("name"): el for el in root.findall("link")}
     joint_of = {el.find("child").get("link"): el for el in root.findall("joint") if el.find("child") is not None}
@@ -203,7 +205,9 @@ def lump_frames(xml: str, model: RobotModel | None = None) -> Lumped:
             above, offset = placed[body]
             body, pose = above, offset @ pose
         placed[name] = (body, pose)
-    return Lumped(etree.tostring(root, encoding="unicode"), placed)
+    mass, _, inertia = _mass_properties(links[root_name])
+    massless = root_name != WORLD_LINK and not (mass > 0 and np.linalg.eigvalsh(inertia).min() > 0)
+    return Lumped(etree.tostring(root, encoding="unicode"), placed, root_name if massless else "")
 
 
 def check_inertias(model: RobotModel) -> None:

@@ -132,3 +132,15 @@ def test_a_sensor_declared_twice_on_one_link_is_one_sensor():
     model = parse_urdf(robot(extra_joints=f'<gazebo reference="base">{camera}{camera}</gazebo>'))
     assert [s.name for s in model.rendered_sensors] == ["cam"]
     assert any("declared again" in w for w in model.warnings)
+
+
+def test_a_floating_root_without_mass_is_refused_named():
+    pytest.importorskip("dartpy")
+    from nodes.sim.entity import Entity, EntitySpec
+    from nodes.sim.pose import SpawnError
+
+    xml = robot().replace('<link name="base"><inertial><mass value="2"/>' + INERTIA + "</inertial>",
+                          '<link name="base">')
+    with pytest.raises(SpawnError, match="root link 'base' of a floating base has no mass"):
+        Entity(EntitySpec(name="r", xml=xml))
+    assert not Entity(EntitySpec(name="r", xml=xml, fixed=True)).floating   # welded: its mass does not matter
