@@ -458,3 +458,31 @@ def test_gazebo_ros2_control_style_chain(tmp_path: Path, zenoh_port: int) -> Non
     out = launch.output()
     order = [out.index(s) for s in ("'spawn_entity' [pid", "started 'ros2' [pid", "'ros2' [pid", "started 'ros2_2'")]
     assert order == sorted(order), out
+
+
+def test_python_includes_xml_and_yaml(tmp_path: Path) -> None:
+    """The ROS docs' mixed-format example: a .launch.py including ROS XML and ROS YAML files (launch_xml's and
+    launch_yaml's sources), each in its own pushed namespace, arguments passed down."""
+    (tmp_path / "bot.launch.xml").write_text(XML)
+    (tmp_path / "bot.launch.yaml").write_text(ROS_YAML)
+    (tmp_path / "tiny.urdf").write_text(SMALL_URDF)
+    (tmp_path / "mixed.launch.py").write_text("""
+from launch import LaunchDescription
+from launch.actions import GroupAction, IncludeLaunchDescription
+from launch.substitutions import ThisLaunchFileDir
+from launch_ros.actions import PushROSNamespace
+from launch_xml.launch_description_sources import XMLLaunchDescriptionSource
+from launch_yaml.launch_description_sources import YAMLLaunchDescriptionSource
+
+def generate_launch_description():
+    return LaunchDescription([
+        GroupAction([PushROSNamespace('left'), IncludeLaunchDescription(
+            XMLLaunchDescriptionSource([ThisLaunchFileDir(), '/bot.launch.xml']), launch_arguments={'ns': 'a'}.items())]),
+        GroupAction([PushROSNamespace('right'), IncludeLaunchDescription(
+            YAMLLaunchDescriptionSource([ThisLaunchFileDir(), '/bot.launch.yaml']), launch_arguments=[('ns', 'b')])]),
+    ])
+""")
+    done = launch_cli(str(tmp_path / "mixed.launch.py"), "--print")
+    assert done.returncode == 0, done.stderr
+    assert "__ns:=/left/a" in done.stdout or "namespace: left/a" in done.stdout, done.stdout
+    assert "namespace: right/b" in done.stdout, done.stdout
