@@ -228,9 +228,10 @@ def _inside(root: Path, relative: str, uri: str) -> Path:
 
 
 def model_paths() -> list[Path]:
-    """Where ``model://NAME`` looks: Gazebo's resource variables, then our worlds/ (its models/ folder)."""
+    """Where ``model://NAME`` looks: the simulator's model path variables and Gazebo's other resource
+    variables, then our worlds/ (its models/ folder)."""
     found: list[Path] = []
-    for name in ("GAZEBO_MODEL_PATH", "GZ_SIM_RESOURCE_PATH", "IGN_GAZEBO_RESOURCE_PATH", "SDF_PATH"):
+    for name in ("ZENROID_MODEL_PATH", "GAZEBO_MODEL_PATH", "GZ_SIM_RESOURCE_PATH", "IGN_GAZEBO_RESOURCE_PATH", "SDF_PATH"):
         found += _env_paths(name)
     worlds = ROBOTS_DIR.parent / "worlds"
     return [*found, worlds / "models", worlds]

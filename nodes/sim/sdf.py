@@ -22,6 +22,7 @@ import numpy as np
 from lxml import etree
 
 from nodes.core import names as ros_names
+from nodes.packages.index import PackageNotFoundError, find_share
 from nodes.share import WORLDS_DIR
 from nodes.share import world_file as shared_world_file
 from nodes.urdf.model import rpy_matrix
@@ -737,10 +738,17 @@ class _Reader:
             name, _, rest = uri[len("model://"):].partition("/")
             folder = self.model_folder(f"model://{name}", element, None)
             path = folder / rest
+        elif uri.startswith("package://"):
+            package, _, rest = uri[len("package://"):].partition("/")
+            try:
+                folder = find_share(package).resolve()   # the package index, as for URDF meshes
+            except PackageNotFoundError as exc:
+                raise self.error(element, f"mesh {uri[:200]!r}: {exc}", where) from None
+            path = folder / rest
         else:
             if "://" in uri and not uri.startswith("file://"):
-                raise self.error(element, f"mesh {uri[:200]!r}: only model://, file:// and paths in the model's "
-                                 "folder are read", where)
+                raise self.error(element, f"mesh {uri[:200]!r}: only model://, package://, file:// and paths in "
+                                 "the model's folder are read", where)
             if self.folder is None:
                 raise self.error(element, f"mesh {uri[:200]!r}: a mesh in a spawn request must be a model:// URI "
                                  "(there is no folder for a path to resolve in)", where)

@@ -338,3 +338,24 @@ def test_a_file_include_outside_the_model_path_gets_one_answer_whether_the_folde
     spec = parse_world(world(f"<include><uri>file://{tmp_path / 'models' / 'inside'}</uri></include>"),
                        environ={"ZENROID_MODEL_PATH": str(tmp_path / "models")})
     assert len(spec.models) == 1
+
+
+def test_a_package_mesh_in_an_sdf_comes_through_the_package_index(tmp_path: Path, monkeypatch) -> None:
+    from nodes.packages import refresh
+
+    package = tmp_path / "rpp" / "wedge_description"
+    (package / "meshes").mkdir(parents=True)
+    (package / "package.xml").write_text("<package format='3'><name>wedge_description</name></package>")
+    corners = ["0 0 0", "1 0 0", "0 1 0", "0 0 1"]
+    facets = "".join("facet normal 0 0 0\nouter loop\n" + "".join(f"vertex {corners[i]}\n" for i in face)
+                     + "endloop\nendfacet\n" for face in ((0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)))
+    (package / "meshes" / "wedge.stl").write_text(f"solid w\n{facets}endsolid w\n")
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(tmp_path / "rpp"))
+    refresh()
+    mesh = ("<model name='w'><static>true</static><link name='l'><collision name='c'><geometry><mesh><uri>{}</uri>"
+            "</mesh></geometry></collision></link></model>")
+    spec = parse_world(world(mesh.format("package://wedge_description/meshes/wedge.stl")))
+    assert WorldModel(spec.models[0]).skeleton.getBodyNode(0).getShapeNode(0).getShape().getType() == "MeshShape"
+    refused(world(mesh.format("package://wedge_description/../../secret.stl")), r"leaves the model folder")
+    refused(world(mesh.format("package://no_such_description/m.stl")),
+            r"package 'no_such_description' not found; searched:")
