@@ -3,6 +3,7 @@ opens one session per context)."""
 
 from __future__ import annotations
 
+import atexit
 import os
 import sys
 import threading
@@ -48,6 +49,9 @@ class Context:
                     rclpy_logging.get_logger(name).set_level(level)
             self._session = self._open_session()
             self._ok = True
+        # a program that ends without rclpy.shutdown() (an exception, sys.exit) still closes its session:
+        # an open Zenoh session can hold the interpreter's exit
+        atexit.register(self.try_shutdown)
 
     def _open_session(self) -> Any:
         from nodes.core.session import ENV_CONFIG, default_endpoints, is_connected, open_peer

@@ -51,7 +51,7 @@ class Executor:
         # tasks (create_task, done callbacks, coroutine steps): a queue of their own in the same spin
         self._tasks = CoreExecutor(self._report, on_spin_thread=True)
         self._tasks.propagate_errors = True
-        self._spinner.add(self._tasks)
+        self._tasks_spun = False   # the task queue joins the spin with the first task (one queue less to look at)
 
     @staticmethod
     def _report(text: str) -> None:
@@ -68,10 +68,13 @@ class Executor:
 
     def create_task(self, callback: Callable[..., Any], *args: Any, **kwargs: Any) -> Task:
         task = Task(callback, args, kwargs, executor=self)
-        self._tasks.put((task, (), "task", None))
+        self._resume_task(task)
         return task
 
     def _resume_task(self, task: Task) -> None:
+        if not self._tasks_spun:
+            self._tasks_spun = True
+            self._spinner.add(self._tasks)
         self._tasks.put((task, (), "task", None))
 
     def shutdown(self, timeout_sec: float | None = None) -> bool:

@@ -185,6 +185,8 @@ class Executor:
 
     def take(self) -> tuple[Any, ...] | None:
         """The next queued callback without waiting (None: nothing queued)."""
+        if self._queue.empty():   # cheaper than the exception get_nowait raises on an empty queue
+            return None
         try:
             return self._queue.get_nowait()
         except queue.Empty:
@@ -220,6 +222,8 @@ class Executor:
             self._call(timer.callback, (), "timer")
 
     def _next_wall_deadline(self) -> float | None:
+        if not self._wall_timers:   # a peek without the lock: no timers at all
+            return None
         with self._timer_lock:
             while self._wall_timers and self._wall_timers[0][2].cancelled:
                 heapq.heappop(self._wall_timers)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -68,3 +69,85 @@ def test_no_router_says_so_once_and_ctrl_c_ends_it(tmp_path, ros_env) -> None:
     text = log.read_text()
     assert text.count("waiting for a Zenoh router") == 1, text
     assert "zenroid router" in text, text
+
+
+@pytest.fixture
+def context(router, monkeypatch):
+    """An rclpy context of this process on the test's router (no signal handlers: pytest keeps its own)."""
+    import rclpy
+    from rclpy.context import Context
+
+    monkeypatch.setenv("ZENOH_CONNECT", router)
+    ctx = Context()
+    rclpy.init(args=[], context=ctx)
+    try:
+        yield ctx
+    finally:
+        ctx.try_shutdown()
+
+
+def test_transient_local_reaches_a_late_subscription(context, session) -> None:
+    import msgs
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+
+    String = msgs.get_type("std_msgs/msg/String")
+    latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    talker = rclpy.create_node("latched_talker", context=context)
+    talker.create_publisher(String, "/config", latched).publish(String(data="set once"))
+    listener = rclpy.create_node("late_listener", context=context)
+    got = []
+    listener.create_subscription(String, "/config", got.append, latched)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(listener)
+    deadline = time.monotonic() + 10
+    while not got and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.2)
+    assert [m.data for m in got] == ["set once"]
+
+
+def test_a_raising_callback_ends_spin_and_bad_messages_are_refused_here(context) -> None:
+    import msgs
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    JointState = msgs.get_type("sensor_msgs/msg/JointState")
+    node = rclpy.create_node("raiser", context=context)
+    publisher = node.create_publisher(JointState, "/js", 10)
+    with pytest.raises(ValueError, match=r"position\[1\]: not a finite number"):
+        publisher.publish(JointState(name=["a", "b"], position=[0.0, float("nan")]))
+    with pytest.raises(TypeError, match="expects|expected"):
+        publisher.publish(msgs.get_type("std_msgs/msg/String")(data="x"))
+
+    fired = []
+
+    def boom() -> None:
+        fired.append(1)
+        raise RuntimeError("callback failed")
+
+    guard = node.create_guard_condition(boom)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    guard.trigger()
+    with pytest.raises(RuntimeError, match="callback failed"):
+        executor.spin()
+    assert fired == [1]
+    with pytest.raises(NotImplementedError, match=r"Node\.add_waitable .* docs/rclpy\.md"):
+        node.add_waitable(None)
+
+
+def test_names_resolve_as_rcl_does(context) -> None:
+    import rclpy
+
+    node = rclpy.create_node("resolver", namespace="/robot", context=context,
+                             cli_args=["--ros-args", "-r", "/robot/cmd:=/other/cmd"])
+    assert node.get_fully_qualified_name() == "/robot/resolver"
+    assert node.resolve_topic_name("state") == "/robot/state"
+    assert node.resolve_topic_name("/joint_states") == "/joint_states"
+    assert node.resolve_topic_name("~/status") == "/robot/resolver/status"
+    assert node.resolve_topic_name("cmd") == "/other/cmd"     # remapped after resolution
+    from rclpy.exceptions import ParameterAlreadyDeclaredException
+
+    with pytest.raises(ParameterAlreadyDeclaredException):
+        node.declare_parameter("use_sim_time", True)
