@@ -170,12 +170,9 @@ class LifecycleNodeMixin:
         if pub is None:
             return
         goal = {"on_configure": 2, "on_activate": 3, "on_deactivate": 2, "on_cleanup": 1, "on_shutdown": 4}[hook]
-        try:
-            event = pub.msg_type(start_state={"id": start, "label": PRIMARY[start]},
-                                 goal_state={"id": goal, "label": PRIMARY[goal]})
-        except Exception:  # noqa: BLE001 - keyword construction of nested fields needs the message classes
-            return
-        pub.publish(event)
+        state = msgs.get_type("lifecycle_msgs/msg/State")
+        pub.publish(pub.msg_type(start_state=state(id=start, label=PRIMARY[start]),
+                                 goal_state=state(id=goal, label=PRIMARY[goal])))
 
     # the callbacks (override them); the defaults succeed, activating and deactivating managed entities
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:

@@ -19,6 +19,8 @@ from nodes.core import Node
 from tests.conftest import ROOT, wait_until
 from tests.support.ros_shim import DEFINITIONS, shim_env
 
+pytestmark = pytest.mark.slow
+
 PROGRAMS = ROOT / "tests" / "support" / "rclpy_programs"
 PEER = ROOT / "tests" / "support" / "ros2_peer.py"
 STRING_DEF = "string data\n"
