@@ -2,6 +2,7 @@
 RSS and CPU drift per process.
 
     python bench/soak.py [--minutes 5] [--mode realtime] [--sample 10] [--sensors]
+    python bench/soak.py --churn [--rounds 3] [--pairs 200]
 
 Starts ``python -m launch humanoid.yaml gui:=false`` (the joint commander bends the knees every 2 s) on a free
 port and, in a separate process, an outside subscriber written with zenoh + msgpack alone: it takes
@@ -14,6 +15,12 @@ bending. ``--sensors``: the subscriber also takes the renderer's streams (camera
 the renderer draws them for the whole soak, and each one's delivered rate in the first and the last minute
 is reported; it passes with every process's RSS drift within 1 MB/min and every rate steady (the last minute
 within 10 % of the first). Prints a table, then a JSON line.
+
+``--churn``: spawn/delete churn instead. After a warm-up of 20 pairs, each round spawns and deletes ``--pairs``
+entities one after the other (each reply awaited), then as many again sent without waiting for any reply
+(URDF robots and SDF models alternately, each with a name of its own). After each round (the job settled) the
+RSS of the simulator, the renderer, the state publisher and the controller manager is sampled; it passes when
+every one ends within 10 MB of where it started.
 """
 
 from __future__ import annotations
@@ -166,6 +173,110 @@ def run(minutes: float, mode: str, sample_s: float, log_dir: Path, progress=prin
         job.close()
 
 
+CHURNED = ("simulator", "renderer", "robot_state_publisher", "controller_manager")
+CHURN_LIMIT_MB = 10.0
+CHURN_URDF = ("<?xml version='1.0'?><robot name='churn'><link name='base'><inertial><mass value='1'/>"
+              "<inertia ixx='0.01' iyy='0.01' izz='0.01' ixy='0' ixz='0' iyz='0'/></inertial>"
+              "<visual><geometry><box size='0.2 0.2 0.2'/></geometry></visual>"
+              "<collision><geometry><box size='0.2 0.2 0.2'/></geometry></collision></link></robot>")
+CHURN_SDF = ("<?xml version='1.0'?><sdf version='1.7'><model name='churn'><link name='l'><collision name='c'>"
+             "<geometry><box><size>0.2 0.2 0.2</size></box></geometry></collision><visual name='v'><geometry>"
+             "<sphere><radius>0.1</radius></sphere></geometry></visual></link></model></sdf>")
+
+
+def churn_request(index: int) -> tuple[str, dict[str, Any]]:
+    name = f"churn_{index}"
+    return name, {"name": name, "xml": CHURN_URDF if index % 2 == 0 else CHURN_SDF,
+                  "initial_pose": {"position": {"x": 3.0 + (index % 10) * 0.5, "y": 3.0, "z": 0.2},
+                                   "orientation": {"w": 1.0}}}
+
+
+def churn_round(job: Job, first: int, pairs: int) -> int:
+    """``pairs`` spawn/delete pairs awaited one by one, then ``pairs`` sent without waiting; the next index."""
+    index = first
+    for _ in range(pairs):
+        name, request = churn_request(index)
+        index += 1
+        reply = job.call("sim/spawn_entity", request, timeout=30)
+        if not reply.get("success"):
+            raise RuntimeError(f"spawn {name}: {reply.get('status_message')}")
+        job.call("sim/delete_entity", {"name": name}, timeout=30)
+    import msgpack
+
+    pending = []
+    for _ in range(pairs):   # fire and forget: the replies are collected (and dropped) by Zenoh
+        name, request = churn_request(index)
+        index += 1
+        pending.append(job.session.get("sim/spawn_entity", payload=msgpack.packb(request), timeout=120))
+        pending.append(job.session.get("sim/delete_entity", payload=msgpack.packb({"name": name}), timeout=120))
+    for replies in pending:   # every request served (or timed out) before the round ends
+        for _ in replies:
+            pass
+    # zenoh-python delivers each queryable's queries on a thread of its own: a delete sent right after its
+    # spawn may be served first (as two services of a ROS 2 node are not ordered either). What it left is
+    # deleted now, awaited, so that each round ends with the world it started with.
+    left = [m for m in job.call("sim/get_model_list", {}).get("model_names", []) if m.startswith("churn_")]
+    for name in left:
+        job.call("sim/delete_entity", {"name": name}, timeout=30)
+    job.overtaken = getattr(job, "overtaken", 0) + len(left)
+    return index
+
+
+def run_churn(rounds: int, pairs: int, log_dir: Path, progress=print) -> dict[str, Any]:  # noqa: ANN001
+    job = Job(log_dir, "realtime", commander="none")
+    report: dict[str, Any] = {"rounds": rounds, "pairs": pairs}
+    try:
+        job.start()
+        processes = {n: p for n, p in job.processes().items() if n in CHURNED}
+        started = job.started()
+        index = churn_round(job, 0, 10)   # warm-up: lazily imported code, first-use caches, the allocator
+
+        def settled() -> dict[str, float]:
+            time.sleep(5.0)
+            return {n: round(v, 1) for n, v in rss_mb(processes).items()}
+
+        rss = [settled()]
+        progress(f"churn: warmed up, RSS {rss[-1]}")
+        for number in range(1, rounds + 1):
+            t0 = time.monotonic()
+            index = churn_round(job, index, pairs)
+            rss.append(settled())
+            progress(f"churn: round {number} in {time.monotonic() - t0:.0f} s, RSS {rss[-1]}")
+        models = job.call("sim/get_model_list", {}).get("model_names", [])
+        growth = {n: round(rss[-1][n] - rss[0][n], 1) for n in rss[0]}
+        restarted = {n: c - started.get(n, 0) for n, c in job.started().items() if c > started.get(n, 0)}
+        report.update(rss_per_round=rss, growth_mb=growth, leftover_models=[m for m in models if "churn" in m],
+                      restarted=restarted, deletes_before_their_spawn=getattr(job, "overtaken", 0))
+        report["pass"] = bool(all(abs(g) <= CHURN_LIMIT_MB for g in growth.values()) and not restarted
+                              and not report["leftover_models"])
+    finally:
+        job.close()
+    report["longest_silence_s"] = longest_silences(job.output())
+    return report
+
+
+def longest_silences(launch_output: str) -> dict[str, float]:
+    """The launcher's closing figure: each node's longest time without answering its health probe."""
+    import re
+
+    line = next((ln for ln in launch_output.splitlines() if "health: longest time without an answer:" in ln), "")
+    return {name: float(value) for name, value in re.findall(r"(\w+) (\d+(?:\.\d+)?) s", line.split(":", 3)[-1])}
+
+
+def churn_table(report: dict[str, Any]) -> str:
+    rounds = report["rss_per_round"]
+    lines = [f"{'process':<24}{'start MB':>10}" + "".join(f"{f'round {i}':>10}" for i in range(1, len(rounds)))
+             + f"{'growth MB':>11}"]
+    for name in rounds[0]:
+        lines.append(f"{name:<24}" + "".join(f"{r[name]:>10.1f}" for r in rounds) + f"{report['growth_mb'][name]:>11.1f}")
+    lines.append(f"{report['pairs']} awaited + {report['pairs']} unawaited spawn/delete pairs a round; leftover models "
+                 f"{report['leftover_models'] or 'none'}, restarts {report['restarted'] or 'none'}; deletes served "
+                 f"before their spawn (then deleted again) {report['deletes_before_their_spawn']}")
+    lines.append("longest time without answering the launcher's health probe: " + ", ".join(
+        f"{name} {value:.1f} s" for name, value in report.get("longest_silence_s", {}).items()))
+    return "\n".join(lines)
+
+
 def summarise(samples: list[dict[str, Any]], duration: float) -> dict[str, Any]:
     """Drift per process: the first minute after the warm-up against the last minute."""
     warm = [s for s in samples if s["t"] >= min(WARMUP_S, duration / 3)]
@@ -217,11 +328,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sample", type=float, default=10.0, help="s between RSS/CPU samples (default 10)")
     parser.add_argument("--sensors", action="store_true",
                         help="also take the camera, lidar and laser streams (the renderer draws them all along)")
+    parser.add_argument("--churn", action="store_true", help="spawn/delete churn rounds instead of a soak")
+    parser.add_argument("--rounds", type=int, default=3, help="--churn: rounds (default 3)")
+    parser.add_argument("--pairs", type=int, default=200,
+                        help="--churn: awaited pairs a round, and as many unawaited (default 200)")
     parser.add_argument("--subscriber", nargs=3, metavar=("PORT", "SECONDS", "KEYS"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.subscriber:
         subscriber(int(args.subscriber[0]), float(args.subscriber[1]), args.subscriber[2].split(","))
         return 0
+    if args.churn:
+        with tempfile.TemporaryDirectory(prefix="zenroid-churn-") as tmp:
+            report = run_churn(args.rounds, args.pairs, Path(tmp),
+                               progress=lambda s: print(s, file=sys.stderr, flush=True))
+        print(churn_table(report))
+        print(json.dumps(report, default=str))
+        return 0 if report.get("pass") else 1
     with tempfile.TemporaryDirectory(prefix="zenroid-soak-") as tmp:
         report = run(args.minutes, args.mode, args.sample, Path(tmp),
                      progress=lambda s: print(s, file=sys.stderr, flush=True), sensors=args.sensors)

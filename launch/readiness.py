@@ -1,5 +1,7 @@
 """Which nodes are up and which still serve: the launcher watches the graph's node liveliness tokens
-(``wait_for``) and probes each watched node's ``<node>/get_parameters`` service once a second (health).
+(``wait_for``) and probes each watched node once a second (health): its ``<node>/get_parameters`` service,
+and, from a zenroid node, ``<node>/_alive``, answered on a Zenoh thread with how long its executor has left
+queued work untaken (so a node busy with a flood of requests is seen taking work, a stuck one is not).
 
 A liveliness token only says the node's Zenoh session is open: Zenoh's own threads keep it alive even
 when the node's Python loop is stuck, and a token can linger until the lease expires when the link is
@@ -75,6 +77,7 @@ class NodeReadiness:
             for name in names:
                 try:
                     graph.probe_node(self._session, name, self._replied(name), PROBE_TIMEOUT_S)
+                    graph.probe_alive(self._session, name, self._on_alive(name), PROBE_TIMEOUT_S)
                 except Exception:  # noqa: BLE001 - the session is closing: the loop ends with it
                     return
 
@@ -84,6 +87,16 @@ class NodeReadiness:
             with self._lock:
                 if name in self._answered:
                     self._answered[name] = time.monotonic()
+        return on_answer
+
+    def _on_alive(self, name: str):  # noqa: ANN202 - called on a Zenoh thread
+        def on_answer(stalled_for: float) -> None:
+            # a zenroid node's own account: it last took work stalled_for s ago (a flood of requests that
+            # delays its get_parameters answer is no silence)
+            with self._lock:
+                if name in self._answered:
+                    seen = time.monotonic() - stalled_for
+                    self._answered[name] = max(self._answered[name] or seen, seen)
         return on_answer
 
     def close(self) -> None:

@@ -107,6 +107,7 @@ class Managed:
     silent_reported: bool = False
     sigkill_at: float | None = None  # killed for silence: when SIGKILL follows the SIGTERM
     wedged: bool = False  # killed for silence (its exit is a failure whatever its status)
+    longest_silence: float = 0.0  # the longest time it went without answering a probe (after its first answer)
 
 
 class Supervisor:
@@ -318,6 +319,7 @@ class Supervisor:
         if last is None:
             return  # not serving yet (start-up): only a node that served once can stop serving
         silent = now - last
+        managed.longest_silence = max(managed.longest_silence, silent)
         if silent < spec.health_timeout:
             if managed.silent_reported:
                 managed.silent_reported = False
@@ -514,6 +516,9 @@ class Supervisor:
             leftovers = end_leftovers({self.reaper.pid} if self.reaper else set())
             if leftovers:
                 self.say(f"ended processes the nodes left behind: {', '.join(leftovers)}", "WARN")
+        silences = [f"{m.spec.name} {m.longest_silence:.1f} s" for m in self.nodes if m.longest_silence > 0]
+        if silences:   # how close the watchdog came to a kill: the figure health_timeout is chosen against
+            self.say(f"health: longest time without an answer: {', '.join(silences)}")
         for message in self.plan.on_shutdown:
             self.say(message)
         return self.exit_status

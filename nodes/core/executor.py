@@ -92,6 +92,9 @@ class CallbackGroup:
             executor.put(item)
 
 
+MIN_WORK_S = 0.01   # CPU s the spinner must have spent since the last probe to count as computing
+
+
 class Executor:
     def __init__(self, report_error: Callable[[str], None], *, on_spin_thread: bool = False) -> None:
         self.report_error = report_error
@@ -108,6 +111,39 @@ class Executor:
         self._timer_seq = itertools.count()
         self._timer_lock = threading.Lock()
         self._stop = threading.Event()
+        self._taken_at: float | None = None   # when a spinner last took queued work or found none (None: never)
+        self._spinner: int | None = None       # the thread that did
+        self._working: tuple[float, float] | None = None   # (when, its CPU time then): it last computed
+
+    def stalled_for(self) -> float:
+        """How long queued work has waited while no spinner took any and the spinner did not compute either:
+        0 while it keeps up (idle, or busy in a long callback), growing while it is blocked. A node never
+        spun is not stalled. (A spinner that loops for ever computing is busy, not blocked: not seen here.)"""
+        taken = self._taken_at
+        if taken is None or self._queue.empty():
+            return 0.0
+        now = time.monotonic()
+        cpu = self._spinner_cpu()
+        if cpu is not None:
+            if self._working is None:
+                self._working = (taken, cpu)    # the baseline: its CPU time now, counted from the last take
+            elif cpu - self._working[1] >= MIN_WORK_S:
+                self._working = (now, cpu)
+            taken = max(taken, self._working[0])
+        return max(0.0, now - taken)
+
+    def _took(self) -> None:
+        self._taken_at, self._spinner, self._working = time.monotonic(), threading.get_ident(), None
+
+    def _spinner_cpu(self) -> float | None:
+        try:
+            return time.clock_gettime(time.pthread_getcpuclockid(self._spinner))  # type: ignore[arg-type]
+        except (AttributeError, OSError, TypeError, OverflowError):   # not Linux, or the thread is gone
+            return None
+
+    def mark(self) -> None:
+        """Queue a no-op: the next ``stalled_for`` shows whether a spinner still takes work."""
+        self.put((_nothing, (), "health", None))
 
     # ---------------------------------------------------------------- running callbacks
     def run_callback(self, fn: Callable[..., None], *args: Any, where: str = "callback") -> None:
@@ -185,6 +221,7 @@ class Executor:
 
     def take(self) -> tuple[Any, ...] | None:
         """The next queued callback without waiting (None: nothing queued)."""
+        self._took()
         if self._queue.empty():   # cheaper than the exception get_nowait raises on an empty queue
             return None
         try:
@@ -271,8 +308,10 @@ class Executor:
         try:
             item = self._queue.get(timeout=wait) if wait is None or wait > 0 else self._queue.get_nowait()
         except queue.Empty:
+            self._took()
             self._run_wall_timers()
             return False
+        self._took()
         fn, args, where, group = item
         if group is None and self.default_group is None:
             with self.lock:

@@ -118,6 +118,29 @@ def from_node(reply: zenoh.Reply) -> bool:
         return False
 
 
+ALIVE_SUFFIX = "_alive"   # <node>/_alive: answered on a Zenoh thread with how long the node's executor is stuck
+
+
+def alive_key(node: str) -> str:
+    return f"{node.strip('/')}/{ALIVE_SUFFIX}"
+
+
+def probe_alive(session: zenoh.Session, node: str, on_answer: Callable[[float], None], timeout: float) -> None:
+    """Ask ``node`` how long its executor has left queued work untaken (its spinner stuck): ``on_answer``
+    gets that many seconds, on a Zenoh thread. A busy node that keeps taking work answers 0; a node whose
+    session or callbacks are broken does not answer."""
+    def on_reply(reply: zenoh.Reply) -> None:
+        if reply.ok is None:
+            return
+        try:
+            stalled = float(msgpack.unpackb(reply.ok.payload.to_bytes()).get("stalled_for", 0.0))
+        except Exception:  # noqa: BLE001 - not a zenroid node's answer
+            return
+        on_answer(stalled)
+
+    session.get(alive_key(node), on_reply, timeout=timeout)
+
+
 def probe_node(session: zenoh.Session, node: str, on_answer: Callable[[], None], timeout: float) -> None:
     """Ask ``node`` (``ns/name``) whether it serves, without waiting: ``on_answer()`` runs on a Zenoh thread
     when any reply comes back, even an error one. Every node serves ``<node>/get_parameters`` from its

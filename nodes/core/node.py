@@ -18,13 +18,14 @@ import warnings
 from collections.abc import Callable
 from typing import Any
 
+import msgpack
 import zenoh
 
 import msgs
 from msgs.rcl_interfaces import Log
 from msgs.rosgraph_msgs import Clock
 from msgs.std_msgs import Header
-from nodes.core import names
+from nodes.core import graph, names
 from nodes.core.action import ActionClient, ActionServer
 from nodes.core.clock import NodeClock
 from nodes.core.endpoints import Client, Publisher, ServiceServer, Subscription
@@ -115,6 +116,14 @@ class Node:
             self.create_subscription(Clock, "/sim/clock", self.clock.on_clock, inline=True)
         self.parameters.serve(self.create_service)
         LoggerLevelServices(self.logger, (self.name, self.fully_qualified_name)).serve(self.create_service)
+        # the launcher's liveness probe, answered here on Zenoh's thread (a flood of requests does not delay
+        # it); the mark it queues shows, at the next probe, whether the spinner still takes work
+        self._alive = self.session.declare_queryable(graph.alive_key(self.fully_qualified_name), self._on_alive)
+
+    def _on_alive(self, query: zenoh.Query) -> None:
+        stalled = self.executor.stalled_for()
+        self.executor.mark()
+        query.reply(query.key_expr, msgpack.packb({"stalled_for": stalled}))
 
     # ------------------------------------------------------------ names, logging
     def resolve(self, name: str, *, wildcards: bool = False) -> str:
@@ -262,6 +271,8 @@ class Node:
         self.request_shutdown()
         self.logger.set_sink(None)
         self._endpoints.destroy_all()
+        if getattr(self, "_alive", None) is not None:
+            self._alive.undeclare()
         self.presence.close()
         if self._owns_session:
             self.session.close()

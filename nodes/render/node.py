@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 import msgs
-from nodes.core import Node
+from nodes.core import Node, memory
 from nodes.render import payloads
 from nodes.render.camera import render_camera
 from nodes.render.geometry import (
@@ -93,7 +93,8 @@ class RendererNode(Node):
         self.link_names: list[str] = []
         self.sensors: dict[str, _Sensor] = {}
         self.done_pub = self.create_publisher(RenderDone, "/sim/render/done")
-        self.create_subscription(Scene, "/sim/scene", self._on_scene)
+        # only the newest scene matters: a burst of spawns and deletes must not queue one build after another
+        self.scenes = self.create_subscription(Scene, "/sim/scene", self._on_scene, pulled=True, backlog=1)
         self.frames = self.create_subscription(RenderFrame, "/sim/render/frame", self._queue_frame, pulled=True,
                                                backlog=FRAME_BACKLOG)
         self._pending: list[Any] = []
@@ -124,8 +125,12 @@ class RendererNode(Node):
         for old in self.sensors.values():
             for publisher in old.publishers.values():
                 self.destroy_entity(publisher)
+        previous = self.scene
         self.scene, self.scene_version, self.link_names, self.sensors = ray_scene, int(scene.version), \
             list(scene.links), sensors
+        if previous is not None:
+            previous.close()    # its casting threads end with it
+        memory.release_soon()   # the previous scene's geometry and BVH back to the system
         if sensors:
             self.logger.info(f"scene {scene.version}: {len(scene.models)} models, {len(shapes)} shapes; sensors "
                              + ", ".join(f"{s.key} ({s.spec.type}, {s.spec.update_rate:g} Hz -> "
@@ -252,6 +257,8 @@ class RendererNode(Node):
         else published on sim/scene): ask the simulator's latched one, at most once a second."""
         deadline = time.monotonic() + timeout
         while self.scene_version < version and time.monotonic() < deadline:
+            if self.scenes.take_pending():
+                continue
             if not self.spin_once(0.05):
                 break
         if self.scene_version == version or time.monotonic() < self._next_resync:
@@ -313,6 +320,7 @@ class RendererNode(Node):
             if not self._pending:
                 self.frames.wait(WANTED_POLL_S)
             self.spin_once(0.0)
+            self.scenes.take_pending()
             self._tell_wanted_if_changed()
             for frame, keys in self._next_jobs():
                 try:

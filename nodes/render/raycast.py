@@ -43,6 +43,20 @@ MAX_BACK_FACES = 4                   # back faces a ray passes through (nested h
 BACK_FACE_STEP = np.float32(1e-4)    # m past a back face before casting on (float32 at 100 m: 8 um)
 
 
+_device = None
+
+
+def shared_device():  # noqa: ANN201 - an embreex EmbreeDevice
+    """The process's one Embree device: scenes come and go with every spawn and delete, and a device of
+    their own each would keep its thread-local memory after they are gone."""
+    global _device
+    if _device is None:
+        from embreex import rtcore
+
+        _device = rtcore.EmbreeDevice()
+    return _device
+
+
 @dataclass
 class Hits:
     """The nearest hit of each ray: ``distance`` float32 (N,) along the (unit) ray, +inf for none;
@@ -245,9 +259,7 @@ class RayScene:
         if self._poses is None:
             raise RenderError("cast before the first update(poses): where the links are is not known")
         if self._device is None:
-            from embreex import rtcore
-
-            self._device = rtcore.EmbreeDevice()
+            self._device = shared_device()
         static, dynamic = self._groups[layer]
         static.refresh(self._poses, self.version, self._device)
         # the moving links out of view are left out: each of them costs its triangles' upload every frame

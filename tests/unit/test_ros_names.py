@@ -78,3 +78,4 @@ def test_a_plugin_s_names_are_each_checked() -> None:
     assert "<remapping> 'a//b:=ok': from 'a//b' has an empty token" in text
     assert "<frame_name> 'base*'" in text
     assert plugin_name_problems("s", "imu_plugin", "/robot", {"~/out": "imu"}, "imu_link") == []
+
