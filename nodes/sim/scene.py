@@ -100,7 +100,9 @@ def build_scene(world: PhysicsWorld, models: dict[str, Model], version: int,
     """The plain data of a zenroid_msgs/Scene (the ground first, then the models in order) and its links."""
     skeletons = [(GROUND_NAME, world.ground, "", True, "")] if world.ground is not None else []
     for name, model in models.items():
-        description = getattr(getattr(model, "spec", None), "xml", "") if model.namespace else ""
+        # a robot's URDF, at the root namespace too (the tutorials' layout); an SDF model has none
+        description = getattr(getattr(model, "spec", None), "xml", "") or ""
+        description = description if "<robot" in description else ""
         skeletons.append((name, model.skeleton, model.namespace, model.static, description))
     scene = {"version": version, "models": [], "namespaces": [], "static_models": [], "descriptions": [],
              "links": [], "link_models": [], "shapes": [], "has_camera_pose": camera_pose is not None,

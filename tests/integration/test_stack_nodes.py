@@ -213,3 +213,81 @@ def test_rviz2_opens_our_viewer_with_the_config_mapped(processes, zenoh_port, tm
     assert f"rviz2: {config} shown: fixed frame 'map', RobotModel (/robot_description)" in out
     assert "rviz2: not shown by our viewer: Path (Path, /plan)" in out
     assert proc.poll() is None, out
+
+
+PLUGIN_CART = """<robot name="cart">
+  <link name="world"/>
+  <link name="base"><inertial><mass value="5"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/>
+    </inertial><collision><geometry><box size="0.4 0.4 0.1"/></geometry></collision></link>
+  <link name="slider"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>
+    </inertial><collision><geometry><box size="0.1 0.1 0.1"/></geometry></collision></link>
+  <joint name="fix" type="fixed"><parent link="world"/><child link="base"/><origin xyz="0 0 0.5"/></joint>
+  <joint name="slider" type="prismatic"><parent link="base"/><child link="slider"/><axis xyz="1 0 0"/>
+    <limit lower="-1" upper="1" effort="100" velocity="2"/></joint>
+  <ros2_control name="GazeboSystem" type="system">
+    <hardware><plugin>gazebo_ros2_control/GazeboSystem</plugin></hardware>
+    <joint name="slider">
+      <command_interface name="position"/>
+      <state_interface name="position"><param name="initial_value">0.2</param></state_interface>
+      <state_interface name="velocity"/>
+    </joint>
+  </ros2_control>
+  <gazebo>
+    <plugin filename="libgazebo_ros2_control.so" name="gazebo_ros2_control">
+      <ros><namespace>/cart</namespace></ros>
+      <parameters>{controllers}</parameters>
+    </plugin>
+  </gazebo>
+</robot>"""
+
+PLUGIN_CONTROLLERS = """controller_manager:
+  ros__parameters:
+    update_rate: 100
+    joint_state_broadcaster:
+      type: joint_state_broadcaster/JointStateBroadcaster
+    joint_trajectory_controller:
+      type: joint_trajectory_controller/JointTrajectoryController
+joint_trajectory_controller:
+  ros__parameters:
+    joints: [slider]
+    command_interfaces: [position]
+    state_interfaces: [position, velocity]
+"""
+
+
+def test_gazebo_ros2_control_plugin_starts_the_manager(processes, zenoh_port, session, tmp_path) -> None:
+    """gazebo_ros2_control's way: the URDF's plugin (namespace, parameters file) gives the spawned robot its
+    controller manager; the state interface's initial_value is where the joint starts; a trajectory moves it."""
+    import subprocess
+    import sys
+
+    controllers = tmp_path / "controllers.yaml"
+    controllers.write_text(PLUGIN_CONTROLLERS)
+    urdf = tmp_path / "cart.urdf"
+    urdf.write_text(PLUGIN_CART.format(controllers=controllers))
+    job = processes.start("-m", "nodes.tools.ros2", "launch", "gazebo_ros", "gzserver.launch.py",
+                          "world:=empty.world", "sensors:=false", name="gzserver")
+    wait_until(lambda: "simulator ready" in processes.output(job), timeout=90, message="the simulator")
+    env = processes.env()
+
+    def ros2(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "nodes.tools.ros2", *args], env=env, capture_output=True,
+                              text=True, timeout=timeout)
+
+    spawned = ros2("run", "gazebo_ros", "spawn_entity.py", "-entity", "cart", "-file", str(urdf))
+    assert spawned.returncode == 0, spawned.stdout + spawned.stderr
+    wait_until(lambda: "controller manager /cart/controller_manager" in processes.output(job), timeout=60,
+               message="the plugin's controller manager")
+    states = Latest(session, "cart/joint_states", JointState)
+    for name in ("joint_state_broadcaster", "joint_trajectory_controller"):
+        loaded = wait_until(lambda n=name: (done := ros2("control", "load_controller", "--set-state", "active", n,
+                                                         "-c", "/cart/controller_manager")).returncode == 0 and done,
+                            timeout=90, interval=1.0, message=f"{name} loaded and active")
+        assert "into state active" in loaded.stdout
+    first = wait_until(states.positions, timeout=30, message="cart/joint_states")
+    assert first["slider"] == pytest.approx(0.2, abs=0.02)    # initial_value
+    sent = ros2("topic", "pub", "--once", "/cart/joint_trajectory_controller/joint_trajectory",
+                "trajectory_msgs/msg/JointTrajectory",
+                "{joint_names: [slider], points: [{positions: [0.5], time_from_start: {sec: 1}}]}")
+    assert sent.returncode == 0, sent.stderr
+    wait_until(lambda: abs(states.positions()["slider"] - 0.5) < 0.02, timeout=60, message="the cart at 0.5")

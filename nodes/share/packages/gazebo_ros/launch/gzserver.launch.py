@@ -35,6 +35,9 @@ def generate_launch_description():
                  '-p', ['paused:=', LaunchConfiguration('pause')],
                  '-p', ['sensors:=', LaunchConfiguration('sensors')]],
             output='screen'),
+        # gazebo_ros2_control's plugin: a controller manager for each robot whose URDF loads it
+        ExecuteProcess(name='gazebo_ros2_control', cmd=[sys.executable, '-m', 'nodes.gazebo_ros2_control'],
+                       output='screen'),
         ExecuteProcess(name='renderer', cmd=[sys.executable, '-m', 'nodes.render'], output='screen',
                        condition=IfCondition(LaunchConfiguration('sensors'))),
     ])
