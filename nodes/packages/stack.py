@@ -28,6 +28,11 @@ SERVED: dict[str, dict[str, Served]] = {
     "robot_state_publisher": {
         "robot_state_publisher": Served("nodes.state_publisher", ros_node=True, what="our state publisher"),
     },
+    "gazebo_ros2_control": {
+        # what Gazebo's plugin loading does (gzserver.launch.py starts it beside the simulator)
+        "gazebo_ros2_control": Served("nodes.gazebo_ros2_control", ros_node=True,
+                                      what="a controller manager for each robot whose URDF loads the plugin"),
+    },
     "joint_state_publisher": {
         "joint_state_publisher": Served("nodes.joint_state_publisher.node", ros_node=True,
                                         what="joint_states from the robot description"),

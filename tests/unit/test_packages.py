@@ -120,7 +120,7 @@ def test_python_distributions_with_an_ament_index(clean_env: Path, tmp_path: Pat
 
 def test_the_stack_packages_and_our_robots(clean_env: Path) -> None:
     found = list_packages()
-    for name in ("gazebo_ros", "ros_gz_sim", "controller_manager", "robot_state_publisher", "joint_state_publisher",
+    for name in ("gazebo_ros", "gazebo_ros2_control", "ros_gz_sim", "controller_manager", "robot_state_publisher", "joint_state_publisher",
                  "joint_state_publisher_gui", "rviz2", "tf2_ros", "xacro", "zenroid_description"):
         assert found[name].source == "zenroid", name
     share = find_share("zenroid_description")
