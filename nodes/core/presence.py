@@ -14,6 +14,22 @@ from nodes.core import graph, ros2
 from nodes.core.log import Logger
 
 
+class _EndpointToken:
+    """An endpoint's liveliness token: undeclared, it is also forgotten by the presence (an endpoint created and
+    destroyed over and over, as a spawned robot's, must not leave its token behind)."""
+
+    __slots__ = ("_token", "_live")
+
+    def __init__(self, token: Any, live: set) -> None:
+        self._token = token
+        self._live = live
+        live.add(self)
+
+    def undeclare(self) -> None:
+        self._live.discard(self)
+        self._token.undeclare()
+
+
 class GraphPresence:
     def __init__(self, session: zenoh.Session, fully_qualified_name: str, logger: Logger) -> None:
         # session, session_id, fully_qualified_name and logger are what ``ros2.attach`` reads
@@ -23,15 +39,15 @@ class GraphPresence:
         self.logger = logger
         self._tokens: list[Any] = [session.liveliness().declare_token(
             graph.node_key(self.session_id, fully_qualified_name))]
+        self._endpoint_tokens: set[_EndpointToken] = set()
         self._ros2 = ros2.attach(self)  # the ROS 2 wire (rmw_zenoh) presence, None when off
 
     def token(self, kind: str, key: str, type_name: str) -> Any:
         """Announce one endpoint (``kind`` as in ``graph.KINDS``); the token is undeclared by ``close`` at the
         latest, or earlier by the endpoint itself."""
-        token = self.session.liveliness().declare_token(
-            graph.endpoint_key(kind, self.session_id, self.fully_qualified_name, key, type_name))
-        self._tokens.append(token)
-        return token
+        return _EndpointToken(self.session.liveliness().declare_token(
+            graph.endpoint_key(kind, self.session_id, self.fully_qualified_name, key, type_name)),
+            self._endpoint_tokens)
 
     def mirror(self, endpoint: Any) -> Any | None:
         """The endpoint's twin on the ROS 2 wire (an object with ``close()``), None when not mirrored."""
@@ -40,7 +56,7 @@ class GraphPresence:
     def close(self) -> None:
         if self._ros2 is not None:
             self._ros2.close()
-        for token in self._tokens:
+        for token in [*self._endpoint_tokens, *self._tokens]:
             try:
                 token.undeclare()
             except Exception:  # noqa: BLE001 - best effort on the way out (already undeclared, session closing)

@@ -265,3 +265,19 @@ def test_every_launch_file_takes_ros2_false():
         assert ros2_wire_of(resolve(path, {"ros2": "false"})) is False, path.name
     assert child_environment(None, ros2=False)["ZENROID_ROS2"] == "0"
     assert "ZENROID_ROS2" not in child_environment(None, ros2=True) or os.environ.get("ZENROID_ROS2")
+
+
+def test_entity_ids_of_closed_entities_are_taken_again_smallest_first():
+    """Zenoh keeps memory for every distinct liveliness key; rmw ids in the keys must not grow with churn."""
+    from nodes.core.ros2 import _EntityIds
+
+    ids = _EntityIds()
+    assert [ids.take() for _ in range(4)] == [0, 1, 2, 3]
+    ids.give_back(2)
+    ids.give_back(1)
+    assert [ids.take(), ids.take(), ids.take()] == [1, 2, 4]
+    for _ in range(1000):               # a robot spawned and deleted over and over: the same ids
+        taken = [ids.take() for _ in range(3)]
+        for entity_id in taken:
+            ids.give_back(entity_id)
+    assert ids.take() == 5

@@ -10,7 +10,7 @@ per endpoint, which returns an object with ``close()`` (or None when the endpoin
 
 from __future__ import annotations
 
-import itertools
+import heapq
 import os
 import threading
 from typing import Any
@@ -41,12 +41,35 @@ def domain_id() -> int:
     return value
 
 
+class _EntityIds:
+    """rmw_zenoh's entity ids of one session: unique among the live entities, and a closed entity's id is taken
+    again (the smallest first). Zenoh keeps a little memory for every distinct key ever declared, in the node
+    and in the router, and the id is part of each liveliness key: fresh ids on every spawn/delete grew both
+    without bound."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._next = 0
+        self._free: list[int] = []
+
+    def take(self) -> int:
+        with self._lock:
+            if self._free:
+                return heapq.heappop(self._free)
+            self._next += 1
+            return self._next - 1
+
+    def give_back(self, entity_id: int) -> None:
+        with self._lock:
+            heapq.heappush(self._free, entity_id)
+
+
 class _SessionState:
-    """What all nodes sharing one Zenoh session share: the graph watcher and rmw_zenoh's id counter."""
+    """What all nodes sharing one Zenoh session share: the graph watcher and rmw_zenoh's entity ids."""
 
     def __init__(self, session: zenoh.Session, domain: int) -> None:
         self.graph = RosGraph(session, domain)
-        self.ids = itertools.count()
+        self.ids = _EntityIds()
         self.users = 0
 
 
@@ -74,7 +97,11 @@ class Ros2Node:
         self._closed = False
 
     def next_entity_id(self) -> int:
-        return next(self._state.ids)
+        return self._state.ids.take()
+
+    def release_entity_id(self, entity_id: int) -> None:
+        """An entity's token is undeclared: its id may serve the next one."""
+        self._state.ids.give_back(entity_id)
 
     def warn(self, text: str) -> None:
         # throttled per what and where ("ROS 2 wire: bad request on /humanoid/x"), not per reason, so every
@@ -121,6 +148,7 @@ class Ros2Node:
             self._token.undeclare()
         except Exception:  # noqa: BLE001 - session already closing
             pass
+        self.release_entity_id(self.node_id)
         with _sessions_lock:
             self._state.users -= 1
             if self._state.users <= 0:

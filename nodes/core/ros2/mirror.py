@@ -39,6 +39,7 @@ class MirrorOwner(Protocol):
     graph: RosGraph
 
     def next_entity_id(self) -> int: ...
+    def release_entity_id(self, entity_id: int) -> None: ...
     def warn(self, text: str) -> None: ...
 
 _CDR = zenoh.Encoding.APPLICATION_CDR
@@ -61,13 +62,18 @@ class _Entity:
         self.ros_name = ros_name
         self.type_name = type_name
         self.data_key = names.data_key(owner.domain, ros_name, type_name)
-        key = names.endpoint_token(owner.domain, owner.zid, owner.node_id, owner.next_entity_id(), kind,
+        self.entity_id: int | None = owner.next_entity_id()
+        key = names.endpoint_token(owner.domain, owner.zid, owner.node_id, self.entity_id, kind,
                                    owner.namespace, owner.name, ros_name, type_name, qos)
         self.gid = attachment.make_gid(key)
         self.token = owner.session.liveliness().declare_token(key)
 
     def close(self) -> None:
+        if self.entity_id is None:
+            return   # closed already: its id may be another entity's by now
         self.token.undeclare()
+        self.owner.release_entity_id(self.entity_id)
+        self.entity_id = None
 
 
 class TopicMirror:
