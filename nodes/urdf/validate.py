@@ -100,6 +100,9 @@ def _joint_errors(model: RobotModel) -> list[str]:
 def _inertia_errors(model: RobotModel) -> list[str]:
     errors: list[str] = []
     frames = set(frame_links(model))   # ROS tolerates these: the simulator merges them into their parent
+    roots = model.roots()
+    if len(roots) == 1 and any(j.parent == roots[0] and j.type == "fixed" for j in model.joints.values()):
+        frames.add(roots[0])   # a massless root takes its fixed children's mass in the simulator (Gazebo's way)
     for link in model.links.values():
         if link.inertial is None or link.name in frames:
             continue
