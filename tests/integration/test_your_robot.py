@@ -83,6 +83,7 @@ def launch(tmp_path: Path, port: int, *args: str) -> Scenario:
 
 @needs_robots
 @pytest.mark.slow
+@pytest.mark.timeout(900)   # 19 s of lockstep sim time: minutes when the machine is loaded (load 20 seen)
 def test_g1_stands_squats_through_the_jtc_and_comes_back(tmp_path: Path, zenoh_port: int) -> None:
     g1 = ROBOTS / "g1_description" / "urdf" / "g1_29dof_rev_1_0.urdf"
     scenario = launch(tmp_path, zenoh_port, f"robot_file:={g1}")
@@ -117,6 +118,7 @@ def test_g1_stands_squats_through_the_jtc_and_comes_back(tmp_path: Path, zenoh_p
 
 @needs_robots
 @pytest.mark.slow
+@pytest.mark.timeout(900)
 def test_talos_with_its_frames_merged_stands_half_sitting(tmp_path: Path, zenoh_port: int) -> None:
     talos = ROBOTS / "talos_data" / "robots" / "talos_reduced.urdf"
     scenario = launch(tmp_path, zenoh_port, f"robot_file:={talos}", "initial_pose:=half_sitting")
