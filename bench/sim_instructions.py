@@ -120,7 +120,7 @@ class PlainHumanoid:
 
         robot = dart.utils.DartLoader().parseSkeleton(str(URDF))
         robot.setPosition(5, SPAWN_Z)                # FreeJoint: rx ry rz x y z
-        gains = sim_gains()
+        gains = self.gains(robot)
         self.squatting = []                          # (joint, pitch): the leg joints the squat moves
         self.force_per_depth = np.zeros(robot.getNumDofs())   # kp * pitch per DOF: the squat as joint forces
         for i in range(robot.getNumJoints()):
@@ -128,7 +128,7 @@ class PlainHumanoid:
             if joint.getNumDofs() != 1:
                 continue
             name = joint.getName()
-            gain = next(g for pattern, g in gains.items() if fnmatch.fnmatchcase(name, pattern))
+            gain = gains[name]
             joint.setLimitEnforcement(True)          # the humanoid has no continuous joint
             joint.setSpringStiffness(0, float(gain["p"]))
             joint.setDampingCoefficient(0, float(gain["d"]))
@@ -138,6 +138,19 @@ class PlainHumanoid:
                 self.force_per_depth[joint.getIndexInSkeleton(0)] = float(gain["p"]) * pitch_of(name)
         world.addSkeleton(robot)
         self.world, self.robot = world, robot
+
+    @staticmethod
+    def gains(robot) -> dict[str, dict[str, float]]:
+        """The simulator's gains for each joint: config/sim.yaml's patterns, else the physics' (computed once
+        here, as the simulator computes them once at spawn: nothing of ours runs while the loop steps)."""
+        from nodes.sim.servo_gains import physics_gains
+
+        names = [robot.getJoint(i).getName() for i in range(robot.getNumJoints())
+                 if robot.getJoint(i).getNumDofs() == 1]
+        patterns = sim_gains() or {}
+        physics = physics_gains(robot, names, floating=True)
+        return {name: next((g for pattern, g in patterns.items() if fnmatch.fnmatchcase(name, pattern)),
+                           {"p": physics[name].kp, "d": physics[name].kd}) for name in names}
 
     def settle(self, steps: int = SETTLE_STEPS) -> None:
         for _ in range(steps):
