@@ -36,9 +36,10 @@ def generate_launch_description():
                   '-p', ['paused:=', LaunchConfiguration('paused')], '-p', ['sensors:=', LaunchConfiguration('sensors')],
                   '-p', entity]
     spawner = dict(package='controller_manager', executable='spawner', namespace=robot, output='screen')
+    wait = ['--controller-manager-timeout', '60']   # as humanoid.yaml: a loaded machine starts the manager late
     return LaunchDescription([
         DeclareLaunchArgument('robot', default_value='humanoid'),
-        *[DeclareLaunchArgument(axis, default_value='0.93' if axis == 'z' else '0.0') for axis in 'xyzRPY'],
+        *[DeclareLaunchArgument(axis, default_value='auto' if axis == 'z' else '0.0') for axis in 'xyzRPY'],
         DeclareLaunchArgument('mode', default_value='realtime', choices=['realtime', 'lockstep']),
         DeclareLaunchArgument('paused', default_value='false'),
         DeclareLaunchArgument('gui', default_value='true'),
@@ -55,8 +56,8 @@ def generate_launch_description():
         python_node('controller_manager', 'nodes.control', '--ns', robot, '--params-file',
                     LaunchConfiguration('controllers'), respawn=True, respawn_delay=0.1),
         Node(arguments=['joint_state_broadcaster', 'imu_sensor_broadcaster', 'left_foot_ft_broadcaster',
-                        'right_foot_ft_broadcaster'], **spawner),
-        Node(arguments=['joint_trajectory_controller'], **spawner),
+                        'right_foot_ft_broadcaster', *wait], **spawner),
+        Node(arguments=['joint_trajectory_controller', *wait], **spawner),
         python_node(LaunchConfiguration('commander'), ['nodes.commanders.', LaunchConfiguration('commander')],
                     '--ns', robot, '-p', 'use_sim_time:=true', respawn=True, respawn_delay=0.3,
                     condition=IfCondition(NotSubstitution(EqualsSubstitution(LaunchConfiguration('commander'),
