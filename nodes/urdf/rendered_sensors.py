@@ -26,7 +26,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from lxml import etree
 
-from nodes.core.names import shown, topic_problem
 from nodes.urdf.sensors import (
     Noise,
     SensorDeclarationError,
@@ -386,6 +385,8 @@ def rendered_sensor_problems(specs: list[RenderedSensorSpec], links: dict | set,
     problems: list[str] = []
     seen = set(taken)
     for spec in specs:
+        from nodes.core.names import shown, topic_problem  # here: no Zenoh for a robot without such sensors
+
         where = spec.where
         if (problem := naming_problem(spec.name, where, seen)) is not None:
             problems.append(problem)

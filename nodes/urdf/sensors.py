@@ -25,7 +25,6 @@ from typing import Any
 import numpy as np
 from lxml import etree
 
-from nodes.core import names
 from nodes.urdf.rotation import rpy_matrix
 
 IMU_INTERFACES = ("orientation.x", "orientation.y", "orientation.z", "orientation.w",
@@ -155,7 +154,12 @@ class SensorSpec:
 
 
 def sensor_where(sensor_name: str, line: int | None) -> str:
-    shown = f"'{sensor_name}'" if len(sensor_name) <= 60 else names.shown(sensor_name)
+    if len(sensor_name) <= 60:
+        shown = f"'{sensor_name}'"
+    else:
+        from nodes.core import names  # here: the launcher checks robots without importing Zenoh
+
+        shown = names.shown(sensor_name)
     return f"sensor {shown}" + (f" (line {line})" if line else "")
 
 
@@ -163,6 +167,8 @@ def plugin_name_problems(where: str, node: str, namespace: str, remappings: dict
                          frame: str = "") -> list[str]:
     """The names a gazebo_ros plugin writes, each checked as ROS checks it: its node name, its
     ``<ros><namespace>``, both sides of each ``<remapping>``, its ``<frame_name>``."""
+    from nodes.core import names  # here: the launcher checks robots without importing Zenoh
+
     problems = []
     if (problem := names.node_name_problem(node)) is not None:
         problems.append(f"{where} <plugin name> {names.shown(node)}: {problem}")
@@ -233,6 +239,8 @@ def naming_problem(name: str, where: str, taken: Container[str]) -> str | None:
         return f"{where}: <sensor> has no name attribute"
     if name in taken:
         return f"{where}: a second sensor named '{name}'"
+    from nodes.core import names  # here: the launcher checks robots without importing Zenoh
+
     if (problem := names.node_name_problem(name)) is not None:
         return f"{where}: <sensor name> {problem}"
     return None
