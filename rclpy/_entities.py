@@ -31,8 +31,8 @@ def check_message(msg: Any, msg_type: Any, where: str) -> bytes:
     if getattr(msg, "_type", None) != msg_type._type:
         raise TypeError(f"{where}: expected {msg_type._type}, got {type(msg).__module__}.{type(msg).__name__}")
     try:
-        payload = msgs.encode(msg)
-    except (TypeError, ValueError, OverflowError) as exc:
+        payload = msgs.encode(msg)   # a ValueError here already names the field: it goes as it is
+    except (TypeError, OverflowError) as exc:
         raise TypeError(f"{where}: {msg_type._type} cannot be encoded: {exc}") from None
     # Decoding every message would double the cost of a publish: only a payload that may hold what receivers
     # refuse is decoded here, to name the field. Under MAX_ARRAY_LENGTH bytes no array can be too long, and
