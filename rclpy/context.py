@@ -49,9 +49,10 @@ class Context:
                     rclpy_logging.get_logger(name).set_level(level)
             self._session = self._open_session()
             self._ok = True
-        # a program that ends without rclpy.shutdown() (an exception, sys.exit) still closes its session:
-        # an open Zenoh session can hold the interpreter's exit
-        atexit.register(self.try_shutdown)
+        # A program that ends without rclpy.shutdown() (an exception, sys.exit) still closes its session, and
+        # before the interpreter waits for its threads: threads Zenoh's callbacks run on end only with it.
+        register = getattr(threading, "_register_atexit", atexit.register)
+        register(self.try_shutdown)
 
     def _open_session(self) -> Any:
         from nodes.core.session import ENV_CONFIG, default_endpoints, is_connected, open_peer
