@@ -149,14 +149,12 @@ def test_002_managed_motor_controller_walked_by_zenroid_lifecycle(processes, ros
         [sys.executable, "-m", "nodes.tools.cli", "lifecycle", "nodes"], capture_output=True, text=True,
         env=processes.env(), cwd=ROOT, timeout=60).stdout, timeout=30, message="the managed node listed")
     assert "unconfigured" in lifecycle("get", "/motor_controller")
-    for transition, state, line in (("configure", "inactive", "Configuring..."),
-                                    ("activate", "active", "Activating..."),
-                                    ("deactivate", "inactive", "Deactivating..."),
-                                    ("cleanup", "unconfigured", "Cleaning up..."),
-                                    ("shutdown", "finalized", "Shutting down...")):
-        lifecycle("set", "/motor_controller", transition)
-        assert state in lifecycle("get", "/motor_controller")
+    for transition, line in (("configure", "Configuring..."), ("activate", "Activating..."),
+                             ("deactivate", "Deactivating..."), ("cleanup", "Cleaning up..."),
+                             ("shutdown", "Shutting down...")):
+        lifecycle("set", "/motor_controller", transition)   # exits 2 unless the transition succeeded
         assert line in processes.output(node)
+    assert "finalized" in lifecycle("get", "/motor_controller")
 
 
 def test_003_position_and_pid_controllers_run(processes, router, ros_env) -> None:
