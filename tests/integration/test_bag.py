@@ -151,7 +151,7 @@ def test_recorded_bag_is_a_rosbag2_bag_for_rosbags(router, tmp_path) -> None:
 
 
 def _rosbags_bag(path: Path, storage: StoragePlugin) -> list[tuple[float, object]]:
-    """JointStates at irregular times over 3 s, plus a Temperature (a type zenroid does not define)."""
+    """JointStates at irregular times over 3 s, plus a statistics data point (a type zenroid does not define)."""
     js = JAZZY.types["sensor_msgs/msg/JointState"]
     header = JAZZY.types["std_msgs/msg/Header"]
     stamp = JAZZY.types["builtin_interfaces/msg/Time"]
@@ -174,7 +174,7 @@ def _rosbags_bag(path: Path, storage: StoragePlugin) -> list[tuple[float, object
 @pytest.mark.parametrize("storage", [StoragePlugin.MCAP, StoragePlugin.SQLITE3], ids=["mcap", "sqlite3"])
 def test_plays_bags_written_by_rosbags(router, tmp_path, storage: StoragePlugin) -> None:
     """A rosbag2 directory written by rosbags plays here: every message with its values, in order, with
-    the original timing scaled by --rate; the Temperature topic (a type we do not define) is skipped, said so."""
+    the original timing scaled by --rate; the statistics topic (a type we do not define) is skipped, said so."""
     from nodes.core import Node
 
     rate = 3.0

@@ -13,6 +13,8 @@ def sample_message(type_name: str, depth: int = 0) -> Any:
     values: dict[str, Any] = {}
     for i, f in enumerate(get_spec(type_name).fields):
         n = f.array_size if f.array_size is not None else (2 if depth < 3 else 0)
+        if f.upper_bound is not None:
+            n = min(n, f.upper_bound)
         if f.is_bytes:
             values[f.name] = bytes((i + k) % 256 for k in range(n))
         elif f.is_array:
@@ -46,17 +48,16 @@ def chain_urdf(n: int, star: bool = False) -> str:
 
 
 # A standard type zenroid does not define (bags hold topics of such types; readers skip them, said so).
-UNDEFINED_TYPE = "sensor_msgs/msg/Temperature"
+UNDEFINED_TYPE = "statistics_msgs/msg/StatisticDataPoint"
 
 
 def undefined_type_cdr() -> bytes:
-    """A sensor_msgs/Temperature (zero stamp), CDR as rosbags' Jazzy types write it."""
+    """A statistics_msgs/StatisticDataPoint, CDR as rosbags' Jazzy types write it."""
     from rosbags.typesys import Stores, get_typestore
 
     import msgs
 
     assert UNDEFINED_TYPE not in msgs.list_types(), f"zenroid now defines {UNDEFINED_TYPE}: pick another type"
     types = get_typestore(Stores.ROS2_JAZZY).types
-    return bytes(get_typestore(Stores.ROS2_JAZZY).serialize_cdr(types[UNDEFINED_TYPE](
-        header=types["std_msgs/msg/Header"](stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id=""),
-        temperature=21.5, variance=0.0), UNDEFINED_TYPE))
+    return bytes(get_typestore(Stores.ROS2_JAZZY).serialize_cdr(types[UNDEFINED_TYPE](data_type=1, data=21.5),
+                                                               UNDEFINED_TYPE))

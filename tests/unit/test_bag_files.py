@@ -40,7 +40,10 @@ JAZZY = get_typestore(Stores.ROS2_JAZZY)
 # which we do not define), nor the action wrappers (FeedbackMessage, SendGoal_Request...), whose nested
 # types (pkg/action/X_Feedback) their .msg text cannot name: the recorder reports them as "not recorded".
 ACTION_WRAPPERS = ("_FeedbackMessage", "_SendGoal_Request", "_GetResult_Response")
-TOPIC_TYPES = [t for t in ALL if "/srv/" not in t and not t.endswith(ACTION_WRAPPERS)]
+# ...nor types with a `char` field, which rosbags hashes unlike rosidl (tests/unit/test_ros2_wire.py: UPSTREAM_JAZZY),
+# or a `wstring` one, which it does not model: the writer records only what the reader will accept.
+UNMODELLED = [t for t in ALL if any(f.base in ("char", "wstring") for f in get_spec(t).fields)]
+TOPIC_TYPES = [t for t in ALL if "/srv/" not in t and not t.endswith(ACTION_WRAPPERS) and t not in UNMODELLED]
 METADATA_KEYS = {"version", "storage_identifier", "duration", "starting_time", "message_count",
                  "topics_with_message_count", "compression_format", "compression_mode", "relative_file_paths",
                  "files", "custom_data", "ros_distro"}
@@ -253,7 +256,7 @@ def test_directory_without_metadata_still_opens(tmp_path: Path) -> None:
 
 
 def rosbags_bag(path: Path, storage: StoragePlugin, compression: CompressionMode | None = None) -> list[Any]:
-    """A bag written by rosbags: JointStates on two topics plus a Temperature (a type zenroid does not define)."""
+    """A bag written by rosbags: JointStates on two topics plus a statistics data point (a type zenroid does not define)."""
     js = JAZZY.types["sensor_msgs/msg/JointState"]
     header = JAZZY.types["std_msgs/msg/Header"]
     stamp = JAZZY.types["builtin_interfaces/msg/Time"]

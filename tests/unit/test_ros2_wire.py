@@ -42,6 +42,9 @@ UPSTREAM_JAZZY = {
         "RIHS01_51d8dd89cc624cbe9daaeeb4d80d6de9b86168ffdc3be41fefc0953e3c26e480",
     "control_msgs/action/FollowJointTrajectory":
         "RIHS01_738ebcb7a2d7cfa42f9f1001cc99ce3a4383d1cfe508015d9be8485e4b1c66f6",
+    # rosidl turns a .msg `char` into uint8 (rosidl_adapter's MSG_TYPE_TO_IDL); rosbags hashes it as a char of
+    # its own. The value the generated Jazzy bindings carry (e.g. ros-z's and cyclonedds' msgspec stubs):
+    "std_msgs/msg/Char": "RIHS01_3ad2d04dd29ba19d04b16659afa3ccaedd691914b02a64e82e252f2fa6a586a9",
 }
 
 
@@ -54,7 +57,8 @@ def test_every_standard_message_hashes_like_rosbags_jazzy():
     assert {"sensor_msgs/msg/JointState", "trajectory_msgs/msg/JointTrajectory", "tf2_msgs/msg/TFMessage",
             "rosgraph_msgs/msg/Clock", "rcl_interfaces/msg/Log", "action_msgs/msg/GoalStatusArray"} <= set(types)
     for type_name in types:
-        assert rihs01(type_name) == JAZZY.hash_rihs01(type_name), type_name
+        if type_name not in UPSTREAM_JAZZY:   # rosbags hashes a `char` field unlike rosidl (see there)
+            assert rihs01(type_name) == JAZZY.hash_rihs01(type_name), type_name
 
 
 @pytest.mark.parametrize("type_name", sorted(UPSTREAM_JAZZY))
