@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Any
 
 from msgs import packages
-from msgs.codec import DEFAULT_LIMITS, DecodeError, Limits, decode, encode, from_dict, to_dict
+from msgs.codec import DEFAULT_LIMITS, DecodeError, EncodeError, Limits, decode, encode, from_dict, to_dict
 from msgs.compiled import builder, packer
 from msgs.idl import DefinitionError
 from msgs.registry import (
@@ -29,7 +29,7 @@ from msgs.timeutil import duration_from_sec, duration_to_sec, time_from_sec, tim
 packages.install()  # ``from msgs.sensor_msgs import JointState`` (msgs/packages.py)
 
 __all__ = [
-    "Action", "DEFAULT_LIMITS", "DecodeError", "DefinitionError", "Limits", "Service", "add_search_path",
+    "Action", "DEFAULT_LIMITS", "DecodeError", "DefinitionError", "EncodeError", "Limits", "Service", "add_search_path",
     "builder", "decode", "duration_from_sec", "duration_to_sec", "encode", "from_dict", "get_class", "get_type",
     "list_types", "package_names", "packer", "register_message", "time_from_sec", "time_map", "time_to_sec",
     "to_dict",

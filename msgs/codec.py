@@ -31,6 +31,17 @@ class DecodeError(ValueError):
         super().__init__(where + reason)
 
 
+class EncodeError(ValueError):
+    """A message that cannot be sent: a value a receiver would refuse, named by its field path."""
+
+    def __init__(self, type_name: str, path: str, reason: str) -> None:
+        self.type_name = type_name
+        self.path = path
+        self.reason = reason
+        where = f"{type_name}: {path}: " if path else f"{type_name}: "
+        super().__init__(f"{where}{reason} (not sent)")
+
+
 @dataclass(frozen=True)
 class Limits:
     """Size limits applied on decode (oversized messages are rejected, not truncated)."""
@@ -50,11 +61,60 @@ DEFAULT_LIMITS = Limits()
 
 def to_dict(msg: Any) -> dict[str, Any]:
     """A message as plain msgpack-ready data (nested dicts, lists, bytes)."""
-    return compiled.encoder(msg._type)(msg)
+    try:
+        return compiled.encoder(msg._type)(msg)
+    except Exception as exc:  # noqa: BLE001 - a value no setter saw (appended to a list, set inside one)
+        raise _explain(msg, exc) from None
 
 
 def encode(msg: Any) -> bytes:
-    return compiled.packb(compiled.encoder(msg._type)(msg))
+    """msgpack bytes of ``msg``, checked as a receiver checks them: a value it would refuse (NaN, a string
+    too long, a wrong type appended to a list) raises ``EncodeError`` naming the field, here, not there."""
+    type_name = msg._type
+    limits = _limits_for(type_name, DEFAULT_LIMITS)
+    try:
+        plain = compiled.checked_encoder(type_name, limits.allow_nonfinite)(msg)
+    except Exception as exc:  # noqa: BLE001 - Refuse, or whatever a foreign object raised: say which field
+        raise _explain(msg, exc) from None
+    payload = compiled.packb(plain)
+    if len(payload) > min(limits.max_string_length, limits.max_array_length):
+        # only now can a string or an array be over the receiver's limits: the receiver's own check
+        try:
+            _precise(type(msg), plain, limits)
+        except DecodeError as error:
+            raise EncodeError(type_name, error.path, error.reason) from None
+        if len(payload) > limits.max_message_bytes:
+            raise EncodeError(type_name, "", f"message is {len(payload)} bytes, over the "
+                                             f"{limits.max_message_bytes}-byte limit")
+    return payload
+
+
+def _explain(msg: Any, exc: Exception) -> EncodeError:
+    """Why ``msg`` cannot be encoded, found by the precise decoder on a loose copy of it."""
+    type_name = msg._type
+    try:
+        _precise(type(msg), _loose(msg, type_name), _limits_for(type_name, DEFAULT_LIMITS))
+    except DecodeError as error:
+        return EncodeError(type_name, error.path, error.reason)
+    return EncodeError(type_name, "", f"cannot be encoded ({type(exc).__name__}: {exc})")
+
+
+def _loose(value: Any, type_name: str) -> Any:
+    """A message as plain data without converting anything, so the precise decoder sees the offending value
+    (a message of another type stays an object: "expected a map for ..., got Point")."""
+    if getattr(value, "_type", None) != type_name:
+        return value
+    out = {}
+    for f in get_spec(type_name).fields:
+        v = getattr(value, f.name, None)
+        if f.is_array and not f.is_bytes and hasattr(v, "__iter__") and not isinstance(v, (str, bytes, dict)):
+            v = v.tolist() if hasattr(v, "tolist") else list(v)
+            if not f.is_primitive:
+                v = [_loose(x, f.base) for x in v]
+        elif not f.is_primitive and not f.is_array:
+            v = _loose(v, f.base)
+        out[f.name] = v
+    return out
 
 
 # ---------------------------------------------------------------- decode
@@ -221,7 +281,7 @@ def _compiled_decoder(type_name: str, limits: Limits) -> Callable[[Any], Any]:
                 if m != n and not (empty_ok and m == 0):
                     raise _FieldError(f"has {m} entries but {ref} has {n}"
                                       + (" (must be equal or empty)" if empty_ok else ""), [other])
-        return cls(**values)
+        return cls._make(**values)
 
     _decoders[key] = dec
     return dec

@@ -111,6 +111,170 @@ def _encode_expr(spec: MsgSpec, var: str, env: dict[str, Any], depth: int) -> st
     return "{" + ", ".join(items) + "}"
 
 
+# ---------------------------------------------------------------- checked encoders (what msgs.encode sends)
+
+class Refuse(Exception):
+    """A value the checked encoder will not send; ``msgs.codec`` then finds and names the field."""
+
+
+def _c_float(v: Any, finite: bool) -> float:
+    if type(v) is bool or not isinstance(v, (int, float)) and not hasattr(v, "__float__"):
+        raise Refuse
+    v = float(v)
+    if finite and not -_INF < v < _INF:
+        raise Refuse
+    return v
+
+
+def _c_int(v: Any, lo: int, hi: int) -> int:
+    if type(v) is int and lo <= v <= hi:
+        return v
+    if isinstance(v, float) or not hasattr(v, "__index__"):
+        raise Refuse
+    v = v.__index__()
+    if not lo <= v <= hi:
+        raise Refuse
+    return v
+
+
+def _c_bool(v: Any) -> bool:
+    if type(v) is bool or type(v).__name__ == "bool_":
+        return bool(v)
+    raise Refuse
+
+
+def _c_items(v: Any, size: int | None, bound: int | None) -> list:
+    """``v`` as a list of at most ``bound`` (exactly ``size``) items: lists as they are, numpy arrays, tuples..."""
+    if type(v) is not list:
+        if isinstance(v, (str, bytes, bytearray, dict)) or not hasattr(v, "__iter__"):
+            raise Refuse
+        v = v.tolist() if hasattr(v, "tolist") else list(v)
+    if bound is not None and len(v) > bound or size is not None and len(v) != size:
+        raise Refuse
+    return v
+
+
+def _c_floats(v: Any, size: int | None, bound: int | None, finite: bool) -> list[float]:
+    return [_c_float(x, finite) for x in _c_items(v, size, bound)]
+
+
+def _c_strs(v: Any, size: int | None, bound: int | None, string_bound: int | None) -> list[str]:
+    return [_c_str(x, string_bound) for x in _c_items(v, size, bound)]
+
+
+def _c_bytes(v: Any, size: int | None, bound: int | None) -> bytes:
+    if type(v) is not bytes:
+        if isinstance(v, str):
+            raise Refuse
+        try:
+            v = bytes(v)
+        except (TypeError, ValueError):
+            raise Refuse from None
+    if bound is not None and len(v) > bound or size is not None and len(v) != size:
+        raise Refuse
+    return v
+
+
+def _c_str(v: Any, bound: int | None) -> str:
+    if not isinstance(v, str) or bound is not None and len(v) > bound:
+        raise Refuse
+    return str(v)
+
+
+def _refuse() -> Any:
+    raise Refuse
+
+
+@functools.cache
+def checked_encoder(type_name: str, allow_nonfinite: bool) -> Callable[[Any], dict]:
+    """``encode(msg)`` -> the map, refusing (``Refuse``) what a receiver would refuse: wrong types (a value
+    appended to a list, a message of another type), NaN and infinities (unless ``allow_nonfinite``), integers
+    out of range, bounded strings and sequences too long, the equal-length rules. The limits on unbounded
+    strings and arrays are the caller's to check, on the packed size (no string or array can be longer than
+    the payload). Values of the right type pass as they are, inline, so it costs about what ``encoder`` does."""
+    spec = get_spec(type_name)
+    env: dict[str, Any] = {
+        "_c_float": _c_float, "_c_int": _c_int, "_c_bool": _c_bool, "_c_str": _c_str, "_c_items": _c_items,
+        "_c_floats": _c_floats, "_c_strs": _c_strs, "_c_bytes": _c_bytes, "_refuse": _refuse, "Refuse": Refuse,
+        "_INF": _INF, "_t": type, "_isfinite": math.isfinite, "_FO": _FLOAT_ONLY, "_SO": _STR_ONLY,
+        "_IO": frozenset({int}), "_BO": frozenset({bool}),
+    }
+    names: dict[str, str] = {}   # top-level field -> the local holding its value (for the equal-length rule)
+    body = [f"    d = {_checked_expr(spec, 'm', env, 0, allow_nonfinite, names)}"]
+    rule = EQUAL_LENGTH_RULES.get(type_name)
+    if rule:
+        ref, others, empty_ok = rule
+        for other in others:
+            m, n = f"len({names[other]})", f"len({names[ref]})"
+            body += [f"    if {m} != {n}" + (f" and {m} != 0:" if empty_ok else ":"), "        raise Refuse"]
+    source = "\n".join(["def encode(m):", *body, "    return d"])
+    return compile_source(source, env, "encode", f"checked encoder of {type_name}")
+
+
+def _checked_expr(spec: MsgSpec, var: str, env: dict[str, Any], depth: int, allow_nonfinite: bool,
+                  names: dict[str, str], prefix: str = "") -> str:
+    """A dict display of the message in ``var``, each value read once into a local (``v<prefix>_<i>``) and
+    passed on as it is when it has the right type, else through a converting check that may refuse."""
+    items = []
+    for i, f in enumerate(spec.fields):
+        v = f"v{prefix}_{i}"
+        if depth == 0:
+            names[f.name] = v
+        read = f"({v} := {var}.{f.name})"
+        size, bound, sbound = f.array_size, f.upper_bound, f.string_bound
+        lengths = (f" and len({v}) == {size}" if size is not None else "") + (
+            f" and len({v}) <= {bound}" if bound is not None else "")
+        if f.is_bytes:
+            expr = f"({v} if _t{read} is bytes{lengths} else _c_bytes({v}, {size}, {bound}))"
+        elif f.is_array and f.is_primitive:
+            if f.base in FLOAT_TYPES:
+                finite = "" if allow_nonfinite else f" and _isfinite(sum({v}))"
+                fast = f"_FO.issuperset(map(_t, {v})){finite}"
+                slow = f"_c_floats({v}, {size}, {bound}, {not allow_nonfinite})"
+            elif f.base in STRING_TYPES:
+                fast = f"_SO.issuperset(map(_t, {v}))" + (
+                    f" and (not {v} or max(map(len, {v})) <= {sbound})" if sbound is not None else "")
+                slow = f"_c_strs({v}, {size}, {bound}, {sbound})"
+            elif f.base in INT_RANGES:
+                lo, hi = INT_RANGES[f.base]
+                fast = f"_IO.issuperset(map(_t, {v})) and (not {v} or {lo} <= min({v}) and max({v}) <= {hi})"
+                slow = f"[_c_int(x, {lo}, {hi}) for x in _c_items({v}, {size}, {bound})]"
+            else:
+                fast = f"_BO.issuperset(map(_t, {v}))"
+                slow = f"[_c_bool(x) for x in _c_items({v}, {size}, {bound})]"
+            expr = f"({v} if _t{read} is list and {fast}{lengths} else {slow})"
+        elif f.is_array:
+            name, cls = f"_enc_{_ident(f.base)}", f"_cls_{_ident(f.base)}"
+            env[name] = checked_encoder(f.base, allow_nonfinite)
+            env[cls] = get_class(f.base)
+            expr = f"[({name}(x) if _t(x) is {cls} else _refuse()) for x in _c_items({var}.{f.name}, {size}, {bound})]"
+            if depth == 0:
+                expr = f"({v} := {expr})"
+        elif f.base in FLOAT_TYPES:
+            expr = (f"({v} if _t{read} is float else _c_float({v}, False))" if allow_nonfinite
+                    else f"({v} if _t{read} is float and -_INF < {v} < _INF else _c_float({v}, True))")
+        elif f.base in INT_RANGES:
+            lo, hi = INT_RANGES[f.base]
+            expr = f"({v} if _t{read} is int and {lo} <= {v} <= {hi} else _c_int({v}, {lo}, {hi}))"
+        elif f.base == "bool":
+            expr = f"({v} if _t{read} is bool else _c_bool({v}))"
+        elif f.base in STRING_TYPES:
+            check = f" and len({v}) <= {sbound}" if sbound is not None else ""
+            expr = f"({v} if _t{read} is str{check} else _c_str({v}, {sbound}))"
+        elif depth < 3 and f.base not in EQUAL_LENGTH_RULES:
+            cls = f"_cls_{_ident(f.base)}"
+            env[cls] = get_class(f.base)
+            inner = _checked_expr(get_spec(f.base), v, env, depth + 1, allow_nonfinite, names, f"{prefix}_{i}")
+            expr = f"({inner} if _t{read} is {cls} else _refuse())"
+        else:
+            name, cls = f"_enc_{_ident(f.base)}", f"_cls_{_ident(f.base)}"
+            env[name] = checked_encoder(f.base, allow_nonfinite)
+            env[cls] = get_class(f.base)
+            expr = f"({name}({v}) if _t{read} is {cls} else _refuse())"
+        items.append(f"{f.name!r}: {expr}")
+    return "{" + ", ".join(items) + "}"
+
+
 # ---------------------------------------------------------------- fast decoders (map -> instance)
 
 @functools.cache
@@ -137,7 +301,7 @@ def _decode_lines(type_name: str, obj: str, result: str, env: dict[str, Any], pr
     instance; nested single messages are inlined up to a depth (no call per Header or Time)."""
 
     spec = get_spec(type_name)
-    env[f"_cls{prefix}"] = get_class(type_name)
+    env[f"_cls{prefix}"] = get_class(type_name)._make   # values already checked: stored without a second check
     env[f"_names{prefix}"] = frozenset(f.name for f in spec.fields)
     body = [f"    if type({obj}) is not dict or not _names{prefix}.issuperset({obj}):", "        raise Reject"]
     args = []
@@ -155,7 +319,7 @@ def _decode_lines(type_name: str, obj: str, result: str, env: dict[str, Any], pr
         else:
             body += ["        " + line
                      for line in _check_lines(f, var, env, f"{prefix}_{i}", allow_nonfinite, lengths_checked)]
-        args.append(f"{f.name}={var}")
+        args.append(var)
     body += ["    " + line for line in equal_length_lines(type_name, prefix, "Reject")]
     body.append(f"    {result} = _cls{prefix}({', '.join(args)})")
     return body

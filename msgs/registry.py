@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import threading
 from pathlib import Path
 from typing import Any
 
+from msgs.classes import make_class
 from msgs.idl import (
     FLOAT_TYPES,
     INT_RANGES,
@@ -177,34 +177,19 @@ def _scalar_default(base: str) -> Any:
     raise DefinitionError(f"no default for {base}")
 
 
-def _python_type(f: FieldSpec) -> Any:
-    if f.is_bytes:
-        return bytes
-    if f.is_primitive:
-        scalar = bool if f.base == "bool" else float if f.base in FLOAT_TYPES else int if f.base in INT_RANGES else str
-    else:
-        scalar = Any
-    return list[scalar] if f.is_array else scalar
-
-
 def get_class(full_name: str) -> Any:
+    """The message class of ``full_name`` (msgs/classes.py), made on first use."""
     with _lock:
         cls = _classes.get(full_name)
         if cls is not None:
             return cls
-        spec = get_spec(full_name)
-        cls_name = full_name.split("/")[-1]
-        fields = [
-            (f.name, _python_type(f), dataclasses.field(default_factory=lambda f=f: default_value(f)))
-            for f in spec.fields
-        ]
-        namespace = dict(spec.constants)
-        namespace["_type"] = full_name
-        namespace["_spec"] = spec
-        cls = dataclasses.make_dataclass(cls_name, fields, namespace=namespace, kw_only=True, slots=True)
-        cls.__module__ = f"msgs.{full_name.split('/')[0]}"
-        cls.__doc__ = f"{full_name}\n\n{spec.text}"
+        cls, resolve = make_class(get_spec(full_name), default_value)
         _classes[full_name] = cls
+        try:
+            resolve(get_class)   # nested classes; a type may refer back to this one, now registered
+        except BaseException:
+            del _classes[full_name]
+            raise
         return cls
 
 

@@ -129,7 +129,7 @@ def _converter(type_name: str) -> Callable[[Any], Any]:
 def _convert_lines(type_name: str, source: str, result: str, env: dict[str, Any], prefix: str,
                    depth: int) -> list[str]:
     spec = get_spec(type_name)
-    env[f"_cls{prefix}"] = get_class(type_name)
+    env[f"_cls{prefix}"] = get_class(type_name)._make   # msgspec checked the values: stored as they are
     body = []
     args = []
     for i, f in enumerate(spec.fields):
@@ -144,7 +144,7 @@ def _convert_lines(type_name: str, source: str, result: str, env: dict[str, Any]
             else:
                 body += ["else:", *("    " + line
                                     for line in _convert_lines(f.base, var, var, env, f"{prefix}_{i}", depth + 1))]
-        args.append(f"{f.name}={var}")
+        args.append(var)
     body += equal_length_lines(type_name, prefix, "_Broken")
     body.append(f"{result} = _cls{prefix}({', '.join(args)})")
     return ["    " + line for line in body] if depth == 0 else body
