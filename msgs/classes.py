@@ -258,8 +258,7 @@ def make_class(spec: MsgSpec, default: Callable[[FieldSpec], Any]) -> tuple[type
     setattr_type(cls, "_spec", spec)
     setattr_type(cls, "_fields_and_field_types", {f.name: field_type_name(f) for f in fields})
     setattr_type(cls, "SLOT_TYPES", tuple(slot_type(f) for f in fields))
-    # the codec's constructor: positional values in field order, already valid, stored as they are
-    setattr_type(cls, "_make", staticmethod(namespace_env["_make"]))
+    _makers[cls] = namespace_env["_make"]
     cls.__module__ = f"msgs.{pkg}"
     cls.__qualname__ = name
     cls.__doc__ = f"{type_name}\n\n{spec.text}"
@@ -274,6 +273,15 @@ def make_class(spec: MsgSpec, default: Callable[[FieldSpec], Any]) -> tuple[type
                     namespace_env[f"_ONLY{i}"] = frozenset({nested})
 
     return cls, resolve
+
+
+_makers: dict[type, Callable[..., Any]] = {}
+
+
+def maker(cls: type) -> Callable[..., Any]:
+    """The codec's constructor of ``cls``: the field values, positional in field order (or by name), already
+    valid, stored as they are without a second check."""
+    return _makers[cls]
 
 
 def setattr_type(cls: type, name: str, value: Any) -> None:

@@ -16,6 +16,7 @@ from typing import Any
 import msgpack
 
 from msgs import compiled, structs
+from msgs.classes import maker
 from msgs.idl import EQUAL_LENGTH_RULES, FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
 from msgs.registry import default_value, get_class, get_spec
 
@@ -249,7 +250,7 @@ def _compiled_decoder(type_name: str, limits: Limits) -> Callable[[Any], Any]:
     if dec is not None:
         return dec
     spec = get_spec(type_name)
-    cls = get_class(type_name)
+    make = maker(get_class(type_name))
     # Placeholder first: recursive types resolve through the cache.
     _decoders[key] = lambda obj: _decoders[key](obj)
     steps = [(f.name, _field_decoder(f, limits), f) for f in spec.fields]
@@ -281,7 +282,7 @@ def _compiled_decoder(type_name: str, limits: Limits) -> Callable[[Any], Any]:
                 if m != n and not (empty_ok and m == 0):
                     raise _FieldError(f"has {m} entries but {ref} has {n}"
                                       + (" (must be equal or empty)" if empty_ok else ""), [other])
-        return cls._make(**values)
+        return make(**values)
 
     _decoders[key] = dec
     return dec

@@ -23,6 +23,7 @@ from typing import Any
 
 import msgpack
 
+from msgs.classes import maker
 from msgs.idl import EQUAL_LENGTH_RULES, FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec, MsgSpec
 from msgs.registry import default_value, get_class, get_spec
 
@@ -301,7 +302,7 @@ def _decode_lines(type_name: str, obj: str, result: str, env: dict[str, Any], pr
     instance; nested single messages are inlined up to a depth (no call per Header or Time)."""
 
     spec = get_spec(type_name)
-    env[f"_cls{prefix}"] = get_class(type_name)._make   # values already checked: stored without a second check
+    env[f"_cls{prefix}"] = maker(get_class(type_name))   # values already checked: stored without a second check
     env[f"_names{prefix}"] = frozenset(f.name for f in spec.fields)
     body = [f"    if type({obj}) is not dict or not _names{prefix}.issuperset({obj}):", "        raise Reject"]
     args = []

@@ -21,6 +21,7 @@ from typing import Annotated, Any
 
 import msgspec
 
+from msgs.classes import maker
 from msgs.compiled import compile_source, equal_length_lines, on_first_use
 from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES, FieldSpec
 from msgs.registry import default_value, get_class, get_spec
@@ -129,7 +130,7 @@ def _converter(type_name: str) -> Callable[[Any], Any]:
 def _convert_lines(type_name: str, source: str, result: str, env: dict[str, Any], prefix: str,
                    depth: int) -> list[str]:
     spec = get_spec(type_name)
-    env[f"_cls{prefix}"] = get_class(type_name)._make   # msgspec checked the values: stored as they are
+    env[f"_cls{prefix}"] = maker(get_class(type_name))   # msgspec checked the values: stored as they are
     body = []
     args = []
     for i, f in enumerate(spec.fields):
