@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import _zenroid_interfaces
 from msgs import packages
 from msgs.codec import DEFAULT_LIMITS, DecodeError, EncodeError, Limits, decode, encode, from_dict, to_dict
 from msgs.compiled import builder, packer
@@ -27,6 +28,7 @@ from msgs.registry import (
 from msgs.timeutil import duration_from_sec, duration_to_sec, time_from_sec, time_map, time_to_sec
 
 packages.install()  # ``from msgs.sensor_msgs import JointState`` (msgs/packages.py)
+_zenroid_interfaces.install()  # ``from sensor_msgs.msg import JointState`` (also installed at start-up by a .pth)
 
 __all__ = [
     "Action", "DEFAULT_LIMITS", "DecodeError", "DefinitionError", "EncodeError", "Limits", "Service", "add_search_path",

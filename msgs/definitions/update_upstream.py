@@ -3,8 +3,8 @@
     python msgs/definitions/update_upstream.py MIRRORS
 
 MIRRORS holds bare git clones named ``<owner>+<repo>/repo`` (what ``git clone --mirror`` or the project's
-mirror tool makes). Each package's ``msg/``, ``srv/`` and ``action/`` files, its ``package.xml`` and the
-repository's LICENSE are taken at the branch named in SOURCES, byte for byte; the commit of every source is
+mirror tool makes). Each package's ``msg/``, ``srv/`` and ``action/`` files, its ``package.xml`` and its LICENSE
+(the repository's when the package has none) are taken at the branch named in SOURCES, byte for byte; the commit of every source is
 written to ``SOURCES.txt``. Our own packages (zenroid_msgs, humanoid_msgs) are not touched.
 """
 
@@ -50,12 +50,14 @@ def _copy_package(repo: Path, branch: str, folder: str, dest: Path) -> None:
         if not member.isfile() or not member.name.startswith(prefix):
             continue
         inside = Path(member.name[len(prefix):])
-        wanted = inside.as_posix() == "package.xml" or (
+        wanted = inside.as_posix() in ("package.xml", "LICENSE") or (
             len(inside.parts) == 2 and inside.parts[0] in KINDS and inside.suffix == f".{inside.parts[0]}")
         if wanted:
             (dest / inside).parent.mkdir(parents=True, exist_ok=True)
             (dest / inside).write_bytes(archive.extractfile(member).read())
     for name in ("LICENSE", "LICENSE.txt"):
+        if (dest / "LICENSE").exists():
+            break   # the package's own
         try:
             (dest / "LICENSE").write_bytes(_git(repo, "show", f"{branch}:{name}"))
             break
