@@ -1,6 +1,6 @@
-"""Copy the standard interface packages verbatim from their upstream repositories into this folder.
+"""Copy the standard interface packages verbatim from their upstream repositories into msgs/definitions.
 
-    python msgs/definitions/update_upstream.py MIRRORS
+    python -m tests.support.update_upstream_interfaces MIRRORS
 
 MIRRORS holds bare git clones named ``<owner>+<repo>/repo`` (what ``git clone --mirror`` or the project's
 mirror tool makes). Each package's ``msg/``, ``srv/`` and ``action/`` files, its ``package.xml`` and its LICENSE
@@ -17,7 +17,7 @@ import sys
 import tarfile
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(__file__).resolve().parents[2] / "msgs" / "definitions"
 
 # (owner/repo, branch, {package: folder of the package in the repository})
 SOURCES: list[tuple[str, str, dict[str, str]]] = [
