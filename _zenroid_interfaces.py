@@ -41,9 +41,9 @@ def _builtin_definitions() -> str | None:
 
 def _roots() -> list[str]:
     roots = [p for p in os.environ.get(ENV_PATH, "").split(os.pathsep) if p]
-    registry = sys.modules.get("msgs.registry")
-    if registry is not None:   # msgs.add_search_path folders, once msgs is loaded
-        roots += [str(p) for p in registry.search_paths()]
+    search_paths = getattr(sys.modules.get("msgs.registry"), "search_paths", None)
+    if search_paths is not None:   # msgs.add_search_path folders, once msgs is loaded
+        roots += [str(p) for p in search_paths()]
     else:
         builtin = _builtin_definitions()
         roots += [builtin] if builtin else []
@@ -52,10 +52,15 @@ def _roots() -> list[str]:
 
 def _in_index(name: str) -> bool:
     try:
-        from nodes.packages.index import list_packages
+        from nodes.packages import index
     except ImportError:
         return False
-    package = list_packages().get(name)
+    lock = getattr(index, "_lock", None)
+    if lock is not None and lock.locked():
+        # a scan is under way, maybe on this very thread, importing something nobody has: asking the index
+        # again would wait for itself
+        return False
+    package = index.list_packages().get(name)
     return package is not None and any(os.path.isdir(os.path.join(package.share, k)) for k in KINDS)
 
 
@@ -113,7 +118,10 @@ class InterfaceFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
             return None   # the parent is imported first; if it is not ours, neither is this
         if dot and not isinstance(getattr(sys.modules[package], "__loader__", None), InterfaceFinder):
             return None
-        if not dot and not is_interface_package(package):
+        try:
+            if not dot and not is_interface_package(package):
+                return None
+        except Exception:  # noqa: BLE001 - asked for every name nobody else has: it must never break an import
             return None
         return importlib.util.spec_from_loader(fullname, self, origin=f"zenroid interface package {package}",
                                                is_package=not dot)

@@ -62,13 +62,20 @@ def normalize(type_name: str) -> tuple[str, str, str]:
 
 
 def _find_file(pkg: str, kind: str, name: str) -> Path | None:
+    """The definition file: folders given explicitly first (ZENROID_MSG_PATH, ``add_search_path``), then the
+    package index (the user's workspace overrides a package zenroid also ships, as humanoid_msgs), then ours."""
     for root in search_paths():
+        if root == BUILTIN_DIR:
+            continue
         candidate = root / pkg / kind / f"{name}.{kind}"
         if candidate.is_file():
             return candidate
     share = interface_packages().get(pkg)
     candidate = share / kind / f"{name}.{kind}" if share is not None else None
-    return candidate if candidate is not None and candidate.is_file() else None
+    if candidate is not None and candidate.is_file():
+        return candidate
+    candidate = BUILTIN_DIR / pkg / kind / f"{name}.{kind}"
+    return candidate if candidate.is_file() else None
 
 
 def definition_file(type_name: str) -> Path | None:
@@ -77,13 +84,23 @@ def definition_file(type_name: str) -> Path | None:
     return _find_file(pkg, kind, name)
 
 
+_interface_packages: tuple[Any, dict[str, Path]] | None = None
+
+
 def interface_packages() -> dict[str, Path]:
     """ROS packages of the package index (the workspace's src/, ROS_PACKAGE_PATH, AMENT_PREFIX_PATH ...) that
-    hold msg/, srv/ or action/ folders: user interface packages, found as ROS finds them."""
-    from nodes.packages.index import list_packages  # the index scans the disk: only when a type is unknown
+    hold msg/, srv/ or action/ folders: user interface packages, found as ROS finds them (kept until the index
+    scans again)."""
+    from nodes.packages.index import index  # the index scans the disk once per directory and environment
 
-    return {name: package.share for name, package in list_packages().items()
-            if any((package.share / kind).is_dir() for kind in ("msg", "srv", "action"))}
+    global _interface_packages
+    current = index()
+    known = _interface_packages
+    if known is None or known[0] is not current:
+        known = _interface_packages = (current, {
+            name: package.share for name, package in sorted(current.packages.items())
+            if any((package.share / kind).is_dir() for kind in ("msg", "srv", "action"))})
+    return known[1]
 
 
 def get_spec(full_name: str) -> MsgSpec:
