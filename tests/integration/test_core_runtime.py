@@ -21,6 +21,7 @@ from nodes.core.endpoints import ServiceError
 from tests.conftest import ROOT, wait_until
 from tests.support.samples import sample_message
 
+
 def _families(per_package: int = 4) -> list[str]:
     """A few message types of every package (all of them would be ~230 endpoints each way)."""
     chosen: dict[str, list[str]] = {}

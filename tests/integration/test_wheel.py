@@ -120,3 +120,27 @@ def test_zenroid_launch_works_when_ros2_shadows_launch(venv: Path, tmp_path: Pat
                     cwd=tmp_path, env=env, timeout=60).stdout.strip()
     assert Path(shadowed) == ros / "__init__.py"
     _joint_states_flow([str(venv / "bin" / "zenroid"), "launch"], tmp_path, env, zenoh_port)
+
+
+@pytest.mark.slow
+def test_a_fresh_interpreter_imports_interfaces_by_their_ros_names(venv: Path, tmp_path: Path) -> None:
+    """zenroid-interfaces.pth ships in the wheel: ``python my_node.py`` with nothing imported before finds
+    ``std_msgs.msg`` and the rest, the same classes as ``msgs``, and a workspace's own package in src/."""
+    package = tmp_path / "src" / "my_robot_msgs"
+    (package / "msg").mkdir(parents=True)
+    (package / "package.xml").write_text("<package format='3'><name>my_robot_msgs</name></package>\n")
+    (package / "msg" / "Grasp.msg").write_text("string hand\nfloat64 force 1.0\n")
+    program = tmp_path / "my_node.py"
+    program.write_text(
+        "import sys\n"
+        "from std_msgs.msg import String\n"
+        "from trajectory_msgs.msg import JointTrajectory\n"
+        "from example_interfaces.srv import AddTwoInts\n"
+        "from control_msgs.action import FollowJointTrajectory\n"
+        "from my_robot_msgs.msg import Grasp\n"
+        "import msgs\n"
+        "assert String is msgs.std_msgs.String and JointTrajectory is msgs.trajectory_msgs.JointTrajectory\n"
+        "assert msgs.__file__.startswith(sys.prefix), msgs.__file__\n"
+        "print(Grasp().force, AddTwoInts.Request(a=1, b=2).b, FollowJointTrajectory.Goal.__name__)\n")
+    done = _run([str(venv / "bin" / "python"), str(program)], cwd=tmp_path, env=_outside_env(), timeout=120)
+    assert done.stdout.split() == ["1.0", "2", "FollowJointTrajectory_Goal"], done.stderr

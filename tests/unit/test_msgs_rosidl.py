@@ -150,11 +150,10 @@ def _run(code: str, cwd: Path, **env: str) -> subprocess.CompletedProcess:
 
 
 def test_ros_names_are_the_same_class_objects():
-    from std_msgs.msg import String as RosString
+    import std_msgs.msg
     from control_msgs.action import FollowJointTrajectory
     from example_interfaces.srv import AddTwoInts
-
-    import std_msgs.msg
+    from std_msgs.msg import String as RosString
 
     assert RosString is msgs.std_msgs.String is std_msgs.msg.String
     assert isinstance(msgs.std_msgs.String(), RosString) and isinstance(RosString(), msgs.std_msgs.String)
