@@ -59,7 +59,7 @@ def active(scenario: Scenario, ns: str = "humanoid") -> dict[str, str]:
 def stands(scenario: Scenario, seconds: float, ns: str = "humanoid") -> tuple[float, list[tuple[float, float]]]:
     """Waits ``seconds`` of sim time after the controllers are active; returns the settled height and the
     (height, tilt) samples of that stretch."""
-    scenario.wait_for(lambda: active(scenario, ns).get("joint_trajectory_controller") == "active", 120,
+    scenario.wait_for(lambda: active(scenario, ns).get("joint_trajectory_controller") == "active", 300,
                       "the trajectory controller active")
     start = sim_time(scenario, ns)
     scenario.wait_for(lambda: sim_time(scenario, ns) >= start + 1.0, 120, "1 s of sim time")
