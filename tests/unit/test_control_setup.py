@@ -6,10 +6,10 @@ from pathlib import Path
 
 import yaml
 
+from nodes.share.controllers import broadcasters
 from nodes.sim.urdf_info import parse_urdf as sim_parse
 from nodes.tools.cli import main
 from nodes.urdf import parse_urdf
-from nodes.share.controllers import broadcasters
 from nodes.urdf.control_setup import control_block, controllers_config, limbs
 
 ROOT = Path(__file__).resolve().parents[2]
