@@ -235,3 +235,18 @@ def _decompose(vertices: np.ndarray, faces: np.ndarray, where: str) -> list[np.n
 def visual_files(mesh: MeshData) -> tuple[list[tuple[Path, tuple | None]], bool]:
     """One STL per material with the file's own colour (None: none given), and whether from the cache."""
     return _files(mesh, "visual", lambda: [(p.vertices, p.faces, p.rgba) for p in mesh.parts])
+
+
+def by_reference(uri: str, scale) -> tuple[np.ndarray, np.ndarray]:
+    """The triangles of a scene mesh sent by reference (too big for the scene message): a converted file of
+    this host's mesh cache, read and checked again, ``scale`` applied, as (float32 (N, 3), uint32 (M, 3)).
+    A path outside the cache is refused: a scene comes from the network."""
+    from nodes.meshes.load import check_scale, load_mesh  # noqa: PLC0415 - load imports this module's users
+
+    path = Path(uri)
+    if not path.resolve().is_relative_to(cache_dir().resolve()):
+        raise MeshError(f"{uri[:200]}: a mesh sent by reference must be a file of the mesh cache "
+                        f"{cache_dir()} (is the renderer on another host, or given another ZENROID_MESH_CACHE?)")
+    vertices, faces = load_mesh(path).merged()
+    vertices = vertices * np.asarray(check_scale(scale, str(path)))
+    return vertices.astype(np.float32), faces.astype(np.uint32)

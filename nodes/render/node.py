@@ -23,6 +23,8 @@ import numpy as np
 
 import msgs
 from nodes.core import Node, memory
+from nodes.meshes import MeshError
+from nodes.meshes.convert import by_reference
 from nodes.render import payloads
 from nodes.render.camera import render_camera
 from nodes.render.geometry import (
@@ -174,7 +176,12 @@ class RendererNode(Node):
         if kind is None:
             raise RenderError(f"shape of link {entry.link}: kind {entry.kind} is not one of {sorted(KINDS)}")
         vertices = triangles = None
-        if kind == "mesh":
+        if kind == "mesh" and not entry.vertices and entry.mesh_uri:   # too big for the scene: by reference
+            try:
+                vertices, triangles = by_reference(entry.mesh_uri, entry.size)
+            except MeshError as exc:
+                raise RenderError(str(exc)) from None
+        elif kind == "mesh":
             vertices, triangles = mesh_from_bytes(bytes(entry.vertices), bytes(entry.triangles))
         color = entry.color
         return Shape(kind=kind, size=tuple(float(v) for v in entry.size), pose=_matrix(entry.pose),

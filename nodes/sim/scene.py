@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import dartpy as dart
 import numpy as np
 
+from nodes.core.session import max_payload_bytes
 from nodes.meshes import MeshError, load_mesh
 from nodes.meshes.convert import source_of
 from nodes.sim.model import Model
@@ -26,6 +27,7 @@ BOX, CYLINDER, SPHERE, MESH = 1, 2, 3, 4
 MAX_MESH_TRIANGLES = 200_000        # one mesh (nodes.render refuses more, too)
 MAX_SCENE_TRIANGLES = 2_000_000     # all meshes of the scene together
 COLLISION_GREY = (0.5, 0.5, 0.5, 1.0)
+SCENE_MARGIN_BYTES = 512 * 1024     # of the payload limit, for everything in a scene but mesh triangles
 
 
 class SceneError(ValueError):
@@ -89,7 +91,8 @@ def _shape_entry(node, link_index: int, where: str, budget: int) -> tuple[dict, 
         entry.update(kind=SPHERE, size=[float(shape.getRadius())])
     elif isinstance(shape, dart.dynamics.MeshShape):
         vertices, faces, triangles = _mesh_triangles(shape, where, budget)
-        entry.update(kind=MESH, size=[], mesh_uri=source_of(shape.getMeshPath()), vertices=vertices, triangles=faces)
+        entry.update(kind=MESH, size=[], mesh_uri=source_of(shape.getMeshPath()), vertices=vertices, triangles=faces,
+                     _file=shape.getMeshPath(), _scale=[float(v) for v in shape.getScale()])
     else:
         return None   # shapes our files never build (capsules, cones, height maps): nothing to render
     return entry, triangles
@@ -126,4 +129,22 @@ def build_scene(world: PhysicsWorld, models: dict[str, Model], version: int,
                 if made is not None:
                     scene["shapes"].append(made[0])
                     budget -= made[1]
+    _fit(scene["shapes"])
     return scene, SceneLinks(list(scene["links"]), bodies)
+
+
+def _fit(shapes: list[dict]) -> None:
+    """Meshes go inline while the scene stays under the payload limit; the biggest beyond it go by reference:
+    no triangles, ``size`` their scale, ``mesh_uri`` their converted file in the mesh cache (a renderer on this
+    host reads it; ``nodes.meshes.convert.by_reference``). A G1's visual meshes alone are 16 MB inline."""
+    inline = sum(len(s["vertices"]) + len(s["triangles"]) for s in shapes if s["kind"] == MESH)
+    limit = max_payload_bytes() - SCENE_MARGIN_BYTES
+    for shape in sorted((s for s in shapes if s["kind"] == MESH),
+                        key=lambda s: len(s["vertices"]) + len(s["triangles"]), reverse=True):
+        if inline <= limit:
+            break
+        inline -= len(shape["vertices"]) + len(shape["triangles"])
+        shape.update(vertices=b"", triangles=b"", size=shape["_scale"], mesh_uri=shape["_file"])
+    for shape in shapes:
+        shape.pop("_file", None)
+        shape.pop("_scale", None)

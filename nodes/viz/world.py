@@ -95,6 +95,14 @@ def mesh_arrays(shape: Any, where: str) -> tuple[np.ndarray, np.ndarray]:
     """(vertices, triangles) of a MESH SceneShape, checked: whole float32 triples, whole uint32 triples,
     finite vertices, indices inside the vertex list."""
     vertices, triangles = bytes(shape.vertices), bytes(shape.triangles)
+    if not vertices and shape.mesh_uri:   # too big for the scene message: a file of the mesh cache
+        from nodes.meshes import MeshError  # noqa: PLC0415
+        from nodes.meshes.convert import by_reference  # noqa: PLC0415
+
+        try:
+            return by_reference(shape.mesh_uri, shape.size)
+        except MeshError as exc:
+            raise WorldProblem(f"{where}: {exc}") from None
     if len(vertices) % 12 or not vertices:
         raise WorldProblem(f"{where}: vertices has {len(vertices)} bytes: not float32 x y z triples")
     if len(triangles) % 12 or not triangles:

@@ -357,3 +357,42 @@ def test_the_viewer_records_a_package_robots_meshes_in_their_colours(processes, 
     # the DAE: millimetres to metres, y up to z up (y and z swap), then the URDF's scale of 0.5
     assert np.ptp(np.asarray(head["Mesh3D:vertex_positions"]), axis=0) == pytest.approx([0.5, 1.5, 1.0], abs=1e-5)
     assert set(head["Mesh3D:vertex_colors"]) == {0xE61A1AFF}
+
+
+def test_the_camera_sees_example_robot_datas_g1_in_its_colours(processes, router, tmp_path):
+    """Unitree's G1 (51 STL meshes through package://example-robot-data) spawned over the wire 2 m ahead of
+    the humanoid's camera: the image's centre is the G1's grey, at the G1's depth."""
+    from nodes.urdf.paths import PathError, package_root
+
+    try:
+        root, _ = package_root("example-robot-data")
+    except PathError:
+        pytest.skip("example-robot-data is not installed (pip install example-robot-data)")
+    urdf = (root / "robots" / "g1_description" / "urdf" / "g1_29dof_rev_1_0.urdf").read_text()
+    sim = processes.start("-m", "nodes.sim", "--params-file", str(ROOT / "config" / "sim.yaml"),
+                          "--param", "world:=empty.world", "--param", "mode:=lockstep", "--param", "paused:=true",
+                          "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}]", name="sim")
+    renderer = processes.start("-m", "nodes.render", name="renderer")
+    node = Node("g1_camera_test", connect=[router])
+    try:
+        wait_ready(node, processes, sim)
+        images = Images(node)
+        camera = call(node, GetEntityState, "/sim/get_entity_state",
+                      GetEntityState.Request(name="humanoid::camera_link")).state.pose.position
+        reply = call(node, SpawnEntity, "/sim/spawn_entity", msgs.from_dict(SpawnEntity.Request, {
+            "name": "g1", "xml": urdf, "robot_namespace": "g1",
+            "initial_pose": {"position": {"x": camera.x + 2.0, "y": 0.0, "z": camera.z - 0.3},
+                             "orientation": {"z": 1.0, "w": 0.0}}}), timeout=120)   # facing the camera
+        assert reply.success, reply.status_message
+        wait_until(lambda: re.search(r"scene \d+: 3 models", processes.output(renderer)), timeout=60,
+                   message="the renderer's scene with the G1 (over the payload limit: its big meshes by reference)")
+        step(node, 100)
+        depth, pixel = centre(images.after(0.05))
+        assert 1.6 < depth < 2.4, depth                  # the G1's torso, not the horizon
+        assert abs(pixel[0] - pixel[1]) < 15 and abs(pixel[1] - pixel[2]) < 15 and pixel.max() > 20, pixel
+        assert "not drawn" not in processes.output(renderer)
+    except BaseException:
+        print("--- simulator:\n" + processes.output(sim)[-3000:] + "\n--- renderer:\n" + processes.output(renderer)[-3000:])
+        raise
+    finally:
+        node.destroy()

@@ -210,3 +210,23 @@ def test_a_link_named_in_the_policy_is_decomposed(tmp_path: Path) -> None:
     hulls = prepare_urdf(xml, tmp_path / "r.urdf", "robot 'r'", CollisionPolicy.parse("hull")).xml
     parts = prepare_urdf(xml, tmp_path / "r.urdf", "robot 'r'", CollisionPolicy.parse("hull,body=decompose")).xml
     assert hulls.count("<collision>") == 2 and parts.count("<collision>") >= 4   # 3+ parts and the box
+
+
+def test_a_scene_over_the_payload_limit_sends_its_biggest_meshes_by_reference(tmp_path, monkeypatch):
+    from nodes.meshes.convert import by_reference
+    from nodes.sim import scene as scene_module
+
+    shapes = [{"kind": scene_module.MESH, "vertices": bytes(12 * n), "triangles": bytes(12 * n), "size": [],
+               "mesh_uri": f"/models/m{n}.stl", "_file": f"/cache/m{n}.stl", "_scale": [1.0, 2.0, 1.0]}
+              for n in (10, 1000, 100)]
+    monkeypatch.setattr(scene_module, "max_payload_bytes", lambda: scene_module.SCENE_MARGIN_BYTES + 5000)
+    scene_module._fit(shapes)
+    assert [len(s["vertices"]) for s in shapes] == [120, 0, 1200]                  # the biggest left the message
+    assert shapes[1]["mesh_uri"] == "/cache/m1000.stl" and shapes[1]["size"] == [1.0, 2.0, 1.0]
+    assert all("_file" not in s and "_scale" not in s for s in shapes)
+
+    files, _ = collision_files(load_mesh(M.binary_stl(tmp_path / "box.stl")), "hull")
+    vertices, faces = by_reference(str(files[0]), [1.0, 2.0, 1.0])
+    assert np.ptp(vertices, axis=0) == pytest.approx([1, 2, 1]) and vertices.dtype == np.float32
+    with pytest.raises(MeshError, match="must be a file of the mesh cache"):
+        by_reference(str(tmp_path / "box.stl"), [1, 1, 1])
