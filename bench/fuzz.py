@@ -330,6 +330,12 @@ def bad_camera_urdfs() -> list[tuple[str, str]]:
         ("camera rate", "<update_rate>30</update_rate>", "<update_rate>1e6</update_rate>"),
         ("laser rays cap", "<samples>720</samples>", "<samples>10000000</samples>"),
         ("laser range", "<min>0.1</min><max>10</max>", "<min>10</min><max>0.1</max>"),
+        # names that are no ROS names (issue 36): each once blinded every rendered sensor
+        ("camera namespace **", "<remapping>camera/image_raw:=camera/rgb</remapping>",
+         "<namespace>**</namespace><remapping>camera/image_raw:=camera/rgb</remapping>"),
+        ("sensor name a/*/b", '<sensor name="camera" type="depth">', '<sensor name="a/*/b" type="depth">'),
+        ("remap ~/out:=**", "<remapping>camera/depth/image_raw:=camera/depth</remapping>",
+         "<remapping>~/out:=**</remapping>"),
     ]
     return [(category, xml.replace(good, bad, 1)) for category, good, bad in edits]
 
@@ -359,6 +365,11 @@ REGRESSION_LOG_LINES = {
     "camera fov": r"sensor 'camera'.*<horizontal_fov> 3.2: must be in \(0, pi\)",
     "camera format": r"sensor 'camera'.*<format> 'ZZZ' is not one of",
     "laser rays cap": r"sensor 'laser'.*rays a scan, over the cap",
+    "100,000-character robot_namespace": r"robot_namespace 'n+'\.\.\. \(100000 characters\): 100000 characters, "
+                                         r"over the limit of 245",
+    "camera namespace **": r"<ros><namespace> '\*\*': has '\*'",
+    "sensor name a/*/b": r"sensor 'a/\*/b'.*<sensor name> has '\*'",
+    "remap ~/out:=**": r"<remapping> '~/out:=\*\*': to '\*\*' has '\*'",
     "render frame of the wrong size": r"sim/render/frame: 3 pose values for \d+ links: ignored",
 }
 
@@ -385,6 +396,8 @@ def regressions(targets: dict[str, Target]) -> list[Case]:
     add(spawn, "billion laughs", {"name": "lol", "xml": '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaa">'
                                   '<!ENTITY b "&a;&a;&a;&a;">]><robot name="r"><link name="&b;"/></robot>'})
     add(spawn, "bad name", {"name": "../../x", "xml": mesh_urdf("m.stl")})
+    add(spawn, "100,000-character robot_namespace", {"name": "fuzz_ns", "xml": chain_urdf(2),
+                                                     "robot_namespace": "n" * 100_000})
     for category, xml in bad_sdf_models():
         add(spawn, category, {"name": "fuzz_sdf", "xml": xml})
     for category, xml in bad_camera_urdfs():
