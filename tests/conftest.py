@@ -17,7 +17,10 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+import _zenroid_interfaces  # noqa: E402 - what zenroid-interfaces.pth does in an installed environment
 from bench.common import child_env, free_port, spawn, stop_all  # noqa: E402 - the checkout is on the path now
+
+_zenroid_interfaces.install()   # tests import ``sensor_msgs.msg`` as ROS programs do, this checkout's finder
 
 # converted meshes go to a folder of this run, not the user's cache (child processes inherit it)
 if "ZENROID_MESH_CACHE" not in os.environ:
