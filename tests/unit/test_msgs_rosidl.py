@@ -220,3 +220,18 @@ def test_a_user_package_in_the_workspace_imports_with_no_build(tmp_path, package
         print(PlanTrajectory.Request.__name__, NavigateToGoal.Goal.__name__)
     """, tmp_path / "ws")
     assert done.stdout.split() == ["PlanTrajectory_Request", "NavigateToGoal_Goal"], done.stderr
+
+
+def test_stubs_give_an_ide_the_field_types(tmp_path):
+    import ast
+
+    from msgs.stubs import write_stubs
+
+    written = write_stubs(tmp_path)
+    for path in written:
+        ast.parse(path.read_text(), filename=str(path))   # every stub module is valid Python
+    joint_state = (tmp_path / "sensor_msgs" / "msg" / "__init__.pyi").read_text()
+    assert "    position: list[float]\n" in joint_state and "    header: std_msgs.msg.Header\n" in joint_state
+    assert "class AddTwoInts:\n    Request = AddTwoInts_Request" in (
+        tmp_path / "example_interfaces" / "srv" / "__init__.pyi").read_text()
+    assert "    LINE_STRIP: ClassVar[int]\n" in (tmp_path / "visualization_msgs" / "msg" / "__init__.pyi").read_text()
