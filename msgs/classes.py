@@ -22,6 +22,7 @@ from __future__ import annotations
 import keyword
 import math
 import operator
+import re
 from collections.abc import Callable
 from typing import Any
 
@@ -224,8 +225,11 @@ def make_class(spec: MsgSpec, default: Callable[[FieldSpec], Any]) -> tuple[type
     # internal names start with "_": ROS field names cannot, so none is shadowed by a field
     lines.append(f"    def __init__(_self, *, {params + ', ' if params else ''}check_fields=None):")
     for i, f in enumerate(fields):
+        # the setter's checks inline (a call per field would cost the construction more than the checks)
+        checks = [re.sub(r"\bv\b", "_v", line) for line in _setter_lines(i, f, env)]
         lines += [f"        if {f.name} is _UNSET:", f"            _s{i}(_self, {_default_expr(i, f, env, default)})",
-                  "        else:", f"            _set{i}(_self, {f.name})"]
+                  "        else:", f"            _v = {f.name}", *(f"            {line}" for line in checks),
+                  f"            _s{i}(_self, _v)"]
     lines.append("        return None")
     # __setattr__: the one way a field changes after construction (slots admit no other attribute)
     lines += ["    def __setattr__(self, name, value):", "        setter = _SETTERS.get(name)", "        if setter is None:",

@@ -18,6 +18,7 @@ import time
 from typing import Any
 
 import msgs
+from msgs.classes import maker
 from msgs.controller_manager_msgs import (
     ConfigureController,
     ControllerState,
@@ -66,6 +67,7 @@ STUCK_CYCLE_S = 5.0
 # in the link (stale) and also restart the controllers; watched for this long after the hardware returns.
 CATCH_UP_WATCH_S = 3.0
 _pack_command = msgs.packer("zenroid_msgs/msg/HardwareCommand")
+_make_command = maker(HardwareCommand)   # composed: our own values, stored without the setters' checks
 
 
 class CyclePublisher:
@@ -398,8 +400,8 @@ class ControllerManagerNode(Node):
             self._last_state_wall = time.monotonic()
         self._cycle_since = None
         if self._cmd_pub.local_subscriptions:   # composed: the simulator takes the object itself
-            self._cmd_pub.publish(HardwareCommand(step=step, update_rate=self.update_rate, name=cmd_names,
-                                                  interface=cmd_kinds, value=cmd_values),
+            self._cmd_pub.publish(_make_command(step=step, update_rate=self.update_rate, name=cmd_names,
+                                                interface=cmd_kinds, value=cmd_values),
                                   droppable=self.realtime_hardware)
         else:
             self._cmd_pub.publish_raw(_pack_command(step=step, update_rate=self.update_rate, name=cmd_names,

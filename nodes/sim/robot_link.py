@@ -11,6 +11,7 @@ from collections import deque
 from typing import Any
 
 import msgs
+from msgs.classes import maker
 from msgs.zenroid_msgs import HardwareJoint, HardwareSensor
 from nodes.core import Node
 from nodes.core.endpoints import SingleSender, source_label
@@ -30,6 +31,7 @@ from nodes.sim.stepping import CommandInbox
 # cost the others their command.
 _COMMAND_LIMITS = msgs.Limits(allow_nonfinite=True)
 _pack_state = msgs.packer("zenroid_msgs/msg/HardwareState")
+_make_state = maker(HardwareState)   # composed: our own values, stored without the setters' checks
 _pack_humanoid_state = msgs.packer("humanoid_msgs/msg/HumanoidState")
 _pack_heartbeat = msgs.packer("zenroid_msgs/msg/HardwareHeartbeat")
 _Time = msgs.get_type("builtin_interfaces/msg/Time")
@@ -145,7 +147,7 @@ class RobotLink:
                       effort=hw.efforts().tolist(), sensor_values=self.sensors.state_values())
         if self.state_pub.local_subscriptions:
             # a controller manager in this process (composed): the frame as an object, never encoded for it
-            self.state_pub.publish(HardwareState(stamp=_Time(**msgs.time_map(sim_time)), **fields),
+            self.state_pub.publish(_make_state(stamp=_Time(**msgs.time_map(sim_time)), **fields),
                                    droppable=self.sim.mode == "realtime")
         else:
             self.state_pub.publish_raw(_pack_state(stamp=msgs.time_map(sim_time), **fields),
