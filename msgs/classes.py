@@ -19,6 +19,7 @@ codec builds decoded messages with ``_make``, which stores already-validated val
 
 from __future__ import annotations
 
+import builtins
 import keyword
 import math
 import operator
@@ -184,6 +185,19 @@ def _setter_lines(i: int, f: FieldSpec, env: dict[str, Any]) -> list[str]:
     return [f"if type(v) is not _C{i}:", f"    v = _as_message(v, _C{i}, _T, {name})"]
 
 
+_BUILTINS = ("type", "len", "map", "max", "min", "list", "float", "int", "bool", "str", "bytes")
+_NAMES = re.compile(r"\b(v|" + "|".join(_BUILTINS) + r")\b")
+
+
+def _unshadowed(line: str) -> str:
+    """A setter line for ``__init__``, whose parameters are the field names (a field may be called ``type``,
+    ``min`` or ``v``): the value is ``_v`` and the builtins are ``_b_<name>`` (quoted text left as it is)."""
+    parts = line.split("'")
+    for k in range(0, len(parts), 2):   # outside quotes
+        parts[k] = _NAMES.sub(lambda m: "_v" if m.group(1) == "v" else f"_b_{m.group(1)}", parts[k])
+    return "'".join(parts)
+
+
 def _as_bool_item(x: Any, t: str, p: str) -> bool:
     return x if type(x) is bool else _as_bool(x, t, p)
 
@@ -219,6 +233,7 @@ def make_class(spec: MsgSpec, default: Callable[[FieldSpec], Any]) -> tuple[type
         "_as_bool": _as_bool, "_as_str": _as_str, "_as_message": _as_message, "_as_bytes": _as_bytes,
         "_as_list": _as_list, "_each": _each, "_FLOAT_ONLY": frozenset({float}), "_INT_ONLY": frozenset({int}),
         "_BOOL_ONLY": frozenset({bool}), "_STR_ONLY": frozenset({str}),
+        **{f"_b_{name}": getattr(builtins, name) for name in _BUILTINS},
     }
     lines = [f"class {name}:", f"    __slots__ = {tuple(f.name for f in fields)!r}"]
     params = ", ".join(f"{f.name}=_UNSET" for f in fields)
@@ -226,7 +241,7 @@ def make_class(spec: MsgSpec, default: Callable[[FieldSpec], Any]) -> tuple[type
     lines.append(f"    def __init__(_self, *, {params + ', ' if params else ''}check_fields=None):")
     for i, f in enumerate(fields):
         # the setter's checks inline (a call per field would cost the construction more than the checks)
-        checks = [re.sub(r"\bv\b", "_v", line) for line in _setter_lines(i, f, env)]
+        checks = [_unshadowed(line) for line in _setter_lines(i, f, env)]
         lines += [f"        if {f.name} is _UNSET:", f"            _s{i}(_self, {_default_expr(i, f, env, default)})",
                   "        else:", f"            _v = {f.name}", *(f"            {line}" for line in checks),
                   f"            _s{i}(_self, _v)"]

@@ -11,6 +11,7 @@ from collections.abc import Iterator
 
 import pytest
 
+import msgs
 from msgs.sensor_msgs import JointState
 from nodes.core import Node, graph, intraprocess
 from nodes.core.session import open_peer
@@ -136,7 +137,11 @@ def test_a_container_node_still_rejects_bad_input_from_other_processes(router: s
         got.clear()
         for payload in (b"\xc1", b"\x93\x01\x02\x03", bytes(64)):   # not msgpack, not a map, zeros
             hostile.publish_raw(payload)
-        hostile.publish(JointState(name=["a"], position=[float("nan")], velocity=[0.0], effort=[0.0]))
+        nan_state = JointState(name=["a"], position=[float("nan")], velocity=[0.0], effort=[0.0])
+        with pytest.raises(msgs.EncodeError, match=r"position\[0\]: not a finite number"):
+            hostile.publish(nan_state)   # our publisher refuses it; a foreign one may still send it:
+        hostile.publish_raw(msgs.packer(JointState._type)(name=["a"], position=[float("nan")], velocity=[0.0],
+                                                          effort=[0.0]))
         hostile.publish(state(7.0))
         wait_until(lambda: got, 10, message="the good message after the bad ones")
         time.sleep(0.2)

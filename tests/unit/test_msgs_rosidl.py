@@ -235,3 +235,13 @@ def test_stubs_give_an_ide_the_field_types(tmp_path):
     assert "class AddTwoInts:\n    Request = AddTwoInts_Request" in (
         tmp_path / "example_interfaces" / "srv" / "__init__.pyi").read_text()
     assert "    LINE_STRIP: ClassVar[int]\n" in (tmp_path / "visualization_msgs" / "msg" / "__init__.pyi").read_text()
+
+
+def test_fields_named_like_builtins_construct():
+    """Constructor parameters are the field names: ``type`` (Marker, ControllerState), ``min``, ``max``..."""
+    odd = msgs.register_message("test_msgs/msg/Odd", "int32 min\nint32 max\nfloat64 v\nstring type\nint32[] list\n")
+    made = odd(min=1, max=2, v=3, type="a", list=[1, 2])
+    assert (made.min, made.max, made.v, made.type, made.list) == (1, 2, 3.0, "a", [1, 2])
+    with pytest.raises(TypeError, match="'type' field must be a str"):
+        odd(type=1)
+    assert msgs.get_type("controller_manager_msgs/msg/ControllerState")(type="jtc").type == "jtc"
