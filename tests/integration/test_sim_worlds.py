@@ -14,7 +14,6 @@ import msgpack
 import pytest
 
 from nodes.core import Node
-from nodes.core.endpoints import ServiceError
 from nodes.sim.interfaces import (
     ApplyJointEffort,
     ApplyLinkWrench,
