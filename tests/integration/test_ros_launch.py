@@ -420,9 +420,6 @@ def generate_launch_description():
                parameters=[params])
     spawn_entity = Node(package='gazebo_ros', executable='spawn_entity.py',
                         arguments=['-topic', 'robot_description', '-entity', 'humanoid', '-z', '0.93'], output='screen')
-    # stands for the <gazebo> plugin's controller manager
-    manager = Node(package='controller_manager', executable='ros2_control_node',
-                   parameters=[os.path.join(share, 'config', 'controllers.yaml')], output='screen')
     load_jsb = ExecuteProcess(cmd=['ros2', 'control', 'load_controller', '--set-state', 'active',
                                    'joint_state_broadcaster'], output='screen')
     load_jtc = ExecuteProcess(cmd=['ros2', 'control', 'load_controller', '--set-state', 'active',
@@ -430,7 +427,7 @@ def generate_launch_description():
     return LaunchDescription([
         RegisterEventHandler(event_handler=OnProcessExit(target_action=spawn_entity, on_exit=[load_jsb])),
         RegisterEventHandler(event_handler=OnProcessExit(target_action=load_jsb, on_exit=[load_jtc])),
-        gazebo, rsp, manager, spawn_entity,
+        gazebo, rsp, spawn_entity,
     ])
 """
 
@@ -439,7 +436,8 @@ def generate_launch_description():
 def test_gazebo_ros2_control_style_chain(tmp_path: Path, zenoh_port: int) -> None:
     """gazebo_ros2_control's demo pattern at the root namespace: gazebo.launch.py included, spawn_entity.py from
     /robot_description, then `ros2 control load_controller --set-state active` for the JSB and the JTC chained
-    with OnProcessExit; /joint_states flows and both controllers are active."""
+    with OnProcessExit; the URDF's gazebo_ros2_control plugin starts the controller manager, as in Gazebo;
+    /joint_states flows and both controllers are active."""
     (tmp_path / "chain.launch.py").write_text(CHAINED)
     launch = Launch(str(tmp_path / "chain.launch.py"), "sensors:=false", log_dir=tmp_path / "run", port=zenoh_port)
     try:
