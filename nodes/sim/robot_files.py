@@ -80,7 +80,7 @@ def checked_robot(path: Path):
 
     xml = read_robot_xml(path)
     try:
-        check(xml, path.as_uri())
+        check(xml, path.resolve().as_uri())  # a relative path has no URI
         return parse_model(xml), xml
     except UrdfError as exc:
         raise ConfigError(f"{path}: {exc}") from None
