@@ -30,7 +30,9 @@ from typing import Any
 from msgs.idl import FLOAT_TYPES, INT_RANGES, STRING_TYPES, DefinitionError, FieldSpec, MsgSpec
 from msgs.slot_types import field_type_name, slot_type
 
-_FLOAT32_MAX = 3.402823466e38
+# the largest float32 exactly: rosidl_python's bound, 3.402823466e+38, is a rounding below it and would refuse
+# FLT_MAX itself, which a float32 field holds and the codec sends
+_FLOAT32_MAX = 3.4028234663852886e38
 
 
 class FieldTypeError(TypeError, AssertionError):
