@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 import msgs
+from msgs.compiled import packb
 from nodes.core import Node
 from tests.conftest import wait_until
 from tests.support.rrd import load
@@ -121,8 +122,9 @@ class SensorFeed:
         while not self.stop.wait(0.1):
             t += 0.1
             for key, fields in sensor_messages(t).items():
-                fields = self.edit(key, fields)
-                self.pubs[key].publish(msgs.from_dict(msgs.get_type(TYPES[key]), fields, NONFINITE))
+                message = msgs.from_dict(msgs.get_type(TYPES[key]), self.edit(key, fields), NONFINITE)
+                # as bytes: our publisher refuses a bad message (msgs.EncodeError), a foreign one may send it
+                self.pubs[key].publish_raw(packb(msgs.to_dict(message)))
 
     def __enter__(self) -> SensorFeed:
         self.scene.publish(msgs.from_dict(T["zenroid_msgs/msg/Scene"], SCENE))
