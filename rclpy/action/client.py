@@ -7,6 +7,7 @@ import time
 from typing import Any
 
 from rclpy._entities import CALL_TIMEOUT_S, _calls, check_message
+from rclpy.action.endpoint import ActionEndpoint
 from rclpy.task import Future
 
 
@@ -41,7 +42,7 @@ class ClientGoalHandle:
         return future.result()
 
 
-class ActionClient:
+class ActionClient(ActionEndpoint):
     def __init__(self, node: Any, action_type: Any, action_name: str, *, callback_group: Any = None,
                  goal_service_qos_profile: Any = None, result_service_qos_profile: Any = None,
                  cancel_service_qos_profile: Any = None, feedback_sub_qos_profile: Any = None,
@@ -49,8 +50,7 @@ class ActionClient:
         self._node, self._action_type = node, action_type
         key = node._zr_resolve(action_name)
         self._core = node._zr.create_action_client(action_type, "/" + key)
-        self.callback_group = node._zr_group(callback_group)
-        node._zr_entities["waitables"].append(self)
+        self._attach(callback_group)
 
     def _complete(self, future: Future, result: Any = None, error: BaseException | None = None) -> None:
         """Hand a result to the spinning thread, which completes ``future`` (its done callbacks run there)."""
@@ -157,15 +157,6 @@ class ActionClient:
 
         self._in_background(work)
         return future
-
-    @property
-    def action_type(self) -> Any:
-        return self._action_type
-
-    def destroy(self) -> None:
-        if self in self._node._zr_entities["waitables"]:
-            self._node._zr_entities["waitables"].remove(self)
-            self._node._zr.destroy_entity(self._core)
 
 
 __all__ = ["ActionClient", "ClientGoalHandle"]

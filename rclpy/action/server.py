@@ -13,6 +13,7 @@ import threading
 from typing import Any
 
 from nodes.core.action import ABORTED, ACCEPTED, CANCELED, CANCELING, EXECUTING, SUCCEEDED, TERMINAL
+from rclpy.action.endpoint import ActionEndpoint
 from rclpy.exceptions import not_implemented
 
 
@@ -142,7 +143,7 @@ class ServerGoalHandle:
         return None
 
 
-class ActionServer:
+class ActionServer(ActionEndpoint):
     def __init__(self, node: Any, action_type: Any, action_name: str, execute_callback: Any, *,
                  callback_group: Any = None, goal_callback: Any = default_goal_callback,
                  handle_accepted_callback: Any = default_handle_accepted_callback,
@@ -160,9 +161,8 @@ class ActionServer:
         self._core = node._zr.create_action_server(
             action_type, "/" + key, goal_callback=self._on_goal, cancel_callback=self._on_cancel,
             accepted_callback=self._on_accepted)
-        self.callback_group = node._zr_group(callback_group)
+        self._attach(callback_group)
         self._core.group = self.callback_group
-        node._zr_entities["waitables"].append(self)
 
     def register_execute_callback(self, execute_callback: Any) -> None:
         self._execute_callback = execute_callback
@@ -200,12 +200,3 @@ class ActionServer:
             verdict.close()
             raise not_implemented("ActionServer cancel_callback as a coroutine")
         return verdict == CancelResponse.ACCEPT
-
-    @property
-    def action_type(self) -> Any:
-        return self._action_type
-
-    def destroy(self) -> None:
-        if self in self._node._zr_entities["waitables"]:
-            self._node._zr_entities["waitables"].remove(self)
-            self._node._zr.destroy_entity(self._core)
