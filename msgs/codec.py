@@ -21,26 +21,27 @@ from msgs.idl import EQUAL_LENGTH_RULES, FLOAT_TYPES, INT_RANGES, STRING_TYPES, 
 from msgs.registry import default_value, get_class, get_spec
 
 
-class DecodeError(ValueError):
+class FieldPathError(ValueError):
+    """A message refused for one field: ``type: path: reason``, and the three parts as attributes."""
+
+    after = ""  # what follows the reason in the text
+
+    def __init__(self, type_name: str, path: str, reason: str) -> None:
+        self.type_name = type_name
+        self.path = path
+        self.reason = reason
+        where = f"{type_name}: {path}: " if path else f"{type_name}: "
+        super().__init__(f"{where}{reason}{self.after}")
+
+
+class DecodeError(FieldPathError):
     """A payload that is not a valid message of the expected type."""
 
-    def __init__(self, type_name: str, path: str, reason: str) -> None:
-        self.type_name = type_name
-        self.path = path
-        self.reason = reason
-        where = f"{type_name}: {path}: " if path else f"{type_name}: "
-        super().__init__(where + reason)
 
-
-class EncodeError(ValueError):
+class EncodeError(FieldPathError):
     """A message that cannot be sent: a value a receiver would refuse, named by its field path."""
 
-    def __init__(self, type_name: str, path: str, reason: str) -> None:
-        self.type_name = type_name
-        self.path = path
-        self.reason = reason
-        where = f"{type_name}: {path}: " if path else f"{type_name}: "
-        super().__init__(f"{where}{reason} (not sent)")
+    after = " (not sent)"
 
 
 @dataclass(frozen=True)
