@@ -25,6 +25,9 @@ from types import ModuleType
 from typing import Any
 
 KINDS = ("msg", "srv", "action")
+# never interface packages; site imports sitecustomize and usercustomize at every start-up, and asking the
+# package index about them would import ``nodes`` before a test's or a program's sys.path is set up
+NOT_INTERFACES = ("msgs", "nodes", "launch", "rclpy", "sitecustomize", "usercustomize")
 ENV_PATH = "ZENROID_MSG_PATH"
 
 
@@ -66,7 +69,7 @@ def _in_index(name: str) -> bool:
 
 def is_interface_package(name: str) -> bool:
     """True when ``name`` is an interface package msgs can load (cheap folder checks first, then the index)."""
-    if not name.isidentifier() or name in ("msgs", "nodes", "launch", "rclpy"):
+    if not name.isidentifier() or name in NOT_INTERFACES:
         return False
     for root in _roots():
         if any(os.path.isdir(os.path.join(root, name, kind)) for kind in KINDS):

@@ -135,7 +135,8 @@ class Index:
 
     def _env(self, name: str) -> list[Path]:
         raw = (self.environ if self.environ is not None else os.environ).get(name, "")
-        return [Path(p) for p in raw.split(os.pathsep) if p]
+        # absolute, so that a share directory (and what $(find) gives) means the same from any folder
+        return [(self.cwd or Path.cwd()) / p for p in raw.split(os.pathsep) if p]
 
     def _add(self, name: str | None, share: Path, prefix: Path, source: str) -> None:
         if name and name not in self.packages:

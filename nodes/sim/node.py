@@ -195,7 +195,7 @@ class SimulatorNode(Node):
         self._publish_scene_or_undo(entity.name)
         self._note_sensor_keys(entity)
         joints = len(entity.info.joints)
-        base = "fixed" if spec.fixed else "floating"
+        base = "floating" if entity.floating else "fixed"
         pos = entity.pose.position
         return (f"spawned {entity.name!r} ({joints} joints, {base} base) at "
                 f"({pos[0]:.3f}, {pos[1]:.3f}, {pos[2]:.3f}) in namespace {entity.namespace!r}")

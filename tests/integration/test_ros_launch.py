@@ -484,3 +484,71 @@ def generate_launch_description():
     assert done.returncode == 0, done.stderr
     assert "__ns:=/left/a" in done.stdout or "namespace: left/a" in done.stdout, done.stdout
     assert "namespace: right/b" in done.stdout, done.stdout
+
+
+# -- examples/cart_demo: a package written the gazebo_ros2_control way ---------------------------------------
+CART_DEMO = {"ROS_PACKAGE_PATH": str(ROOT / "examples")}
+
+
+def _cart_joint(states: list[bytes]) -> tuple[float, float] | None:
+    """(position, velocity) of slider_to_cart in the newest /joint_states."""
+    if not states:
+        return None
+    msg = msgpack.unpackb(states[-1])
+    index = msg["name"].index("slider_to_cart")
+    return msg["position"][index], msg["velocity"][index]
+
+
+def _put_commands(session, controller: str, value: float) -> None:
+    import msgs
+
+    command = msgs.get_type("std_msgs/msg/Float64MultiArray")(data=[value])
+    session.put(f"{controller}/commands", msgs.encode(command))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("variant", ["position", "velocity", "effort"])
+def test_cart_demo_package(tmp_path: Path, zenoh_port: int, variant: str) -> None:
+    """`ros2 launch cart_demo cart_example_VARIANT.launch.py`: gazebo.launch.py included, the xacro (its
+    $(find cart_demo) include) spawned from /robot_description by spawn_entity.py, the controllers loaded one
+    after the other (load_controller or spawner chained with OnProcessExit) by the plugin's controller
+    manager. The cart starts at the state interface's initial_value; position: example_position.py's
+    FollowJointTrajectory goal (rclpy) takes it through -1 to 0.5; velocity and effort: a command moves it
+    in the commanded direction."""
+    command = (sys.executable, "-m", "nodes.tools.ros2", "launch")
+    launch = Launch("cart_demo", f"cart_example_{variant}.launch.py", "sensors:=false", log_dir=tmp_path / "run",
+                    port=zenoh_port, command=command, env=child_env(CART_DEMO))
+    try:
+        session = launch.peer()
+        states: list[bytes] = []
+        session.declare_subscriber("joint_states", lambda s: states.append(s.payload.to_bytes()))
+        controller = {"position": "joint_trajectory_controller", "velocity": "velocity_controller",
+                      "effort": "effort_controller"}[variant]
+        wait_output(launch, rf"(Successfully loaded controller {controller} into state active"
+                            rf"|Configured and activated {controller})", 150)
+        start, _ = launch.wait(lambda: _cart_joint(states), 60, "slider_to_cart in /joint_states")
+        assert start == pytest.approx(0.0 if variant == "velocity" else 1.0, abs=0.01)   # initial_value
+        if variant == "position":
+            lowest = [start]
+            session.declare_subscriber("joint_states", lambda s: lowest.append(_cart_joint([s.payload.to_bytes()])[0]))
+            done = subprocess.run([sys.executable, "-m", "nodes.tools.ros2", "run", "cart_demo", "example_position.py",
+                                   "0.5"], capture_output=True, text=True, timeout=90,
+                                  env=child_env({**CART_DEMO, "ZENOH_CONNECT": launch.endpoint}), cwd=ROOT)
+            assert done.returncode == 0 and "result: error_code 0" in done.stdout, done.stdout + done.stderr
+            launch.wait(lambda: abs(_cart_joint(states)[0] - 0.5) < 0.02, 10, "the cart at 0.5")
+            assert min(lowest) < -0.8, min(lowest)       # it went through the trajectory's -1 on the way
+        else:
+            value, sign = (-1.0, -1) if variant == "velocity" else (-5.0, -1)
+            moved = lambda: (_put_commands(session, controller, value),   # noqa: E731
+                             (p := _cart_joint(states)[0]) * sign > sign * start + 0.3 and p)[1]
+            launch.wait(moved, 30, f"the cart moved by its {variant} command", interval=0.1)
+            _, velocity = _cart_joint(states)
+            assert velocity * sign > 0.1, velocity
+            if variant == "velocity":
+                assert velocity == pytest.approx(value, abs=0.05)
+    finally:
+        launch.close()
+    out = launch.output()
+    order = [out.index(s) for s in ("'spawn_entity' [pid", "controller manager /controller_manager with",
+                                    "loaded controller 'joint_state_broadcaster'", f"loaded controller '{controller}'")]
+    assert order == sorted(order), out

@@ -180,6 +180,14 @@ def test_a_fresh_interpreter_finds_them_after_the_pth_line_alone(tmp_path):
     assert done.stdout.strip() == "ok", done.stderr
 
 
+def test_start_up_imports_no_zenroid_module(tmp_path):
+    """The finder is asked for sitecustomize and usercustomize at every start-up: it answers without the package
+    index, so ``nodes`` is imported from wherever the program's own sys.path says, later."""
+    done = _run("import sys; print(sorted(m for m in sys.modules if m.split('.')[0] in ('nodes', 'msgs')))",
+                tmp_path)
+    assert done.stdout.strip() == "[]", done.stdout + done.stderr
+
+
 def test_a_real_ros_package_on_the_path_wins(tmp_path):
     fake = tmp_path / "ros" / "std_msgs" / "msg"
     fake.mkdir(parents=True)

@@ -75,6 +75,31 @@ def test_ros_package_path_is_crawled_as_rospack_does(clean_env: Path, tmp_path: 
     assert get_package_share_directory("outer_pkg") == str(outer) == get_package_prefix("outer_pkg")
 
 
+def test_relative_package_paths_give_absolute_shares(clean_env: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``ROS_PACKAGE_PATH=examples``: the share directory (and what ``$(find)`` puts in a URDF) is absolute,
+    so it means the same to the processes a launch starts from other folders."""
+    make_package(clean_env / "examples" / "rel_pkg")
+    monkeypatch.setenv("ROS_PACKAGE_PATH", "examples")
+    assert find_share("rel_pkg") == clean_env / "examples" / "rel_pkg"
+    assert find_share("rel_pkg").is_absolute()
+
+
+def test_the_cart_demo_package_expands(clean_env: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """examples/cart_demo: each variant's xacro includes the common one through $(find cart_demo) and names its
+    own command interface, initial_value and controllers file."""
+    from nodes.urdf import load_robot_description
+
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(ROOT / "examples"))
+    share = find_share("cart_demo")
+    for variant, initial in (("position", True), ("velocity", False), ("effort", True)):
+        urdf = load_robot_description(share / "urdf" / f"cart_{variant}.urdf.xacro")
+        assert f'<command_interface name="{variant}">' in urdf and 'type="prismatic"' in urdf
+        assert ('<param name="initial_value">1.0</param>' in urdf) == initial
+        assert f"<parameters>{share}/config/cart_controller_{variant}.yaml</parameters>" in urdf
+        assert (share / "config" / f"cart_controller_{variant}.yaml").is_file()
+        assert (share / "launch" / f"cart_example_{variant}.launch.py").is_file()
+
+
 def test_ament_prefix_path_markers_and_share_folders(clean_env: Path, tmp_path: Path,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     first, second = tmp_path / "install_a", tmp_path / "install_b"
