@@ -102,12 +102,20 @@ def _robot_setup(kind: str, words: list[str], source: Source) -> str:
 
     import yaml
 
+    from nodes.packages.index import add_own_package
+    from nodes.share import robot_file
     from nodes.share.controllers import broadcasters
     from nodes.sim.robot_files import ConfigError, controllers_for
 
     if kind == "robot_controllers":
         if len(words) != 2:
             raise LaunchError("$(robot_controllers ROBOT FILE) takes a robot name and its file", source)
+        try:
+            added = add_own_package(robot_file(words[1]))
+        except FileNotFoundError:
+            added = None   # controllers_for names the file that is not there
+        if added:
+            print(f"[launch] [INFO] {added}", file=sys.stderr, flush=True)
         try:
             path, generated = controllers_for(*words)
         except ConfigError as exc:

@@ -203,6 +203,21 @@ def refresh() -> None:
         _cached = None
 
 
+def add_own_package(file: Path) -> str | None:
+    """Make the package ``file`` lies in (its nearest folder with a ``package.xml``) findable by name, for this
+    process and the processes it starts, when no source knows that name: the package folder is appended to
+    ``ROS_PACKAGE_PATH``. A description repository used where it was downloaded then runs as it is: its xacro's
+    ``$(find pkg)`` and its ``package://`` meshes resolve in every node, also from ``robot_description``.
+    Returns the line to log, or None when nothing was added."""
+    folder = next((f for f in Path(file).resolve().parents if (f / "package.xml").is_file()), None)
+    name = package_name(folder) if folder is not None else None
+    if folder is None or not name or name in index().packages:
+        return None
+    os.environ["ROS_PACKAGE_PATH"] = os.pathsep.join(
+        [p for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p] + [str(folder)])
+    return f"package '{name}' of {file} is in no package path: added {folder} to ROS_PACKAGE_PATH"
+
+
 def find_package(name: str) -> Package:
     """The package called ``name``; PackageNotFoundError names it and every path searched."""
     return index().get(name)

@@ -68,8 +68,19 @@ def shipped_robot(name: str) -> Path | None:
 
 
 def robot_file(name: str) -> Path:
-    """``$(robot NAME)``: a path as given, else ``robots/NAME``, ``robots/NAME.urdf`` or ``robots/NAME.urdf.xacro``,
-    else a robot of example-robot-data by name (``g1``, ``talos``, ...: ``SHIPPED_ROBOTS``)."""
+    """``$(robot NAME)``: a path or a ``package://``, ``model://`` or ``file://`` URI as given, else
+    ``robots/NAME``, ``robots/NAME.urdf`` or ``robots/NAME.urdf.xacro``, else a robot of example-robot-data by name (``g1``, ``talos``, ...: ``SHIPPED_ROBOTS``)."""
+    if "://" in name:
+        from nodes.urdf.paths import PathError, robot_uri_path
+
+        try:
+            path = robot_uri_path(name)
+        except PathError as exc:
+            raise FileNotFoundError(f"robot {name!r}: {exc}") from None
+        if path is not None:
+            if not path.is_file():
+                raise FileNotFoundError(f"robot {name!r}: {path} does not exist")
+            return path
     try:
         return _find(name, ROBOTS_DIR, ROBOT_SUFFIXES, "robot")
     except FileNotFoundError as exc:

@@ -181,7 +181,7 @@ def parse_urdf(xml: str, base: str | None = None) -> RobotInfo:
         physics.xml = _with_files(physics.xml, meshes)
     sensors, rendered = _mount_on_bodies(model, physics)
     warnings = list(model.warnings)
-    if generated:
+    if generated and (joints or model.ros2_control_sensors):   # a prop or a camera tripod has nothing to control
         warnings.append(f"no <ros2_control> block: generated one ({len(joints)} joints: position command, "
                         "position and velocity states; python -m nodes.tools.cli setup_robot FILE -o DIR writes it)")
     if physics.frames:

@@ -72,6 +72,10 @@ def load_robot_description(
     mappings = dict(xacro_args or {})
     if path is not None:
         file = Path(path)
+        if "://" in str(path):   # package://pkg/urdf/robot.urdf.xacro, file:///..., as robot_file:= takes them
+            from nodes.urdf.paths import robot_uri_path
+
+            file = robot_uri_path(str(path)) or file
         if not file.is_file():
             raise UrdfError(f"robot description file '{file}' does not exist")
         try:

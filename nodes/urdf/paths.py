@@ -125,6 +125,18 @@ def resolve_uri(uri: str, base: str | os.PathLike | None = None) -> Path:
     return _checked(text, base_path.resolve().parent / path, [root])
 
 
+def robot_uri_path(text: str) -> Path | None:
+    """The file a robot named by URI is (``package://pkg/urdf/robot.urdf.xacro``, ``model://...``,
+    ``file:///abs/robot.urdf``), as ``robot_file:=`` and ``robot_description_file`` take it; None for a plain
+    path. A ``package://`` file must lie inside its package; a ``file://`` one is the user's own path."""
+    parsed = urlparse(text.strip())
+    if len(parsed.scheme) <= 1:   # no scheme, or a drive letter
+        return None
+    if parsed.scheme == "file":
+        return Path(unquote(parsed.path))
+    return resolve_uri(text)
+
+
 def _base_path(base: str | os.PathLike | None) -> Path | None:
     if base is None or str(base) == "":
         return None

@@ -1,7 +1,8 @@
 """Real robots from example-robot-data in the main job (``robot_file:=``), with the real simulator and the real
 controllers in empty.world: G1 stands and squats through the JTC, TALOS (frame links merged) stands in its
-SRDF half_sitting pose, and a robot without <ros2_control> runs on the block and controllers generated for
-it, which are the files written."""
+SRDF half_sitting pose, a robot without <ros2_control> runs on the block and controllers generated for
+it, which are the files written, and a lab's own xacro package (examples/lab_biped_description, named by
+``package://``) stands, its STL, DAE and OBJ meshes in the viewer's recording and in a camera's image."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from importlib.metadata import PackageNotFoundError, distribution
 from pathlib import Path
 
 import msgpack
+import numpy as np
 import pytest
 import yaml
 
@@ -209,3 +211,89 @@ def test_a_bad_robot_ends_the_launch_at_once_naming_file_and_reason(tmp_path: Pa
     assert done.returncode == 1, done.stdout + done.stderr
     assert str(robot) in done.stderr and reason.format(file=robot) in done.stderr, done.stderr
     assert "started '" not in done.stdout + done.stderr     # no process was started
+
+
+LAB_BIPED = "package://lab_biped_description/urdf/lab_biped.urdf.xacro"
+# the colours of the lab biped's meshes: the DAE's material, the URDF's material of the STLs, the OBJ's MTL
+ORANGE, BLUE, GREEN = (0.9, 0.45, 0.1), (0.15, 0.25, 0.6), (0.1, 0.6, 0.25)
+TRIPOD = """<robot name="tripod"><link name="tripod_link"><inertial><mass value="1"/>
+<inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<gazebo reference="tripod_link"><sensor name="camera" type="camera"><always_on>true</always_on>
+<update_rate>5</update_rate><camera><horizontal_fov>1.0</horizontal_fov>
+<image><width>160</width><height>120</height><format>R8G8B8</format></image><clip><near>0.05</near><far>20</far></clip>
+</camera><plugin name="c" filename="libgazebo_ros_camera.so"><ros><remapping>camera/image_raw:=camera/rgb</remapping>
+</ros><camera_name>camera</camera_name></plugin></sensor></gazebo></robot>"""
+
+
+def share_of(rgb: np.ndarray, colour: tuple[float, float, float]) -> float:
+    """The fraction of an image's pixels of ``colour`` (its chromaticity: shading only scales it)."""
+    pixels = rgb.reshape(-1, 3).astype(float)
+    lit = pixels.sum(axis=1) > 30
+    chroma = pixels[lit] / pixels[lit].sum(axis=1, keepdims=True)
+    return float((np.abs(chroma - np.array(colour) / sum(colour)).max(axis=1) < 0.04).sum() / len(pixels))
+
+
+def mesh_of(data: dict, entity: str) -> dict:
+    """The Mesh3D components the viewer recorded for ``entity`` (static and temporal rows merged)."""
+    rows = data[entity]
+    return {**rows.static, **{k: v for row in rows.rows for k, v in row.items() if v is not None}}
+
+
+def rgba(colour: tuple[float, float, float]) -> int:
+    return int("".join(f"{round(c * 255):02x}" for c in colour) + "ff", 16)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(600)
+def test_a_lab_xacro_package_stands_and_its_meshes_are_drawn_and_seen(tmp_path: Path, zenoh_port: int,
+                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    """examples/lab_biped_description, as a user runs it: found through ROS_PACKAGE_PATH, its xacro (an
+    included leg macro, $(find), args) expanded, no <ros2_control> (generated), frames merged, spawned at
+    z:=auto. It stands 10 s; the viewer's recording has its DAE (millimetres, Y up), STL (binary and ASCII)
+    and OBJ (MTL colour) meshes as Mesh3D in metres and in their colours; a camera on a tripod sees them."""
+    from tests.support.rrd import load
+
+    root = Path(__file__).resolve().parents[2]
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(root / "examples"))
+    rrd = tmp_path / "lab_biped.rrd"
+    scenario = launch(tmp_path, zenoh_port, "robot:=lab_biped", f"robot_file:={LAB_BIPED}", "sensors:=true",
+                      "gui:=true", f"viewer_args:=--save {rrd}")
+    try:
+        scenario.connect("sim/model_states", "lab_biped/joint_states", "tripod/camera/rgb")
+        height, samples = stands(scenario, 10.0, "lab_biped")
+        assert all(abs(z - height) <= 0.05 * height for z, _ in samples), (height, min(samples), max(samples))
+        assert max(t for _, t in samples) < 5.0
+        assert 0.70 < height < 0.80, height      # pelvis over the legs, the soles on the ground (z:=auto)
+
+        # a camera on a tripod 1.5 m ahead of the biped, facing it
+        reply = call(scenario.session, "sim/spawn_entity", {
+            "name": "tripod", "xml": TRIPOD, "robot_namespace": "tripod", "fixed": True,
+            "initial_pose": {"position": {"x": 1.5, "y": 0.0, "z": 0.5}, "orientation": {"z": 1.0, "w": 0.0}}},
+            timeout=60)
+        assert reply and reply["success"], reply
+        scenario.wait_for(lambda: scenario.snapshot("tripod/camera/rgb"), 120, "the tripod's camera image")
+        image = scenario.snapshot("tripod/camera/rgb")[-1]
+        rgb = np.frombuffer(image["data"], np.uint8).reshape(image["height"], image["width"], 3)
+        shares = {name: share_of(rgb, colour) for name, colour in
+                  (("torso (DAE)", ORANGE), ("legs (STL)", BLUE), ("feet (OBJ)", GREEN))}
+        assert all(share > 0.002 for share in shares.values()), shares
+        z, tilt = base(scenario, ns="lab_biped")[-1]
+        assert abs(z - height) <= 0.05 * height and tilt < 5.0
+    finally:
+        scenario.close()
+    data = load(rrd)
+    links = "world/lab_biped/links"
+    torso = mesh_of(data, f"{links}/base_link/visual_0")
+    # millimetres and Y up in the file: metres and Z up here (0.24 deep, 0.30 wide, 0.36 tall)
+    assert np.ptp(np.asarray(torso["Mesh3D:vertex_positions"]), axis=0) == pytest.approx([0.24, 0.30, 0.36],
+                                                                                           abs=1e-4)
+    assert set(torso["Mesh3D:vertex_colors"]) == {rgba(ORANGE)}
+    for side in ("left", "right"):
+        thigh = mesh_of(data, f"{links}/{side}_thigh_link/visual_0")   # binary STL, the URDF's material
+        shin = mesh_of(data, f"{links}/{side}_shin_link/visual_0")     # ASCII STL
+        foot = mesh_of(data, f"{links}/{side}_foot_link/visual_0")     # OBJ and its MTL
+        assert np.ptp(np.asarray(thigh["Mesh3D:vertex_positions"]), axis=0)[2] == pytest.approx(0.25, abs=1e-4)
+        assert set(thigh["Mesh3D:vertex_colors"]) == set(shin["Mesh3D:vertex_colors"]) == {rgba(BLUE)}
+        assert np.ptp(np.asarray(foot["Mesh3D:vertex_positions"]), axis=0) == pytest.approx([0.22, 0.12, 0.04],
+                                                                                              abs=1e-4)
+        assert set(foot["Mesh3D:vertex_colors"]) == {rgba(GREEN)}

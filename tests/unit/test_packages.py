@@ -285,3 +285,43 @@ def test_example_robot_data_as_installed() -> None:
     share = Path(get_package_share_directory("example-robot-data"))
     assert share.name == "example-robot-data" and share.parent.parent.name == "cmeel.prefix"
     assert resolve_uri("package://example-robot-data/robots/ur_description/urdf/ur5_robot.urdf").is_file()
+
+
+def test_a_robot_files_own_package_is_added_to_the_package_path(clean_env: Path, tmp_path: Path,
+                                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    """A description repository used where it lies (no package path names it): its folder is added to
+    ROS_PACKAGE_PATH, once; a package the index knows, or a file in no package, adds nothing."""
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(tmp_path / "elsewhere"))
+    package = make_package(tmp_path / "downloads" / "lab_bot_description")
+    (package / "urdf").mkdir()
+    robot = package / "urdf" / "lab_bot.urdf.xacro"
+    robot.write_text("<robot name='r'/>")
+    line = index_module.add_own_package(robot)
+    assert line is not None and "'lab_bot_description'" in line and str(package) in line
+    assert os.environ["ROS_PACKAGE_PATH"] == os.pathsep.join([str(tmp_path / "elsewhere"), str(package)])
+    assert find_share("lab_bot_description") == package
+    assert index_module.add_own_package(robot) is None        # known now
+    loose = tmp_path / "loose.urdf"
+    loose.write_text("<robot name='r'/>")
+    assert index_module.add_own_package(loose) is None
+
+
+def test_the_example_lab_package_by_uri_through_xacro(clean_env: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """examples/lab_biped_description named as robot_file:= takes it: package:// and file:// URIs, its xacro
+    including its leg macro through $(find), no <ros2_control> block."""
+    from nodes.share import robot_file
+    from nodes.urdf.description import load_robot_description
+    from nodes.urdf.model import parse_urdf
+
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(ROOT / "examples"))
+    file = ROOT / "examples" / "lab_biped_description" / "urdf" / "lab_biped.urdf.xacro"
+    assert robot_file("package://lab_biped_description/urdf/lab_biped.urdf.xacro") == file
+    assert robot_file(file.as_uri()) == file
+    with pytest.raises(FileNotFoundError, match="outside its package root"):
+        robot_file("package://lab_biped_description/../../pyproject.toml")
+    model = parse_urdf(load_robot_description("package://lab_biped_description/urdf/lab_biped.urdf.xacro",
+                                              xacro_args={"hip_spacing": "0.25"}))
+    assert model.name == "lab_biped" and not model.ros2_control
+    assert [j.name for j in model.movable_joints()][:4] == ["left_hip_roll_joint", "left_hip_pitch_joint",
+                                                           "left_knee_joint", "left_ankle_pitch_joint"]
+    assert model.joints["right_hip_roll_joint"].origin[1, 3] == pytest.approx(-0.125)   # the xacro arg
