@@ -84,12 +84,21 @@ class Entity:
         return FrontendText(_scalar(value), self.at(name))
 
     def value(self, name: str) -> Any:
-        """A parameter value: text (typed when it is resolved) or, from YAML, the typed value itself."""
+        """A parameter value: text (typed when it is resolved) or, from YAML, the typed value itself; with a
+        ``NAME-sep`` attribute (launch_xml's list spelling, ``value="1,2" value-sep=","``), the text split on
+        it into a list whose items are typed one by one."""
         raw = self.get(name)
+        separator = self.get(f"{name}-sep", optional=True)
+        if separator is not None:
+            if not isinstance(raw, str) or not isinstance(separator, str) or not separator:
+                raise LaunchError(f"<{self.kind}> attribute '{name}-sep' needs a text '{name}' and a separator "
+                                  f"that is not empty", self.at(f"{name}-sep"))
+            # each item its own substitution list: a flat list of substitutions would be one text, joined
+            return [[FrontendText(part, self.at(name))] for part in raw.split(separator)]
         if isinstance(raw, str):
             return FrontendText(raw, self.at(name))
         if isinstance(raw, list):
-            return [FrontendText(v, self.at(name)) if isinstance(v, str) else v for v in raw]
+            return [[FrontendText(v, self.at(name))] if isinstance(v, str) else v for v in raw]
         return raw
 
     def children_of(self, kind: str) -> list[Entity]:

@@ -49,18 +49,16 @@ def _namespace(ros: RosArgs) -> str:
 
 
 def spawner(args: list[str], ros: RosArgs) -> list[str]:
-    """controller_manager's spawner: ``NAME... [-c CM] [-p FILE] [--inactive|--stopped] [-n NS]``; the manager
+    """controller_manager's spawner: ``NAME... [-c CM] [-p FILE] [-t TYPE] [--inactive|--stopped|--load-only]
+    [-n NS]``; the manager
     is ``/controller_manager`` (or in the node's namespace), as in ROS, not zenroid's default namespace."""
     args = list(args)
     if _take(args, ("--stopped",), valued=False):
         args.append("--inactive")
     namespaces = _take(args, ("-n", "--namespace", "--ns"))
-    for flag in ("-u", "--unload-on-kill", "--activate-as-group", "--load-only"):
-        if _take(args, (flag,), valued=False) and flag == "--load-only":
-            raise ServeError("--load-only is not served (load_controller without --set-state does that)")
+    for flag in ("-u", "--unload-on-kill", "--activate-as-group"):
+        _take(args, (flag,), valued=False)
     _take(args, ("--switch-timeout", "--service-call-timeout"))
-    if _take(args, ("-t", "--controller-type")):
-        raise ServeError("-t/--controller-type is not served: give the type in the --param-file")
     managers = _take(args, ("-c", "--controller-manager"))
     manager = managers[-1] if managers else "controller_manager"
     namespace = namespaces[-1] if namespaces else _namespace(ros)

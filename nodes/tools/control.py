@@ -6,7 +6,8 @@
     zenroid control set_controller_state NAME inactive|active
     zenroid control switch_controllers --activate A ... --deactivate B ... [--strict]
     zenroid control unload_controller NAME
-    zenroid control spawner NAME ... [--inactive] [--param-file F] [--controller-manager-timeout S]
+    zenroid control spawner NAME ... [--inactive | --load-only] [--param-file F] [-t TYPE]
+                                     [--controller-manager-timeout S]
 
 Exit status: 0 done, 1 the manager declined or could not be reached, 2 bad input.
 """
@@ -76,8 +77,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     _manager_args(p)
     p = sub.add_parser("spawner", help="wait for the controller manager, load, configure and activate controllers")
     p.add_argument("names", nargs="+", metavar="NAME")
-    p.add_argument("--inactive", action="store_true", help="configure only, do not activate")
+    state = p.add_mutually_exclusive_group()
+    state.add_argument("--inactive", action="store_true", help="configure only, do not activate")
+    state.add_argument("--load-only", action="store_true", help="load only: leave the controllers unconfigured")
     p.add_argument("-p", "--param-file", help="ros2_control YAML with the controllers' type and parameters")
+    p.add_argument("-t", "--controller-type", help="the controllers' type (package/Class), instead of the YAML's")
     p.add_argument("--controller-manager-timeout", type=float, default=10.0,
                    help="s to wait for the controller manager (the ros2_control startup race)")
     _manager_args(p)
@@ -170,21 +174,23 @@ def _spawner(client: ManagerClient, args: argparse.Namespace) -> None:
                 raise Failed(f"controller manager '{client.prefix}' not available after "
                              f"{args.controller_manager_timeout:g} s: {exc}") from None
             time.sleep(0.2)
-    if args.param_file:
+    if args.param_file or args.controller_type:
         from nodes.control.config import ConfigError, load_config_file
 
         try:
-            config = load_config_file(args.param_file)
+            config = load_config_file(args.param_file) if args.param_file else None
         except ConfigError as exc:
             raise UsageError(str(exc)) from None
         names, values = [], []
         for name in args.names:
-            cfg = config.controllers.get(name)
-            if cfg is None:
+            cfg = config.controllers.get(name) if config is not None else None
+            if cfg is None and not args.controller_type:
                 continue
-            params = dict(cfg.params)
-            if cfg.type:
+            params = dict(cfg.params) if cfg is not None else {}
+            if cfg is not None and cfg.type:
                 params["type"] = cfg.type
+            if args.controller_type:   # as ROS's spawner: -t sets the type of every controller named
+                params["type"] = args.controller_type
             names.append(name)
             values.append(yaml.safe_dump(params))
         if names:
@@ -199,6 +205,9 @@ def _spawner(client: ManagerClient, args: argparse.Namespace) -> None:
             state = "unconfigured"
         else:
             state = controllers[name].state
+        if args.load_only:
+            print(f"Loaded {name}")
+            continue
         if state == "unconfigured":
             client.configure(name)
         if args.inactive:

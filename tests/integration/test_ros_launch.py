@@ -514,7 +514,7 @@ def test_cart_demo_package(tmp_path: Path, zenoh_port: int, variant: str) -> Non
     after the other (load_controller or spawner chained with OnProcessExit) by the plugin's controller
     manager. The cart starts at the state interface's initial_value; position: example_position.py's
     FollowJointTrajectory goal (rclpy) takes it through -1 to 0.5; velocity and effort: a command moves it
-    in the commanded direction."""
+    in the commanded direction. Effort also: `spawner NAME -t TYPE --load-only` leaves it loaded, unconfigured."""
     command = (sys.executable, "-m", "nodes.tools.ros2", "launch")
     launch = Launch("cart_demo", f"cart_example_{variant}.launch.py", "sensors:=false", log_dir=tmp_path / "run",
                     port=zenoh_port, command=command, env=child_env(CART_DEMO))
@@ -546,6 +546,17 @@ def test_cart_demo_package(tmp_path: Path, zenoh_port: int, variant: str) -> Non
             assert velocity * sign > 0.1, velocity
             if variant == "velocity":
                 assert velocity == pytest.approx(value, abs=0.05)
+            else:   # the spawner's other options: a type given on the command line, loaded only
+                ros2 = [sys.executable, "-m", "nodes.tools.ros2"]
+                done = subprocess.run([*ros2, "run", "controller_manager", "spawner", "extra_broadcaster", "-t",
+                                       "joint_state_broadcaster/JointStateBroadcaster", "--load-only", "-c",
+                                       "/controller_manager"], capture_output=True, text=True, timeout=60,
+                                      env=child_env({"ZENOH_CONNECT": launch.endpoint}), cwd=ROOT)
+                assert done.returncode == 0 and "Loaded extra_broadcaster" in done.stdout, done.stdout + done.stderr
+                listed = subprocess.run([*ros2, "control", "list_controllers"], capture_output=True, text=True,
+                                        timeout=60, env=child_env({"ZENOH_CONNECT": launch.endpoint}), cwd=ROOT)
+                assert re.search(r"extra_broadcaster\s+joint_state_broadcaster/JointStateBroadcaster\s+unconfigured",
+                                 listed.stdout), listed.stdout + listed.stderr
     finally:
         launch.close()
     out = launch.output()

@@ -86,8 +86,8 @@ def test_served_executables_map_ros_spellings(tmp_path: Path, monkeypatch: pytes
     _, runs = serve.command("robot_state_publisher", "robot_state_publisher",
                             ["--ros-args", "-p", "robot_description:=<robot/>", "-r", "__ns:=/r"])
     assert runs == [["--ns", "r", "--param", "robot_description:=<robot/>"]]
-    with pytest.raises(serve.ServeError, match="-t/--controller-type is not served"):
-        serve.command("controller_manager", "spawner", ["jtc", "-t", "x/Y"])
+    _, runs = serve.command("controller_manager", "spawner", ["jtc", "-t", "x/Y", "--load-only", "-u"])
+    assert runs == [["control", "spawner", "jtc", "-t", "x/Y", "--load-only", "-c", "controller_manager", "--ns", ""]]
 
 
 def _ros2(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:

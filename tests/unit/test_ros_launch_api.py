@@ -101,3 +101,28 @@ def test_frontend_text_substitutions(tmp_path: Path) -> None:
         substitute("$(find-pkg-share no_such_pkg_zr)", ctx, at)
     with pytest.raises(LaunchError, match="unknown substitution"):
         substitute("$(nope 1)", ctx, at)
+
+
+@pytest.mark.parametrize("name, text", [
+    ("p.launch.xml", '<launch><node pkg="robot_state_publisher" exec="robot_state_publisher" name="rsp">'
+                     '<param name="joints" value="a;b;c" value-sep=";"/><param name="gains" value="1, 2.5, true" '
+                     'value-sep=", "/><param name="plain" value="1,2"/></node></launch>'),
+    ("p.launch.yaml", "launch:\n- node:\n    pkg: robot_state_publisher\n    exec: robot_state_publisher\n"
+                      "    name: rsp\n    param:\n    - {name: joints, value: 'a;b;c', value-sep: ';'}\n"
+                      "    - {name: gains, value: '1, 2.5, true', value-sep: ', '}\n    - {name: plain, value: '1,2'}\n"
+                      "    - {name: listed, value: [x, '$(var n)']}\n"),
+])
+def test_value_sep_makes_a_list_parameter(tmp_path: Path, name: str, text: str) -> None:
+    """launch_xml's ``value-sep``: the value split into a list, each item typed as a parameter value is."""
+    from launch.resolve import resolve
+
+    (tmp_path / name).write_text(text)
+    node = next(n for n in resolve(tmp_path / name, {"n": "7"}).nodes if n.name == "rsp")
+    assert node.params["joints"] == ["a", "b", "c"]
+    assert node.params["gains"] == [1, 2.5, True]
+    assert node.params["plain"] == "1,2"
+    if name.endswith(".yaml"):   # a YAML list stays a list, its text items performed one by one
+        assert node.params["listed"] == ["x", 7]
+    (tmp_path / name).write_text(text.replace('value-sep=";"', 'value-sep=""').replace("value-sep: ';'", "value-sep: ''"))
+    with pytest.raises(LaunchError, match="'value-sep' needs a text 'value' and a separator"):
+        resolve(tmp_path / name, {})
