@@ -248,22 +248,27 @@ def rgba(colour: tuple[float, float, float]) -> int:
 def test_a_lab_xacro_package_stands_and_its_meshes_are_drawn_and_seen(tmp_path: Path, zenoh_port: int,
                                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     """examples/lab_biped_description, as a user runs it: found through ROS_PACKAGE_PATH, its xacro (an
-    included leg macro, $(find), args) expanded, no <ros2_control> (generated), frames merged, spawned at
-    z:=auto. It stands 10 s; the viewer's recording has its DAE (millimetres, Y up), STL (binary and ASCII)
+    included leg macro, $(find), args) expanded, no <ros2_control> (generated), frames merged, its SRDF's
+    knees-bent "stand" as the initial pose, spawned at z:=auto. It stands 10 s; the viewer's recording has its DAE (millimetres, Y up), STL (binary and ASCII)
     and OBJ (MTL colour) meshes as Mesh3D in metres and in their colours; a camera on a tripod sees them."""
     from tests.support.rrd import load
 
     root = Path(__file__).resolve().parents[2]
     monkeypatch.setenv("ROS_PACKAGE_PATH", str(root / "examples"))
     rrd = tmp_path / "lab_biped.rrd"
-    scenario = launch(tmp_path, zenoh_port, "robot:=lab_biped", f"robot_file:={LAB_BIPED}", "sensors:=true",
-                      "gui:=true", f"viewer_args:=--save {rrd}")
+    scenario = launch(tmp_path, zenoh_port, "robot:=lab_biped", f"robot_file:={LAB_BIPED}", "initial_pose:=stand",
+                      "sensors:=true", "gui:=true", f"viewer_args:=--save {rrd}")
     try:
         scenario.connect("sim/model_states", "lab_biped/joint_states", "tripod/camera/rgb")
         height, samples = stands(scenario, 10.0, "lab_biped")
         assert all(abs(z - height) <= 0.05 * height for z, _ in samples), (height, min(samples), max(samples))
         assert max(t for _, t in samples) < 5.0
-        assert 0.70 < height < 0.80, height      # pelvis over the legs, the soles on the ground (z:=auto)
+        # knees bent (the SRDF's "stand", held by the JTC on the generated gains), the soles on the ground (z:=auto)
+        assert 0.60 < height < 0.72, height
+        knees = [m["position"][m["name"].index("left_knee_joint")] for m in scenario.snapshot("lab_biped/joint_states")]
+        assert abs(knees[-1] - 0.7) < 0.05, knees[-1]
+        print(f"lab biped standing: pelvis {height:.4f} m, {min(z for z, _ in samples):.4f}.."
+              f"{max(z for z, _ in samples):.4f} m, tilt at most {max(t for _, t in samples):.2f} deg")
 
         # a camera on a tripod 1.5 m ahead of the biped, facing it
         reply = call(scenario.session, "sim/spawn_entity", {
@@ -274,6 +279,7 @@ def test_a_lab_xacro_package_stands_and_its_meshes_are_drawn_and_seen(tmp_path: 
         scenario.wait_for(lambda: scenario.snapshot("tripod/camera/rgb"), 120, "the tripod's camera image")
         image = scenario.snapshot("tripod/camera/rgb")[-1]
         rgb = np.frombuffer(image["data"], np.uint8).reshape(image["height"], image["width"], 3)
+        (tmp_path / "tripod.ppm").write_bytes(f"P6 {rgb.shape[1]} {rgb.shape[0]} 255\n".encode() + rgb.tobytes())
         shares = {name: share_of(rgb, colour) for name, colour in
                   (("torso (DAE)", ORANGE), ("legs (STL)", BLUE), ("feet (OBJ)", GREEN))}
         assert all(share > 0.002 for share in shares.values()), shares
