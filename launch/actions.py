@@ -138,7 +138,8 @@ class Shutdown(LocatedAction):
 
 
 class EmitEvent(LocatedAction):
-    """Only ``Shutdown`` is an event this launcher acts on; any other is reported and ignored."""
+    """``Shutdown`` ends the launch; an event with an ``emit`` method (launch_ros' lifecycle ``ChangeState``)
+    does what it says; any other is reported and ignored."""
 
     def __init__(self, *, event: Any, **kwargs: Any) -> None:
         super().__init__(**kwargs)
@@ -149,6 +150,8 @@ class EmitEvent(LocatedAction):
 
         if isinstance(self.event, ShutdownEvent):
             resolver.shutdown(f"Shutdown event ({self.event.reason})")
+        elif callable(getattr(self.event, "emit", None)):
+            self.event.emit(resolver, scope, self.source)
         else:
             resolver.log(f"{self.source}: EmitEvent({type(self.event).__name__}) is not supported by this launcher; "
                          "ignored", level="WARN")

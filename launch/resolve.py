@@ -102,6 +102,7 @@ class _Resolver(RosResolution):
         self.plan: LaunchPlan | None = None
         self.include_stack: list[Path] = []
         self.pending_exit: list[tuple[ExitHandler, Source]] = []
+        self.lifecycle_nodes: list[Any] = []   # LifecycleNode actions resolved so far (ChangeState targets)
 
     # -- values ---------------------------------------------------------------------------------
     def text(self, value: Any, scope: _Scope, source: Source, what: str) -> str:

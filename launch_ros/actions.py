@@ -4,9 +4,10 @@ spelling (``parse``) and what it resolves to (``resolve``), as ``launch.actions`
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
-from launch.actions import LocatedAction
+from launch.actions import ExecuteProcess, LocatedAction
 from launch.context import normalize
 from launch.yaml_source import LaunchError
 
@@ -81,10 +82,37 @@ def _seconds(text: str | None, entity: Any) -> float | None:
 
 
 class LifecycleNode(Node):
-    """A managed node: started as any node; ``ros2 lifecycle`` drives its transitions."""
+    """A managed node: started as any node; ``EmitEvent(ChangeState(...))`` in the launch file or
+    ``ros2 lifecycle set`` drive its transitions (launch_ros.events.lifecycle)."""
 
-    def __init__(self, *, name: Any, namespace: Any, **kwargs: Any) -> None:
+    def __init__(self, *, name: Any, namespace: Any, autostart: Any = False, **kwargs: Any) -> None:
         super().__init__(name=name, namespace=namespace, **kwargs)
+        self.autostart = normalize(autostart) if not isinstance(autostart, bool) else autostart
+        self.fully_qualified_names: list[str] = []
+
+    def resolve(self, resolver: Any, scope: Any) -> None:
+        from launch.plan import parse_bool
+
+        super().resolve(resolver, scope)
+        spec = resolver.plan.nodes[-1]
+        fqn = "/" + "/".join(p for p in (spec.namespace.strip("/"), spec.node_name) if p)
+        self.fully_qualified_names.append(fqn)
+        resolver.lifecycle_nodes.append(self)
+        autostart = self.autostart if isinstance(self.autostart, bool) else parse_bool(
+            resolver.perform(self.autostart, scope, self.source, "autostart"), "autostart", self.source)
+        if autostart:   # launch_ros' autostart: configured, then activated, once it is up
+            helper = _LifecycleChange(self, fqn, "configure", "activate")
+            helper.source = self.source
+            resolver.walk([helper], scope)
+
+
+class _LifecycleChange(ExecuteProcess):
+    """The helper process of a ChangeState event for one lifecycle node (launch_ros.lifecycle_change)."""
+
+    def __init__(self, node: LifecycleNode, fqn: str, *transitions: str) -> None:
+        super().__init__(cmd=[sys.executable, "-m", "launch_ros.lifecycle_change", fqn, *transitions],
+                         name=f"change_state_{'_'.join(transitions)}", output="log")
+        self.node = node
 
 
 class PushRosNamespace(LocatedAction):

@@ -563,3 +563,79 @@ def test_cart_demo_package(tmp_path: Path, zenoh_port: int, variant: str) -> Non
     order = [out.index(s) for s in ("'spawn_entity' [pid", "controller manager /controller_manager with",
                                     "loaded controller 'joint_state_broadcaster'", f"loaded controller '{controller}'")]
     assert order == sorted(order), out
+
+
+LIFECYCLE_NODE = """#!/usr/bin/env python3
+import rclpy
+from rclpy.lifecycle import Node, TransitionCallbackReturn
+
+
+class Talker(Node):
+    def on_configure(self, state):
+        self.get_logger().info('on_configure called')
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_activate(self, state):
+        self.get_logger().info('on_activate called')
+        return super().on_activate(state)
+
+
+rclpy.init()
+node = Talker('talker')
+try:
+    rclpy.spin(node)
+except KeyboardInterrupt:
+    pass
+"""
+
+LIFECYCLE_LAUNCH = """
+from launch import LaunchDescription
+from launch.actions import EmitEvent, LogInfo, RegisterEventHandler
+from launch_ros.actions import LifecycleNode
+from launch_ros.event_handlers import OnStateTransition
+from launch_ros.events import matches_action
+from launch_ros.events.lifecycle import ChangeState
+from lifecycle_msgs.msg import Transition
+
+
+def generate_launch_description():
+    talker = LifecycleNode(package='lc_pkg', executable='talker', name='talker', namespace='', output='screen')
+    configure = EmitEvent(event=ChangeState(lifecycle_node_matcher=matches_action(talker),
+                                            transition_id=Transition.TRANSITION_CONFIGURE))
+    on_inactive = RegisterEventHandler(OnStateTransition(
+        target_lifecycle_node=talker, goal_state='inactive',
+        entities=[LogInfo(msg="talker reached 'inactive', activating"),
+                  EmitEvent(event=ChangeState(lifecycle_node_matcher=matches_action(talker),
+                                              transition_id=Transition.TRANSITION_ACTIVATE))]))
+    on_active = RegisterEventHandler(OnStateTransition(
+        target_lifecycle_node=talker, goal_state='active',
+        entities=lambda event, context: [LogInfo(msg=f'{event.node_name} went {event.start_state} -> {event.goal_state}')]))
+    auto = LifecycleNode(package='lc_pkg', executable='talker', name='auto', namespace='', autostart=True)
+    return LaunchDescription([on_inactive, on_active, talker, configure, auto])
+"""
+
+
+@pytest.mark.slow
+def test_lifecycle_node_driven_by_change_state_events(tmp_path: Path, zenoh_port: int) -> None:
+    """launch_ros' lifecycle pattern: EmitEvent(ChangeState(configure)) once the node is up, an
+    OnStateTransition(goal_state='inactive') handler that emits the activate, another that sees it active;
+    LifecycleNode(autostart=True) configured and activated by itself."""
+    env = _packages(tmp_path / "src", ("lc_pkg", "talker"))
+    (tmp_path / "src/lc_pkg/scripts/talker").write_text(LIFECYCLE_NODE)
+    (tmp_path / "lifecycle.launch.py").write_text(LIFECYCLE_LAUNCH)
+    launch = Launch(str(tmp_path / "lifecycle.launch.py"), log_dir=tmp_path / "run", port=zenoh_port,
+                    env=child_env(env))
+    try:
+        wait_output(launch, r"/talker went inactive -> active", 90)
+        wait_output(launch, r"'change_state_configure_activate' \[pid \d+\] exited with status 0", 60)
+        for name in ("/talker", "/auto"):   # auto: LifecycleNode(autostart=True)
+            state = subprocess.run([sys.executable, "-m", "nodes.tools.ros2", "lifecycle", "get", name],
+                                   capture_output=True, text=True, timeout=60,
+                                   env=child_env({"ZENOH_CONNECT": launch.endpoint}), cwd=ROOT)
+            assert state.stdout.startswith("active"), name + state.stdout + state.stderr
+    finally:
+        launch.close()
+    out = launch.output()
+    order = [out.index(s) for s in ("on_configure called", "talker reached 'inactive', activating",
+                                    "on_activate called", "/talker went inactive -> active")]
+    assert order == sorted(order), out
