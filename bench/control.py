@@ -48,6 +48,7 @@ from nodes.control.interfaces import HardwareInterfaces, JointInfo, SensorInfo  
 from nodes.control.manager import STRICT, ControllerManager  # noqa: E402
 from nodes.control.node import NodeControllerContext  # noqa: E402
 from nodes.core import Node  # noqa: E402
+from nodes.core.delivery import Inline, Raw  # noqa: E402
 from nodes.core.session import loopback_endpoint, open_peer, open_router  # noqa: E402
 from nodes.urdf.sensors import FORCE_TORQUE_INTERFACES, IMU_INTERFACES  # noqa: E402
 
@@ -184,8 +185,9 @@ def bench_latency(endpoint: str, port: int, samples: int, sensors: bool = True,
             del state_arrivals[:500]
 
     try:
-        node.create_subscription(None, "/humanoid/hardware/command", on_command, inline=True, raw=True)
-        node.create_subscription(None, "/humanoid/hardware/state", on_state, inline=True, raw=True)
+        node.create_subscription(None, "/humanoid/hardware/command", on_command,
+                                 delivery=Inline(), message=Raw())
+        node.create_subscription(None, "/humanoid/hardware/state", on_state, delivery=Inline(), message=Raw())
         pub = node.create_publisher(JointTrajectory, "/humanoid/joint_trajectory_controller/joint_trajectory",
                                     express=True)
         deadline = time.monotonic() + 120

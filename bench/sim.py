@@ -26,6 +26,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.common import child_env, free_port, loopback, print_table, spawn, stop  # noqa: E402 - after the path set-up
+from nodes.core.delivery import Inline  # noqa: E402
 
 HUMANOID_ENTITY = "entities:=[{name: humanoid, file: humanoid, z: 0.915}]"
 
@@ -74,7 +75,7 @@ class SimRun:
         self._lock = threading.Lock()
         from nodes.sim.interfaces import String
 
-        self.node.create_subscription(String, "/sim/diagnostics", self._on_diag, inline=True)
+        self.node.create_subscription(String, "/sim/diagnostics", self._on_diag, delivery=Inline())
 
     def _on_diag(self, msg) -> None:
         with self._lock:

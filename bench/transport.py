@@ -60,7 +60,7 @@ def subscriber(mode: str, endpoint: str, count: int, ready_key: str) -> None:
         session.close()
     else:
         import msgs
-        from nodes.core import Node
+        from nodes.core import Inline, Node
 
         JointState = msgs.get_type("sensor_msgs/msg/JointState")
         node = Node("bench_sub", connect=[endpoint], log_level="warn")
@@ -70,7 +70,8 @@ def subscriber(mode: str, endpoint: str, count: int, ready_key: str) -> None:
             if done.is_set():
                 node.request_shutdown()
 
-        node.create_subscription(JointState, "/bench/joint_states", on_msg, inline=(mode == "inline"))
+        node.create_subscription(JointState, "/bench/joint_states", on_msg,
+                                 delivery=Inline() if mode == "inline" else None)
         node.session.put(ready_key, b"1")
         if mode == "inline":
             done.wait(60)

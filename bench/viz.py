@@ -50,6 +50,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench.common import Launch, child_env, free_port, spawn, stop_all, wait_until  # noqa: E402
+from nodes.core.delivery import Inline  # noqa: E402
 from tests.support.rrd import load  # noqa: E402
 
 
@@ -74,7 +75,7 @@ def start_probe(port: int):
         arrivals[round((msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9) * 1e6)] = time.time()
 
     node.create_subscription(msgs.get_type("sensor_msgs/msg/JointState"), "/humanoid/joint_states", on_state,
-                             inline=True)
+                             delivery=Inline())
     return node, arrivals
 
 
@@ -148,7 +149,7 @@ def run_browser(seconds: float, open_after: float, port: int, renderer: str, vie
         probe = Node("bench_viz_clock", connect=[f"tcp/127.0.0.1:{port}"])
         probe.create_subscription(msgs.get_type("rosgraph_msgs/msg/Clock"), "/sim/clock",
                                   lambda m: sim.__setitem__("now", m.clock.sec + m.clock.nanosec * 1e-9),
-                                  inline=True)
+                                  delivery=Inline())
         launch.wait_output("started 'joint_commander'", 90)
         time.sleep(open_after)
         with HeadlessBrowser(timeout=120, renderer=renderer) as browser:

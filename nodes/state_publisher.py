@@ -26,6 +26,7 @@ from msgs.sensor_msgs import JointState
 from msgs.std_msgs import String
 from msgs.tf2_msgs import TFMessage
 from nodes.core import Node, ParameterError, run_node
+from nodes.core.delivery import Batched
 from nodes.kinematics import KinematicTree
 from nodes.urdf import UrdfError, load_robot_description, parse_urdf, parse_xacro_args, validate
 
@@ -145,7 +146,8 @@ class RobotStatePublisher(Node):
         self.static_pub = self.create_publisher(TFMessage, "tf_static", latched=True)
         self.tf_pub = self.create_publisher(TFMessage, "tf", reliable=False)  # periodic: drop, never block
         # joint_states may come at 1 kHz: wake at the tf rate and take everything that arrived meanwhile
-        self.create_subscription(JointState, "joint_states", self.on_joint_states, max_rate=self.frequency)
+        self.create_subscription(JointState, "joint_states", self.on_joint_states,
+                                 delivery=Batched(self.frequency))
         if self.use_model_states:
             self.create_subscription(ModelStates, "/sim/model_states", self.on_model_states)
 

@@ -29,6 +29,7 @@ import rclpy.subscription  # noqa: E402, F401
 import rclpy.timer  # noqa: E402, F401
 import rclpy.utilities  # noqa: E402, F401
 from nodes.core import graph
+from nodes.core.delivery import Inline, Raw
 from nodes.core.latched import fetch_latched
 from nodes.core.names import NameError_
 from nodes.core.node import Node as CoreNode
@@ -283,7 +284,7 @@ class Node:
         key = self._zr_resolve(topic)
         group = self._zr_group(callback_group)
         run = _call_maybe_async(self, callback)
-        core = self._zr.create_subscription(msg_type, "/" + key, run, raw=raw)
+        core = self._zr.create_subscription(msg_type, "/" + key, run, message=Raw() if raw else None)
         core.group = group
         subscription = Subscription(self, core, msg_type, callback, qos, group, event_callbacks, raw)
         self._zr_entities["subscriptions"].append(subscription)
@@ -742,7 +743,8 @@ class Node:
         if enabled and not getattr(self, "_zr_clock_sub", None):
             from msgs.rosgraph_msgs import Clock as ClockMsg
 
-            self._zr_clock_sub = core.create_subscription(ClockMsg, "/sim/clock", core.clock.on_clock, inline=True)
+            self._zr_clock_sub = core.create_subscription(ClockMsg, "/sim/clock", core.clock.on_clock,
+                                                          delivery=Inline())
         core.clock.use_sim_time = enabled
         core.use_sim_time = enabled
         self._zr_clock._sim_source = self._zr_sim_now if enabled else None

@@ -49,6 +49,7 @@ from nodes.control.controller import ACTIVE
 from nodes.control.interfaces import COMMAND_KINDS, HardwareInterfaces, JointInfo, SensorInfo
 from nodes.control.manager import BEST_EFFORT, STRICT, ControllerManager, ManagerError
 from nodes.core import Node, ServiceError, realtime
+from nodes.core.delivery import Inline, Raw
 from nodes.core.endpoints import SingleSender, source_label
 from nodes.core.log import truncate
 
@@ -153,7 +154,8 @@ class NodeControllerContext:
     def create_subscription(self, msg_type: Any, topic: str, callback: Any) -> Any:
         # Inline: commands reach the controller without waiting for the executor (lowest latency);
         # controllers hand them to update() through an atomic assignment or a deque.
-        return self._keep(self.node.create_subscription(msg_type, self._resolve(topic), callback, inline=True))
+        return self._keep(self.node.create_subscription(msg_type, self._resolve(topic), callback,
+                                                        delivery=Inline()))
 
     def create_service(self, srv_type: Any, name: str, handler: Any) -> Any:
         return self._keep(self.node.create_service(srv_type, self._resolve(name), handler))
@@ -288,9 +290,10 @@ class ControllerManagerNode(Node):
         # frames from one simulator only: a second publisher on the key (a forged or replayed frame) is ignored
         self._state_sender = SingleSender(takeover_after=self.hardware_timeout)
         # the simulator says it is paused (no frames, but there): not a lost link
-        self.create_subscription(HardwareHeartbeat, "hardware/heartbeat", self._on_heartbeat, inline=True)
-        self.create_subscription(HardwareState, "hardware/state", self._on_state, inline=True, raw=True,
-                                 with_source=True, objects=True)
+        self.create_subscription(HardwareHeartbeat, "hardware/heartbeat", self._on_heartbeat,
+                                 delivery=Inline())
+        self.create_subscription(HardwareState, "hardware/state", self._on_state,
+                                 delivery=Inline(), message=Raw(objects=True, with_source=True))
         self.create_service(ListControllers, "~/list_controllers", self._srv_list)
         self.create_service(LoadController, "~/load_controller", self._srv_load)
         self.create_service(ConfigureController, "~/configure_controller", self._srv_configure)

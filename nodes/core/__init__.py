@@ -1,6 +1,7 @@
 """The node runtime: the only code in zenroid that touches Zenoh."""
 
 from nodes.core.action import ActionClient, ActionServer, ClientGoalHandle, ServerGoalHandle
+from nodes.core.delivery import Batched, Decoded, Executed, Inline, Pulled, Raw
 from nodes.core.endpoints import Client, Publisher, ServiceError, ServiceServer, Subscription
 from nodes.core.executor import CallbackGroup
 from nodes.core.lifecycle import LifecycleNode
@@ -11,7 +12,8 @@ from nodes.core.runner import add_connection_arguments, add_node_arguments, conn
 from nodes.core.spinner import Spinner
 
 __all__ = [
-    "ActionClient", "ActionServer", "CallbackGroup", "Client", "ClientGoalHandle", "LifecycleNode", "Logger", "Node",
-    "ParameterError", "Publisher", "ServerGoalHandle", "ServiceError", "ServiceServer", "Spinner", "Subscription", "Timer",
+    "ActionClient", "ActionServer", "Batched", "CallbackGroup", "Client", "ClientGoalHandle", "Decoded",
+    "Executed", "Inline", "LifecycleNode", "Logger", "Node", "ParameterError", "Publisher", "Pulled", "Raw",
+    "ServerGoalHandle", "ServiceError", "ServiceServer", "Spinner", "Subscription", "Timer",
     "add_connection_arguments", "add_node_arguments", "connect_from_args", "run_node",
 ]

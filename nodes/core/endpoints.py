@@ -2,13 +2,9 @@
 
 from __future__ import annotations
 
-import functools
 import itertools
 import os
-import struct
-import threading
 import time
-from collections import deque
 from collections.abc import Callable
 from typing import Any
 
@@ -18,6 +14,16 @@ import zenoh
 import msgs
 from msgs import DecodeError
 from nodes.core import intraprocess, memory
+from nodes.core.delivery import (  # noqa: F401 - parse_attachment, MAX_ARRAY_LENGTH: imported from here too
+    ATTACHMENT,
+    MAX_ARRAY_LENGTH,
+    Decoded,
+    Delivery,
+    Executed,
+    decode_limits,
+    is_wake,
+    parse_attachment,
+)
 from nodes.core.executor import CallbackGroup
 from nodes.core.graph import parse_key
 from nodes.core.log import truncate
@@ -25,22 +31,10 @@ from nodes.core.runtime import NodeRuntime
 from nodes.core.session import max_payload_bytes
 
 ENCODING = "application/msgpack"
-_ATTACHMENT = struct.Struct("<Q16s")  # sequence number, source id (loss detection, `topic hz`)
 
 
 def encoding_for(type_name: str) -> zenoh.Encoding:
     return zenoh.Encoding(ENCODING).with_schema(type_name)
-
-
-def parse_attachment(sample: Any) -> tuple[int, bytes] | None:
-    """(sequence, source id) of a sample from a zenroid publisher, else None."""
-    att = sample.attachment
-    if att is None:
-        return None
-    raw = att.to_bytes()
-    if len(raw) != _ATTACHMENT.size:
-        return None
-    return _ATTACHMENT.unpack(raw)
 
 
 def source_label(source: bytes | None) -> str:
@@ -144,7 +138,7 @@ class Publisher:
         if mirrored or remote.matching_status.matching:
             if payload is None:
                 payload = msgs.encode(message)
-            remote.put(payload, attachment=_ATTACHMENT.pack(seq, self._source))
+            remote.put(payload, attachment=ATTACHMENT.pack(seq, self._source))
             if mirrored:
                 mirror.send(payload)
         # else nobody outside this process listens: not even encoded
@@ -178,7 +172,7 @@ class Publisher:
         pub = self._pub
         if droppable and self.reliable:
             pub = self._droppable_twin()
-        pub.put(payload, attachment=_ATTACHMENT.pack(next(self._seq), self._source))
+        pub.put(payload, attachment=ATTACHMENT.pack(next(self._seq), self._source))
         mirror = self._mirror
         if mirror is not None and mirror.active:  # someone subscribes to rmw_zenoh's key: send the CDR twin
             mirror.send(payload)
@@ -196,233 +190,83 @@ class Publisher:
 
 
 class Subscription:
-    """Messages of ``key`` decoded into ``msg_type`` and handed to ``callback``.
-
-    ``max_rate`` (Hz): wake at most that often and take every message that arrived meanwhile at once.
-    Zenoh keeps them in its own ring buffer (the newest ``backlog``), so a fast topic such as a 1 kHz
-    ``joint_states`` costs a consumer that only needs 50 updates a second 50 wake-ups, not 1000.
-
-    ``objects=True`` (with ``raw``): in a container, a message another node of the process published as an
-    object reaches the callback as that object, built by trusted code and neither encoded nor decoded (the
-    hardware frames between a composed simulator and controller manager); from Zenoh, bytes as ``raw``.
-
-    ``pulled=True``: no thread delivers anything. Messages wait in Zenoh's ring buffer (the newest
-    ``backlog``) until the owner's thread takes them with ``take_pending()`` or ``wait(timeout)``, and the
-    callback runs there. For a thread that holds the GIL for long stretches (the simulator's physics, in
-    C++): a delivering thread would wait for the GIL until the physics ends and then hand it back and
-    forth; pulling costs no thread hand-off at all.
-    """
+    """Messages of ``key`` handed to ``callback``: ``delivery`` says where and when it runs (default
+    ``Executed()``: by the node's executor), ``message`` what it gets (default ``Decoded()``: the message as
+    ``msg_type``); both are objects of ``nodes/core/delivery.py``, one pair per subscription."""
 
     def __init__(self, node: NodeRuntime, msg_type: Any, key: str, callback: Callable[..., None], *,
-                 inline: bool = False, raw: bool = False, with_key: bool = False, with_source: bool = False,
-                 max_rate: float | None = None, backlog: int = 256, pulled: bool = False,
-                 objects: bool = False) -> None:
+                 delivery: Delivery | None = None, message: Decoded | None = None) -> None:
         if not callable(callback):
             raise TypeError(f"the subscription to '{key}' needs a callback")
+        delivery = Executed() if delivery is None else delivery
+        message = Decoded() if message is None else message
+        if not isinstance(delivery, Delivery):
+            raise TypeError(f"subscription '{key}': delivery must be Executed(), Inline(), Batched(...) or "
+                            f"Pulled(...) from nodes.core.delivery, got {delivery!r}")
+        if not isinstance(message, Decoded):
+            raise TypeError(f"subscription '{key}': message must be Decoded() or Raw() from "
+                            f"nodes.core.delivery, got {message!r}")
+        if msg_type is None and not message.raw:
+            raise TypeError(f"subscription '{key}' has no message type: its callback takes bytes "
+                            "(message=Raw())")
         self.node = node
         self.msg_type = msg_type
         self.key = key
         self.callback = callback
-        self.raw = raw
-        self.objects = objects and raw and msg_type is not None
-        self.inline = inline
-        self.with_key = with_key  # callback(msg, key): for wildcard keys ("*/joint_states")
-        # callback(..., source): the sending publisher's 16-byte id from the attachment (None without one),
-        # to tell two senders on one key apart. It identifies, it does not authenticate (Zenoh's ACL does).
-        self.with_source = with_source
+        self.delivery = delivery
+        self.message = message
         self.max_payload = max_payload_bytes()   # bigger messages are dropped (logged) before decoding
-        if max_rate is not None and not max_rate > 0:
-            raise ValueError(f"max_rate must be > 0 Hz, got {max_rate}")
-        self.pulled = pulled
-        self._wake_pub: Any = None
-        self._wake_at: float | None = None   # pulled: monotonic deadline of the wait in progress
-        self._watchdog: threading.Condition | None = None   # pulled: wakes the watchdog thread (_watch)
-        self._watchdog_idle = False
-        self._watching_until: float | None = None   # the deadline the watchdog thread sleeps until
         self.closed = False
         self.group: CallbackGroup | None = None   # on a spinning thread: its callback group (rclpy's)
-        self._where = f"subscription '{key}'"   # what an error report says (built once, not per message)
-        if pulled:
-            self._sub = node.session.declare_subscriber(key, zenoh.handlers.RingChannel(backlog))
-        elif max_rate is None:
-            self._sub = node.session.declare_subscriber(key, self.handle_sample)
-        else:
-            self._sub = node.session.declare_subscriber(key, zenoh.handlers.RingChannel(backlog))
-            threading.Thread(target=self._drain, args=(1.0 / max_rate,), daemon=True,
-                             name=f"sub:{key}").start()
+        self._arguments = message.sample_arguments
+        delivery.open(self)
+        self._run = delivery.run
         self._token = node.presence.token("sub", key, msg_type._type if msg_type else "*")
         self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
-        # In a container: messages of this session's publishers, handed over in-process (intraprocess.py);
-        # pulled ones wait here for the owner's thread, as the others wait in Zenoh's buffer.
-        self._in_process: deque[tuple[Any, ...]] = deque()
-        self._waiting = False   # pulled: the owner's thread is (about to be) blocked in Zenoh's recv
+        # In a container: messages of this session's publishers, handed over in-process (intraprocess.py)
         self._bus = intraprocess.bus_for(node.session)
         if self._bus is not None:
             self._bus.add_subscription(self)
 
+    @property
+    def raw(self) -> bool:
+        """Does the callback take bytes (no ROS 2 twin is offered for it)?"""
+        return self.message.raw
+
     def wants_payload(self, published_type: Any) -> bool:
         """Does an in-process message of ``published_type`` reach this callback as bytes (or need decoding
         into another class)?"""
-        if self.objects and published_type._type == self.msg_type._type:
-            return False
-        return self.raw or self.msg_type is None or self.msg_type._type != published_type._type
+        return self.message.wants_payload(self, published_type)
 
     def take_in_process(self, message: Any, payload: bytes | None, key: str, source: bytes) -> None:
-        """A message from a publisher of this session (the publishing thread calls this): the object itself
-        when the types agree (zero copy), the publisher's bytes for a raw callback, else decoded from them."""
+        """A message from a publisher of this session (the publishing thread calls this)."""
         if self.closed:
             return
-        same_type = message is not None and self.msg_type is not None and message._type == self.msg_type._type
-        if same_type and (self.objects or not self.raw):
-            value: Any = message
-        elif self.raw or self.msg_type is None:
-            value = payload
-        else:
-            try:   # bytes from publish_raw: checked as any payload is (the code that packed them may be wrong)
-                value = msgs.decode(self.msg_type, payload, decode_limits())
-            except DecodeError as exc:
-                self.node.logger.warn_throttle(1.0, f"dropped a message on '{key}': {exc}", key=f"decode:{self.key}")
-                return
-        args: tuple[Any, ...] = (value, key) if self.with_key else (value,)
-        if self.with_source:
-            args += (source,)
-        if self.pulled:
-            self._in_process.append(args)
-            if self._waiting:   # the owner is blocked in Zenoh's recv: an empty local message ends it
-                self._wake_pub.put(b"", attachment=_WAKE)
-        elif self.inline:
-            self.node.executor.run_callback(self.callback, *args, where=f"subscription '{self.key}'")
-        else:
-            self.node.executor.dispatch_in_process(self.callback, *args, where=f"subscription '{self.key}'")
-
-    def _take_in_process(self) -> int:
-        count = 0
-        while self._in_process:
-            args = self._in_process.popleft()
-            self.node.executor.run_callback(self.callback, *args, where=f"subscription '{self.key}'")
-            count += 1
-        return count
+        args = self.message.object_arguments(self, message, payload, key, source)
+        if args is not None:
+            self.delivery.run_in_process(args)
 
     def take_pending(self) -> int:
-        """Pulled: handle every message that has arrived, on this thread; returns how many."""
-        count = self._take_in_process() if self._in_process else 0
-        while (sample := self._sub.try_recv()) is not None:
-            if not _is_wake(sample):
-                self.handle_sample(sample)
-                count += 1
-        return count
+        """``Pulled``: handle every message that has arrived, on this thread; returns how many."""
+        return self.delivery.take_pending()
 
     def wait(self, timeout: float) -> int:
-        """Pulled: block (without the GIL) until a message arrives or ``timeout`` s pass; handles what
-        arrived and returns how many (0: timed out, or the subscription was closed).
-
-        Zenoh's channel has no timed receive, so a watchdog thread ends an overdue wait with an empty
-        message that only this session sees (``Locality.SESSION_LOCAL``)."""
-        if self.closed:
-            return 0
-        count = self.take_pending()
-        if count:
-            return count
-        self._arm_watchdog(timeout)
-        self._waiting = True
-        try:
-            if self._in_process:   # handed over in-process after take_pending looked
-                self._wake_at = None
-                return self.take_pending()
-            sample = self._sub.recv()
-        except zenoh.ZError:
-            return 0   # undeclared while waiting (the node is closing)
-        finally:
-            self._waiting = False
-            self._wake_at = None
-        if self.closed:
-            return 0
-        if not _is_wake(sample):
-            self.handle_sample(sample)
-            count = 1
-        return count + self.take_pending()
-
-    def _arm_watchdog(self, timeout: float) -> None:
-        if self._wake_pub is None:
-            self._wake_pub = self.node.session.declare_publisher(
-                self.key, allowed_destination=zenoh.Locality.SESSION_LOCAL)
-            self._watchdog = threading.Condition()
-            threading.Thread(target=self._watch, daemon=True, name=f"wait:{self.key}").start()
-        with self._watchdog:
-            self._wake_at = deadline = time.monotonic() + timeout
-            # asleep without a deadline, or until a later one (an earlier wait's, longer timeout): wake it to
-            # take this one; otherwise it looks at the new deadline when its own comes
-            watching = self._watching_until
-            if self._watchdog_idle or (watching is not None and deadline < watching):
-                self._watchdog.notify()
-
-    def _watch(self) -> None:
-        """Wake the owner's ``wait`` once its deadline has passed. It sleeps until the deadline it knows and
-        then looks again, never polling: a thread that woke every 10 ms took the GIL from the simulator's
-        physics thread 100 times a second (and, on a CPU shared with other processes, waited for that CPU
-        before giving it back)."""
-        condition = self._watchdog
-        try:
-            with condition:
-                while not (self.closed or self.node.closed):
-                    deadline = self._wake_at
-                    if deadline is None:
-                        self._watchdog_idle = True
-                        condition.wait()
-                        self._watchdog_idle = False
-                        continue
-                    remaining = deadline - time.monotonic()
-                    if remaining > 0:
-                        self._watching_until = deadline
-                        condition.wait(remaining)
-                        self._watching_until = None
-                        continue
-                    self._wake_at = None
-                    self._wake_pub.put(b"", attachment=_WAKE)
-        except zenoh.ZError:
-            return   # the session closed
-
-    def _drain(self, period: float) -> None:
-        try:
-            while True:
-                batch = [self._sub.recv()]          # blocks (without the GIL) until something arrives
-                while (sample := self._sub.try_recv()) is not None:
-                    batch.append(sample)
-                with self.node.executor.lock:       # the batch in one go: work queued meanwhile sees all of it
-                    for sample in batch:
-                        self.handle_sample(sample)
-                time.sleep(period)
-        except Exception:  # noqa: BLE001 - the subscriber was undeclared: the channel is closed
-            return
+        """``Pulled``: block until a message arrives or ``timeout`` s pass, handle what arrived; how many."""
+        return self.delivery.wait(timeout)
 
     def handle_sample(self, sample: zenoh.Sample) -> None:
         size = len(sample.payload)
-        if size == 0 and _is_wake(sample):
-            return   # another pulled subscription's wake-up on the same key of a shared (container) session
+        if size == 0 and is_wake(sample):
+            return   # a pulled subscription's wake-up on the same key of a shared (container) session
         memory.after_payload(size)
         if size > self.max_payload:   # before copying or decoding anything
             self.node.logger.warn_throttle(
                 1.0, f"dropped a message on '{sample.key_expr}': payload: {size} bytes, over the "
                 f"{self.max_payload}-byte limit", key=f"size:{self.key}")
             return
-        payload = sample.payload.to_bytes()
-        if self.raw or self.msg_type is None:
-            msg: Any = payload
-        else:
-            try:
-                msg = msgs.decode(self.msg_type, payload, decode_limits())
-            except DecodeError as exc:
-                self.node.logger.warn_throttle(
-                    1.0, f"dropped a message on '{sample.key_expr}': {exc}", key=f"decode:{self.key}")
-                return
-        args = (msg, str(sample.key_expr)) if self.with_key else (msg,)
-        if self.with_source:
-            attachment = parse_attachment(sample)
-            args += (attachment[1] if attachment is not None else None,)
-        if self.inline or self.pulled:   # pulled: the taking thread is the one the owner chose
-            self.node.executor.run_callback(self.callback, *args, where=f"subscription '{self.key}'")
-        else:
-            self.node.executor.dispatch(self.callback, *args, where=self._where, group=self.group)
+        args = self._arguments(self, sample)
+        if args is not None:
+            self._run(args)
 
     def destroy(self) -> None:
         if self._bus is not None:
@@ -431,41 +275,8 @@ class Subscription:
         if self._mirror is not None:
             self._mirror.close()
         self.closed = True
-        if self._wake_pub is None:
-            self._sub.undeclare()
-            return
-        self._wake_pub.put(b"", attachment=_WAKE)   # end a wait in progress: it holds the channel
-        with self._watchdog:
-            self._watchdog.notify()   # and the watchdog thread's sleep: it sees the subscription closed
-        for _ in range(500):
-            try:
-                self._sub.undeclare()
-                break
-            except RuntimeError:   # "Already borrowed": the waiting thread has not let go yet
-                time.sleep(0.01)
-        self._wake_pub.undeclare()
+        self.delivery.close()
 
-
-# A pulled subscription's wake-up: an empty message with this attachment (ours are 24 bytes).
-_WAKE = b"zenroid-wake"
-
-
-def _is_wake(sample: zenoh.Sample) -> bool:
-    att = sample.attachment
-    return len(sample.payload) == 0 and att is not None and att.to_bytes() == _WAKE
-
-
-# Elements per array in a message from the network (every list: points, names, positions ...; a JointTrajectory
-# controller takes up to 100,000 points). msgpack refuses a longer array before building any of it: a 4 MB
-# payload could otherwise hold four million tiny elements, a Python object each.
-MAX_ARRAY_LENGTH = 100_000
-
-
-@functools.cache
-def decode_limits(max_bytes: int | None = None) -> msgs.Limits:
-    """The limits our endpoints decode with (one instance per size, so compiled decoders are shared)."""
-    size = max_payload_bytes() if max_bytes is None else max_bytes
-    return msgs.Limits(max_message_bytes=size, max_array_length=MAX_ARRAY_LENGTH, max_string_length=size)
 
 
 def _error_payload(reason: str) -> bytes:

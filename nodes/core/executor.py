@@ -175,16 +175,17 @@ class Executor:
         with self.lock:
             self.run_callback(fn, *args, where=where)
 
-    def dispatch_in_process(self, fn: Callable[..., None], *args: Any, where: str = "callback") -> None:
+    def dispatch_in_process(self, fn: Callable[..., None], *args: Any, where: str = "callback",
+                            group: CallbackGroup | None = None) -> None:
         """Run a callback handed over in-process by another node of the same container, on the publishing
         thread when this node's lock is free soon. Waiting for it without end could deadlock two nodes that
         publish to each other from two threads, each holding its own lock: after ``IN_PROCESS_LOCK_WAIT_S`` the
         callback goes to this node's spinning thread instead."""
         if self.on_spin_thread:
-            self.put((fn, args, where, None))
+            self.put((fn, args, where, group))
             return
         if not self.lock.acquire(timeout=IN_PROCESS_LOCK_WAIT_S):
-            self.put((fn, args, where, None))
+            self.put((fn, args, where, group))
             return
         try:
             self.run_callback(fn, *args, where=where)

@@ -9,6 +9,7 @@ from typing import Any
 import zenoh
 
 from nodes.core.action import ActionClient, ActionServer
+from nodes.core.delivery import Decoded, Delivery
 from nodes.core.endpoints import Client, Publisher, ServiceServer, Subscription
 from nodes.core.latched import LatchedPublisher, fetch_latched
 from nodes.core.runtime import NodeRuntime
@@ -34,12 +35,10 @@ class EndpointFactory:
     def fetch_latched(self, msg_type: Any, topic: str, timeout: float) -> Any | None:
         return fetch_latched(self._runtime.session, msg_type, self._resolve(topic), timeout)
 
-    def subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *, inline: bool,
-                     raw: bool, with_key: bool, max_rate: float | None, with_source: bool = False,
-                     pulled: bool = False, backlog: int = 256, objects: bool = False) -> Subscription:
+    def subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *,
+                     delivery: Delivery | None = None, message: Decoded | None = None) -> Subscription:
         return self._keep(Subscription(self._runtime, msg_type, self._resolve(topic, wildcards=True), callback,
-                                       inline=inline, raw=raw, with_key=with_key, with_source=with_source,
-                                       max_rate=max_rate, pulled=pulled, backlog=backlog, objects=objects))
+                                       delivery=delivery, message=message))
 
     def service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *, inline: bool) -> ServiceServer:
         return self._keep(ServiceServer(self._runtime, srv_type, self._resolve(name), handler, inline=inline))

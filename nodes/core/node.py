@@ -7,7 +7,8 @@ the node only through ``runtime.NodeRuntime``.
 
 Callbacks run one at a time, as under rclpy's single-threaded executor (``nodes/core/executor.py``:
 on the delivering Zenoh thread under the node's executor lock, or all on the spinning thread for nodes
-that ask for it); ``inline=True`` endpoints run on Zenoh's thread without the lock.
+that ask for it); an ``Inline()`` subscription (``nodes/core/delivery.py``) and an ``inline=True`` service run
+on Zenoh's thread without the lock.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from msgs.std_msgs import Header
 from nodes.core import graph, names
 from nodes.core.action import ActionClient, ActionServer
 from nodes.core.clock import NodeClock
+from nodes.core.delivery import Decoded, Delivery, Inline, legacy_subscription_options
 from nodes.core.endpoints import Client, Publisher, ServiceServer, Subscription
 from nodes.core.executor import Executor, Timer
 from nodes.core.factory import EndpointFactory
@@ -113,7 +115,7 @@ class Node:
         self._rosout = Publisher(self, Log, "rosout")
         self.logger.set_sink(self._publish_log)
         if self.use_sim_time:
-            self.create_subscription(Clock, "/sim/clock", self.clock.on_clock, inline=True)
+            self.create_subscription(Clock, "/sim/clock", self.clock.on_clock, delivery=Inline())
         self.parameters.serve(self.create_service)
         LoggerLevelServices(self.logger, (self.name, self.fully_qualified_name)).serve(self.create_service)
         # the launcher's liveness probe, answered here on Zenoh's thread (a flood of requests does not delay
@@ -188,18 +190,18 @@ class Node:
         return self._endpoints.fetch_latched(msg_type, topic, timeout)
 
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *,
-                            inline: bool = False, raw: bool = False, with_key: bool = False,
-                            with_source: bool = False, max_rate: float | None = None,
-                            pulled: bool = False, backlog: int = 256, objects: bool = False) -> Subscription:
-        """``with_key=True`` calls ``callback(msg, key)`` (useful with wildcards like ``"/*/joint_states"``);
-        ``with_source=True`` adds the sending publisher's id (bytes, or None) as the last argument;
-        ``max_rate`` (Hz) batches a fast topic: every message still arrives, at most that many wake-ups a second;
-        ``pulled=True``: messages wait (the newest ``backlog``) until this node's thread takes them with the
-        subscription's ``take_pending()`` or ``wait(timeout)``, and the callback runs there; ``objects=True``
-        (with ``raw``): in a container, what a node of the process published as an object comes as that object."""
-        return self._endpoints.subscription(msg_type, topic, callback, inline=inline, raw=raw, with_key=with_key,
-                                            with_source=with_source, max_rate=max_rate, pulled=pulled,
-                                            backlog=backlog, objects=objects)
+                            delivery: Delivery | None = None, message: Decoded | None = None,
+                            **legacy: Any) -> Subscription:
+        """``callback`` gets each message of ``topic``. ``delivery`` (``nodes.core.delivery``) says where and
+        when it runs: ``Executed()`` by default (with the node's other callbacks), ``Inline()`` on Zenoh's
+        thread, ``Batched(max_rate)`` at most that many wake-ups a second, ``Pulled(backlog)`` when the node's
+        thread calls the subscription's ``take_pending()`` or ``wait(timeout)``. ``message`` says what it
+        gets: ``Decoded()`` by default, ``Raw()`` the bytes (``objects=True``: in a container, the object
+        another node published); both take ``with_key=True`` (``callback(msg, key)``) and
+        ``with_source=True``."""
+        if legacy:
+            raise TypeError(f"create_subscription('{topic}'): {legacy_subscription_options(legacy)}")
+        return self._endpoints.subscription(msg_type, topic, callback, delivery=delivery, message=message)
 
     def create_service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *,
                        inline: bool = False) -> ServiceServer:

@@ -23,6 +23,7 @@ import numpy as np
 
 import msgs
 from nodes.core import Node, memory
+from nodes.core.delivery import Pulled
 from nodes.meshes import MeshError
 from nodes.meshes.convert import by_reference
 from nodes.render import payloads
@@ -96,9 +97,10 @@ class RendererNode(Node):
         self.sensors: dict[str, _Sensor] = {}
         self.done_pub = self.create_publisher(RenderDone, "/sim/render/done")
         # only the newest scene matters: a burst of spawns and deletes must not queue one build after another
-        self.scenes = self.create_subscription(Scene, "/sim/scene", self._on_scene, pulled=True, backlog=1)
-        self.frames = self.create_subscription(RenderFrame, "/sim/render/frame", self._queue_frame, pulled=True,
-                                               backlog=FRAME_BACKLOG)
+        self.scenes = self.create_subscription(Scene, "/sim/scene", self._on_scene,
+                                               delivery=Pulled(backlog=1))
+        self.frames = self.create_subscription(RenderFrame, "/sim/render/frame", self._queue_frame,
+                                               delivery=Pulled(backlog=FRAME_BACKLOG))
         self._pending: list[Any] = []
         self._skipped: set[tuple[str, str, str]] = set()   # shapes left out, said once each
         self._next_resync = 0.0

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import msgs
 from nodes.core import Node
+from nodes.core.delivery import Pulled
 from nodes.sim.outputs import next_due
 from nodes.sim.scene import SceneLinks, build_scene
 from nodes.sim.simulation import Simulation
@@ -59,7 +60,8 @@ class RenderFrames:
         self._wanted: set[str] | None = None   # sensors the renderer draws for someone (None: not told yet)
         # pulled: the physics thread takes the renderer's answers itself when it looks at them; delivered on a
         # Zenoh thread, each of them (150 a second in lockstep) took the GIL from the physics thread
-        self._done_sub = node.create_subscription(RenderDone, "/sim/render/done", self._on_done, pulled=True)
+        self._done_sub = node.create_subscription(RenderDone, "/sim/render/done", self._on_done,
+                                                  delivery=Pulled())
         self.version = 0
         self._scene_key: tuple = ()
         self.links = SceneLinks([], [])

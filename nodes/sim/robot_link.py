@@ -14,6 +14,7 @@ import msgs
 from msgs.classes import maker
 from msgs.zenroid_msgs import HardwareJoint, HardwareSensor
 from nodes.core import Node
+from nodes.core.delivery import Pulled, Raw
 from nodes.core.endpoints import SingleSender, source_label
 from nodes.sim.hardware import CommandError, HardwareInterface
 from nodes.sim.interfaces import (
@@ -85,8 +86,8 @@ class RobotLink:
         # pulled: commands wait in Zenoh's buffer until the physics thread takes them (command_for,
         # newest_command), which holds the GIL while DART steps: a delivering thread would wait for it
         self.command_sub = node.create_subscription(HardwareCommand, f"{ns}/hardware/command", self._on_command,
-                                                    raw=True, with_source=True, pulled=True,
-                                                    backlog=COMMAND_BACKLOG, objects=True)
+                                                    delivery=Pulled(backlog=COMMAND_BACKLOG),
+                                                    message=Raw(objects=True, with_source=True))
         self.info_srv = node.create_service(GetHardwareInfo, f"{ns}/hardware/info", self._on_info)
         # gazebo_ros sensor plugins (IMU, force/torque, bumper): published from here, at the sensor's rate
         self.plugins = SensorPlugins(node, self.sensors, self.namespace)

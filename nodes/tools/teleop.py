@@ -28,6 +28,7 @@ from msgs.control_msgs import JointTrajectoryControllerState as ControllerState
 from msgs.sensor_msgs import JointState
 from msgs.std_msgs import String
 from msgs.trajectory_msgs import JointTrajectory, JointTrajectoryPoint
+from nodes.core.delivery import Inline, Raw
 from nodes.tools.cli import UsageError
 from nodes.tools.common import add_common
 
@@ -141,9 +142,11 @@ def run(args: argparse.Namespace) -> int:
     try:
         latest: dict[str, Any] = {}
         node.create_subscription(ControllerState, f"{args.controller}/controller_state",
-                                 lambda raw: latest.__setitem__("state", raw), inline=True, raw=True)
+                                 lambda raw: latest.__setitem__("state", raw),
+                                 delivery=Inline(), message=Raw())
         node.create_subscription(JointState, "joint_states",
-                                 lambda raw: latest.__setitem__("joints", raw), inline=True, raw=True)
+                                 lambda raw: latest.__setitem__("joints", raw),
+                                 delivery=Inline(), message=Raw())
         deadline = time.monotonic() + args.timeout
         while "state" not in latest:
             if time.monotonic() > deadline:

@@ -22,7 +22,7 @@ import msgpack
 
 import msgs
 from nodes.core import graph
-from nodes.core.endpoints import parse_attachment
+from nodes.core.delivery import parse_attachment
 from nodes.core.latched import latest_sample
 from nodes.core.names import check_key, keys_intersect
 from nodes.tools.common import (

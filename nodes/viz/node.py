@@ -39,6 +39,7 @@ from msgs.visualization_msgs import Marker, MarkerArray
 from msgs.zenroid_msgs import Scene
 from nodes.core import Node, Subscription
 from nodes.core import graph as core_graph
+from nodes.core.delivery import Inline, Raw
 from nodes.core.latched import fetch_latched
 from nodes.urdf.model import UrdfError
 from nodes.urdf.rendered_sensors import RenderedSensorSpec, parse_rendered_sensors
@@ -265,7 +266,7 @@ class Viewer(Node):
                     return
                 handler(msg)
 
-        return self.create_subscription(msg_type, key, on_payload, inline=True, raw=True)
+        return self.create_subscription(msg_type, key, on_payload, delivery=Inline(), message=Raw())
 
     def latch(self, robot: RobotView, slot: str, msg_type: Any, key: str, on_arrival=None) -> Subscription:
         """A raw subscription that only keeps the newest payload in ``robot.latest[slot]``: controller_state
@@ -279,7 +280,7 @@ class Viewer(Node):
             if on_arrival is not None:
                 on_arrival()
 
-        return self.create_subscription(msg_type, key, on_payload, inline=True, raw=True)
+        return self.create_subscription(msg_type, key, on_payload, delivery=Inline(), message=Raw())
 
     def latest(self, robot: RobotView, slot: str) -> Any:
         """The newest message of a latched stream, decoded once; None when stale, absent or undecodable."""

@@ -21,6 +21,7 @@ from rosbags.typesys import Stores, get_typestore
 
 import msgs
 from nodes.bag.reader import read_bag
+from nodes.core.delivery import Inline
 from tests.conftest import ROOT, wait_until
 from tests.support.samples import UNDEFINED_TYPE, undefined_type_cdr
 
@@ -96,7 +97,7 @@ def test_record_info_and_play_round_trip(router, tmp_path, storage: str, suffix:
     from nodes.core import Node
 
     listener = Node("listener", connect=[router])
-    listener.create_subscription(JointState, "/humanoid/joint_states", played.append, inline=True)
+    listener.create_subscription(JointState, "/humanoid/joint_states", played.append, delivery=Inline())
     try:
         time.sleep(0.3)
         result = zenroid(router, "bag", "play", str(bag_dir), "--rate", "4", "--quiet")
@@ -188,7 +189,7 @@ def test_plays_bags_written_by_rosbags(router, tmp_path, storage: StoragePlugin)
     received: list[tuple[float, object]] = []
     listener = Node("listener", connect=[router])
     listener.create_subscription(JointState, "/humanoid/joint_states",
-                                 lambda m: received.append((time.monotonic(), m)), inline=True)
+                                 lambda m: received.append((time.monotonic(), m)), delivery=Inline())
     try:
         time.sleep(0.3)
         result = zenroid(router, "bag", "play", str(bag_dir), "--rate", str(rate), "--quiet")

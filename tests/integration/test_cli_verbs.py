@@ -14,6 +14,7 @@ import yaml
 
 import msgs
 from nodes.core import Node
+from nodes.core.delivery import Inline
 from tests.conftest import ROOT, free_port, wait_until
 
 JointTrajectory = msgs.get_type("trajectory_msgs/msg/JointTrajectory")
@@ -154,7 +155,7 @@ def _commands_per_second(router: str, seconds: float) -> float:
     node = Node("rate_probe", connect=[router])
     try:
         node.create_subscription(JointTrajectory, "/humanoid/joint_trajectory_controller/joint_trajectory", on_msg,
-                                 inline=True)
+                                 delivery=Inline())
         time.sleep(0.5)
         with lock:
             count = 0

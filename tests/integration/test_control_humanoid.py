@@ -11,6 +11,7 @@ import pytest
 
 import msgs
 from nodes.core import Node, cpu, realtime
+from nodes.core.delivery import Inline, Raw
 from tests.conftest import wait_until
 
 pytestmark = pytest.mark.slow
@@ -53,9 +54,10 @@ def test_stand_knee_bend_cycle_keeps_the_humanoid_standing_with_smooth_commands(
                                                                                              strict=True))))
 
     try:
-        node.create_subscription(None, "/humanoid/hardware/command", on_command, inline=True, raw=True)
-        node.create_subscription(ModelStates, "/sim/model_states", on_models, inline=True)
-        node.create_subscription(JointState, "/humanoid/joint_states", on_state, inline=True)
+        node.create_subscription(None, "/humanoid/hardware/command", on_command,
+                                 delivery=Inline(), message=Raw())
+        node.create_subscription(ModelStates, "/sim/model_states", on_models, delivery=Inline())
+        node.create_subscription(JointState, "/humanoid/joint_states", on_state, delivery=Inline())
         pub = node.create_publisher(JointTrajectory, "/humanoid/joint_trajectory_controller/joint_trajectory")
 
         def sim_time() -> float:

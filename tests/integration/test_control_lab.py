@@ -16,6 +16,7 @@ import pytest
 
 import msgs
 from nodes.core import Node, ServiceError
+from nodes.core.delivery import Inline
 from tests.conftest import ROOT, wait_until
 from tests.support.control import plugin_dir
 
@@ -58,7 +59,8 @@ class Lab:
         self.lock = threading.Lock()
         self.states: list[tuple[float, float, float]] = []  # (sim t, position, velocity)
         try:
-            self.node.create_subscription(JointState, f"/{NS}/joint_states", self._on_state, inline=True)
+            self.node.create_subscription(JointState, f"/{NS}/joint_states", self._on_state,
+                                          delivery=Inline())
             self.action = self.node.create_action_client(FJT, f"/{JTC}/follow_joint_trajectory")
             wait_until(lambda: "controller manager ready" in processes.output(self.manager)
                        or self.manager.poll() is not None, timeout=60, message="controller manager ready")
@@ -109,7 +111,7 @@ def lab(processes, router):
 def test_follow_joint_trajectory_to_1_57_in_3_s_succeeds(lab):
     controller_states = []
     lab.node.create_subscription(msgs.get_type("control_msgs/msg/JointTrajectoryControllerState"),
-                                 f"/{JTC}/controller_state", controller_states.append, inline=True)
+                                 f"/{JTC}/controller_state", controller_states.append, delivery=Inline())
     feedback = []
     handle = lab.action.send_goal(goal([(3.0, 1.57)]), feedback_callback=feedback.append)
     assert handle.accepted

@@ -11,6 +11,7 @@ import pytest
 
 import msgs
 from nodes.core import Node
+from nodes.core.delivery import Inline
 from tests.conftest import ROOT, wait_until
 
 pytestmark = pytest.mark.slow
@@ -40,7 +41,7 @@ def test_four_limb_controllers_side_by_side(processes, router):
             latest.update(zip(msg.name, msg.position, strict=True))
 
     try:
-        node.create_subscription(JointState, "/lab_robot/joint_states", on_state, inline=True)
+        node.create_subscription(JointState, "/lab_robot/joint_states", on_state, delivery=Inline())
         wait_until(lambda: len(latest) == 4, timeout=30, message="joint_states of the four limbs")
         pubs = {c: node.create_publisher(JointTrajectory, f"/lab_robot/{c}/joint_trajectory") for c in TARGETS}
 

@@ -17,6 +17,7 @@ import pytest
 import msgs
 from nodes.core import Node, graph
 from nodes.core.action import ABORTED, CANCELED, SUCCEEDED, ActionClient
+from nodes.core.delivery import Decoded, Executed, Inline, Pulled
 from nodes.core.endpoints import ServiceError
 from tests.conftest import ROOT, wait_until
 from tests.support.samples import sample_message
@@ -71,7 +72,7 @@ def test_every_message_family_round_trips_between_processes(echo, client) -> Non
             with lock:
                 received[type_name] = msg
 
-        client.create_subscription(cls, f"/echo/out/{type_name}", store, inline=True)
+        client.create_subscription(cls, f"/echo/out/{type_name}", store, delivery=Inline())
         publishers[type_name] = client.create_publisher(cls, f"/echo/in/{type_name}")
     expected = {t: sample_message(t) for t in MESSAGE_TYPES}
 
@@ -135,10 +136,11 @@ def test_action_feedback_result_cancel_and_preemption(echo, client) -> None:
 
 def test_bad_payload_is_logged_on_rosout_and_node_keeps_state(echo, client) -> None:
     logs = []
-    client.create_subscription(Log, "/rosout", logs.append, inline=True)
+    client.create_subscription(Log, "/rosout", logs.append, delivery=Inline())
     JointState = msgs.get_type("sensor_msgs/msg/JointState")
     back = []
-    client.create_subscription(JointState, "/echo/out/sensor_msgs/msg/JointState", back.append, inline=True)
+    client.create_subscription(JointState, "/echo/out/sensor_msgs/msg/JointState", back.append,
+                               delivery=Inline())
     time.sleep(0.5)
     bad = msgpack.packb({"name": ["a", "b"], "position": [1.0]})
     client.session.put("echo/in/sensor_msgs/msg/JointState", bad)
@@ -244,7 +246,7 @@ def test_wildcard_subscription_reports_the_key(router, client) -> None:
     JointState = msgs.get_type("sensor_msgs/msg/JointState")
     seen: list[tuple[str, list[str]]] = []
     client.create_subscription(JointState, "/*/joint_states", lambda m, key: seen.append((key, m.name)),
-                               inline=True, with_key=True)
+                               delivery=Inline(), message=Decoded(with_key=True))
     talker = Node("talker", connect=[router])
     try:
         a = talker.create_publisher(JointState, "/robot_a/joint_states")
@@ -336,7 +338,7 @@ def test_shutdown_hook_runs_once_before_the_node_closes(router, client) -> None:
     node's endpoints still work, then destroys the node; the process exits 0."""
     String = msgs.get_type("std_msgs/msg/String")
     said: list[str] = []
-    client.create_subscription(String, "/hooked/said", lambda m: said.append(m.data), inline=True)
+    client.create_subscription(String, "/hooked/said", lambda m: said.append(m.data), delivery=Inline())
     # settle: our subscription meets the node's publisher through the router
     status, stdout, stderr = signal_node_script(router, client, HOOKED_NODE, "ready", "/hooked", signal.SIGTERM,
                                                 settle=0.5)
@@ -382,14 +384,14 @@ def test_failing_subclass_constructor_closes_its_session(router, client) -> None
 
 
 def test_pulled_subscription_runs_callbacks_on_the_owners_thread_and_times_out(router, client) -> None:
-    """``pulled=True`` (the simulator's hardware/command): messages wait until the owner takes them, on its
-    own thread; ``wait`` ends after its timeout with a wake-up no other session ever sees."""
+    """``delivery=Pulled()`` (the simulator's hardware/command): messages wait until the owner takes them,
+    on its own thread; ``wait`` ends after its timeout with a wake-up no other session ever sees."""
     String = msgs.get_type("std_msgs/msg/String")
     puller = Node("puller", connect=[router])
     try:
         got: list[tuple[str, int]] = []
         sub = puller.create_subscription(String, "pulled/topic", lambda m: got.append((m.data, threading.get_ident())),
-                                         pulled=True)
+                                         delivery=Pulled())
         seen_elsewhere: list[str] = []
         client.create_subscription(String, "pulled/topic", lambda m: seen_elsewhere.append(m.data))
         pub = client.create_publisher(String, "pulled/topic")
@@ -426,3 +428,39 @@ def test_pulled_subscription_runs_callbacks_on_the_owners_thread_and_times_out(r
         assert ended.wait(10), "wait() did not return after the subscription was undeclared"
     finally:
         puller.destroy()
+
+
+def test_delivery_objects_refuse_bad_input_and_executed_depth_keeps_the_newest(router, client) -> None:
+    """A subscription's delivery and message form are objects (``nodes/core/delivery.py``): the old flags
+    name their replacement, a delivery object serves one subscription, a typeless one takes bytes; and
+    ``Executed(depth=N)`` on a node whose callbacks wait for its spinning thread keeps the newest ``N``."""
+    String = msgs.get_type("std_msgs/msg/String")
+    with pytest.raises(TypeError, match=r"inline= is now delivery=Inline\(\); raw= is now message=Raw\(\)"):
+        client.create_subscription(String, "delivery/a", print, inline=True, raw=True)
+    shared = Inline()
+    client.create_subscription(String, "delivery/a", print, delivery=shared)
+    with pytest.raises(ValueError, match="already delivers 'delivery/a'"):
+        client.create_subscription(String, "delivery/b", print, delivery=shared)
+    with pytest.raises(TypeError, match=r"no message type: its callback takes bytes \(message=Raw\(\)\)"):
+        client.create_subscription(None, "delivery/c", print)
+    with pytest.raises(ValueError, match="depth must be an int >= 1"):
+        Executed(depth=0)
+
+    class Spun(Node):
+        callbacks_on_spin_thread = True
+
+    spun = Spun("spun", connect=[router])
+    try:
+        got: list[str] = []
+        keep = Executed(depth=3)
+        spun.create_subscription(String, "delivery/burst", lambda m: got.append(m.data), delivery=keep)
+        pub = client.create_publisher(String, "delivery/burst")
+        wait_until(lambda: pub.has_subscribers, timeout=10, message="the bounded subscription is matched")
+        for i in range(20):
+            pub.publish(String(data=str(i)))
+        wait_until(lambda: keep.dropped == 17, timeout=10, message=f"17 dropped ({keep.dropped} so far)")
+        while spun.spin_once(0.2):
+            pass
+        assert got == ["17", "18", "19"]
+    finally:
+        spun.destroy()

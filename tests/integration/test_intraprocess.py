@@ -14,6 +14,7 @@ import pytest
 import msgs
 from msgs.sensor_msgs import JointState
 from nodes.core import Node, graph, intraprocess
+from nodes.core.delivery import Inline, Pulled, Raw
 from nodes.core.session import open_peer
 from tests.conftest import wait_until
 
@@ -41,7 +42,7 @@ def test_a_message_reaches_its_own_session_in_process_and_other_sessions_over_ze
         local_raw: list[bytes] = []
         remote: list[JointState] = []
         listener.create_subscription(JointState, "joint_states", local.append)
-        listener.create_subscription(JointState, "joint_states", local_raw.append, raw=True)
+        listener.create_subscription(JointState, "joint_states", local_raw.append, message=Raw())
         outside.create_subscription(JointState, "joint_states", remote.append)
         pub = talker.create_publisher(JointState, "joint_states")
         # until the remote subscription is known here (declarations travel asynchronously)
@@ -86,7 +87,8 @@ def test_a_raw_subscription_taking_objects_gets_the_object_in_process_and_bytes_
     outside = Node("outside", connect=[router])
     try:
         got: list[object] = []
-        listener.create_subscription(JointState, "frames", got.append, raw=True, objects=True, inline=True)
+        listener.create_subscription(JointState, "frames", got.append,
+                                     delivery=Inline(), message=Raw(objects=True))
         pub = talker.create_publisher(JointState, "frames")
         msg = state(1.5)
         pub.publish(msg)
@@ -107,7 +109,8 @@ def test_a_pulled_subscription_waiting_wakes_for_an_in_process_message(container
     stepper = Node("stepper", session=container_session)
     try:
         taken: list[bytes] = []
-        sub = stepper.create_subscription(JointState, "hardware_like", taken.append, raw=True, pulled=True)
+        sub = stepper.create_subscription(JointState, "hardware_like", taken.append,
+                                          delivery=Pulled(), message=Raw())
         pub = talker.create_publisher(JointState, "hardware_like")
         assert sub.wait(0.05) == 0   # nothing yet: the wait times out
         timer = threading.Timer(0.2, lambda: pub.publish(state(1.0)))

@@ -25,6 +25,7 @@ import pytest
 
 import msgs
 from nodes.core import Node
+from nodes.core.delivery import Inline, Raw
 from nodes.sim.interfaces import GetEntityState, SpawnEntity, StepSimulation
 from tests.conftest import free_port, wait_until
 from tests.integration.test_sim_helpers import call, wait_ready
@@ -56,7 +57,7 @@ class Images:
         self.lock = threading.Lock()
         self.latest: dict[str, dict] = {}
         for key in (f"{prefix}/rgb", f"{prefix}/depth"):
-            node.create_subscription(None, f"/{key}", self._on, inline=True, raw=True, with_key=True)
+            node.create_subscription(None, f"/{key}", self._on, delivery=Inline(), message=Raw(with_key=True))
 
     def _on(self, payload: bytes, key: str) -> None:
         with self.lock:
@@ -204,7 +205,7 @@ def test_the_renderer_leaves_out_a_shape_it_cannot_draw_and_draws_the_rest(proce
         wait_until(lambda: "renderer ready" in processes.output(renderer), timeout=60, message="renderer ready")
         rosout: list[str] = []
         node.create_subscription(None, "/rosout", lambda p: rosout.append(msgpack.unpackb(p).get("msg", "")),
-                                 inline=True, raw=True)
+                                 delivery=Inline(), message=Raw())
         nan_vertices = np.array([[0, 0, 0], [1, 0, 0], [0, np.nan, 0]], "<f4").tobytes()
         scene = msgs.from_dict(msgs.get_type("zenroid_msgs/msg/Scene"), {
             "version": 1, "models": ["bot", "wall"], "namespaces": ["bot", ""], "static_models": [False, True],

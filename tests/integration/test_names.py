@@ -14,6 +14,7 @@ import pytest
 
 import msgs
 from nodes.core import Node
+from nodes.core.delivery import Inline, Raw
 from nodes.sim.interfaces import DeleteEntity, GetModelList, SpawnEntity, StepSimulation
 from tests.conftest import wait_until
 from tests.integration.test_sim_helpers import ModelStatesProbe, call, start_sim, wait_ready
@@ -104,7 +105,7 @@ def test_bad_sensor_names_are_refused_and_the_humanoid_camera_keeps_publishing(p
 
     try:
         wait_ready(node, processes, sim)
-        node.create_subscription(None, "/humanoid/camera/rgb", on_image, inline=True, raw=True)
+        node.create_subscription(None, "/humanoid/camera/rgb", on_image, delivery=Inline(), message=Raw())
         wait_until(lambda: "sensors humanoid::camera" in processes.output(renderer), timeout=60,
                    message="the renderer's scene with the sensors")
         for case, (options, reason) in BAD_CAMERAS.items():
@@ -121,8 +122,8 @@ def test_bad_sensor_names_are_refused_and_the_humanoid_camera_keeps_publishing(p
                        "</min_angle><max_angle>0.5</max_angle></horizontal></scan><range><min>0.1</min><max>5</max>"
                        "</range></ray>", lidar)
         warnings: list[str] = []
-        node.create_subscription(None, "/rosout", lambda p: warnings.append(msgpack.unpackb(p)["msg"]), inline=True,
-                                 raw=True)
+        node.create_subscription(None, "/rosout", lambda p: warnings.append(msgpack.unpackb(p)["msg"]),
+                                 delivery=Inline(), message=Raw())
         reply = call(node, SpawnEntity, "/sim/spawn_entity", SpawnEntity.Request(name="lidar", xml=lidar))
         assert reply.success, reply.status_message
         wait_until(lambda: any("publishes on '/humanoid/scan' with frame id 'base'" in w for w in warnings), 10,

@@ -16,6 +16,7 @@ import pytest
 
 import msgs
 from nodes.core import Node
+from nodes.core.delivery import Inline
 from tests.conftest import ROOT, wait_until
 from tests.support.ros_shim import shim_env
 
@@ -55,7 +56,7 @@ class Positions:
         self.latest: dict[str, float] = {}
         self.lock = threading.Lock()
         self.node = Node("seed_test_watcher", connect=[router])
-        self.node.create_subscription(JointState, topic, self._on, inline=True)
+        self.node.create_subscription(JointState, topic, self._on, delivery=Inline())
 
     def _on(self, msg) -> None:
         with self.lock:
@@ -214,7 +215,7 @@ def test_003_trajectory_sender_goal_succeeds_with_the_fix(processes, router, ros
     watcher = Node("seed_status_watcher", connect=[router])
     watcher.create_subscription(
         GoalStatusArray, "/joint_trajectory_controller/follow_joint_trajectory/status",
-        lambda m: statuses.extend(s.status for s in m.status_list), inline=True)
+        lambda m: statuses.extend(s.status for s in m.status_list), delivery=Inline())
     try:
         fixed = one_line_fix(tmp_path, SEEDS / "003_trajectory_sender.py", "nanosec=(t % 1) * 1e9",
                              "nanosec=int((t % 1) * 1e9)")

@@ -26,6 +26,7 @@ import pytest
 
 import msgs
 from nodes.core import Node
+from nodes.core.delivery import Inline, Raw
 from nodes.sim.interfaces import DeleteEntity, GetEntityState, SetEntityState, SpawnEntity, StepSimulation
 from tests.conftest import wait_until
 from tests.integration.test_sim_helpers import call, start_sim, wait_ready
@@ -52,7 +53,7 @@ class Latest:
         self.lock = threading.Lock()
         self.messages: dict[str, dict] = {}
         for key in KEYS:
-            node.create_subscription(None, f"/{key}", self._on, inline=True, raw=True, with_key=True)
+            node.create_subscription(None, f"/{key}", self._on, delivery=Inline(), message=Raw(with_key=True))
 
     def _on(self, payload: bytes, key: str) -> None:
         msg = msgpack.unpackb(payload)
@@ -231,7 +232,7 @@ def test_images_and_scans_recorded_by_zenroid_bag_are_read_by_rosbags_and_played
 
         played: list[dict] = []
         node.create_subscription(None, "/humanoid/camera/rgb", lambda p: played.append(msgpack.unpackb(p)),
-                                 inline=True, raw=True)
+                                 delivery=Inline(), message=Raw())
         player = processes.start("-m", "nodes.tools", "bag", "play", str(bag), "-r", "4", "--quiet", name="player")
         assert player.wait(120) == 0, processes.output(player)
         assert len(played) >= 0.9 * len(images)
@@ -251,7 +252,7 @@ def test_frames_go_out_only_for_the_sensors_somebody_subscribes_to(processes, ro
     frames: list[list[str]] = []
     scans: list[float] = []
     node.create_subscription(None, "/sim/render/frame", lambda p: frames.append(msgpack.unpackb(p)["sensors"]),
-                             inline=True, raw=True)
+                             delivery=Inline(), message=Raw())
     try:
         wait_ready(node, processes, sim)
         wait_until(lambda: "sensors humanoid::camera" in processes.output(renderer), timeout=60,
@@ -263,7 +264,7 @@ def test_frames_go_out_only_for_the_sensors_somebody_subscribes_to(processes, ro
         time.sleep(0.3)
         assert frames == []
         scan_sub = node.create_subscription(None, "/humanoid/scan", lambda p: scans.append(stamp(msgpack.unpackb(p))),
-                                            inline=True, raw=True)
+                                            delivery=Inline(), message=Raw())
         time.sleep(0.5)   # the renderer notices the subscriber and says so (within ~10 ms of Zenoh's matching)
         step(node, 500)   # 0.5 s of sim time: the laser's 20 Hz gives 10 scans
         wait_until(lambda: len(scans) >= 10, timeout=30, message="ten scans")

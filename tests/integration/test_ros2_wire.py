@@ -23,6 +23,7 @@ import msgs
 from bench.common import MAIN_JOB_CONTROLLERS, Launch, child_env
 from msgs import cdr
 from msgs.type_hash import rihs01
+from nodes.core.delivery import Inline
 from nodes.core.node import Node
 from nodes.core.ros2 import attachment, names
 from tests.conftest import wait_until
@@ -113,7 +114,8 @@ def test_any_zenoh_subscriber_switches_cdr_on_and_nothing_is_encoded_without_one
     heard: list = []
     try:
         pub = talker.create_publisher(msgs.get_type(JS), "joint_states")
-        heard_sub = listener.create_subscription(msgs.get_type(JS), "joint_states", heard.append, inline=True)
+        heard_sub = listener.create_subscription(msgs.get_type(JS), "joint_states", heard.append,
+                                                 delivery=Inline())
         wait_until(lambda: (pub.publish(msgs.get_type(JS)(name=["a"], position=[0.0])), heard)[1],
                    timeout=10, interval=0.1, message="the zenroid listener hears the talker")
         for _ in range(200):
@@ -163,7 +165,8 @@ def test_ros2_publisher_drives_our_subscription_once(router, session):
     got: list = []
     try:
         pub = commander.create_publisher(msgs.get_type(JT), "jtc/joint_trajectory")
-        sub = controller.create_subscription(msgs.get_type(JT), "jtc/joint_trajectory", got.append, inline=True)
+        sub = controller.create_subscription(msgs.get_type(JT), "jtc/joint_trajectory", got.append,
+                                             delivery=Inline())
         key = names.data_key(0, "/humanoid/jtc/joint_trajectory", JT)
         assert not sub._mirror.listening, "no ROS 2 publisher yet: our subscription mirror stays off the data key"
         # A ROS 2 publisher announces itself (MP token): the controller's mirror now listens on the data key;

@@ -13,6 +13,7 @@ import msgpack
 import pytest
 
 from nodes.core import Node
+from nodes.core.delivery import Inline, Raw
 from tests.conftest import wait_until
 
 pytestmark = pytest.mark.slow
@@ -58,9 +59,10 @@ def test_imu_plugin_publishes_from_the_simulator(processes, router, tmp_path):
             streams[key].append(msgpack.unpackb(payload))
 
     try:
-        node.create_subscription(None, "/demo/imu", on_imu, inline=True, raw=True)
+        node.create_subscription(None, "/demo/imu", on_imu, delivery=Inline(), message=Raw())
         for key in streams:
-            node.create_subscription(None, f"/{key}", on_message, inline=True, raw=True, with_key=True)
+            node.create_subscription(None, f"/{key}", on_message,
+                                     delivery=Inline(), message=Raw(with_key=True))
         wait_until(lambda: len(received) > 200, timeout=90, message="200 Imu messages on demo/imu")
 
         def contacts_after_two_seconds() -> bool:   # the same instant's contacts may still be on their way

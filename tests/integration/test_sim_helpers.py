@@ -14,6 +14,7 @@ import msgpack
 import pytest
 
 from nodes.core import Node
+from nodes.core.delivery import Inline, Raw
 from nodes.sim.interfaces import GetPhysicsProperties
 from tests.support.hardware_client import HardwareClient
 
@@ -61,7 +62,8 @@ class ModelStatesProbe:
         self._lock = threading.Lock()
         from nodes.sim.interfaces import ModelStates
 
-        node.create_subscription(ModelStates, "/sim/model_states", self._on_msg, inline=True, raw=True)
+        node.create_subscription(ModelStates, "/sim/model_states", self._on_msg,
+                                 delivery=Inline(), message=Raw())
 
     def _on_msg(self, payload: bytes) -> None:
         msg = msgpack.unpackb(payload, raw=False)

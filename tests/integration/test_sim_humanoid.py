@@ -13,6 +13,7 @@ import msgpack
 import pytest
 
 from nodes.core import Node
+from nodes.core.delivery import Inline, Raw
 from nodes.sim.interfaces import Empty, GetHardwareInfo, GetPhysicsProperties, SetPhysicsProperties
 from tests.conftest import wait_until
 from tests.integration.test_sim_helpers import (
@@ -55,7 +56,8 @@ def test_humanoid_stands_10s_then_bends_knees_and_keeps_standing(processes, node
 
     balanced: list[bool] = []
     node.create_subscription(None, "/humanoid/humanoid_state",
-                             lambda raw: balanced.append(msgpack.unpackb(raw)["is_balanced"]), inline=True, raw=True)
+                             lambda raw: balanced.append(msgpack.unpackb(raw)["is_balanced"]),
+                             delivery=Inline(), message=Raw())
     probe = ModelStatesProbe(node)
     client = connect_controller(node, "humanoid", policy)
     wait_until(lambda: client.states > 10, 30, message="lockstep states")

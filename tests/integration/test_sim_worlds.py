@@ -14,6 +14,7 @@ import msgpack
 import pytest
 
 from nodes.core import Node
+from nodes.core.delivery import Inline, Raw
 from nodes.sim.interfaces import (
     ApplyJointEffort,
     ApplyLinkWrench,
@@ -196,7 +197,7 @@ def test_world_file_physics_models_entity_services_and_bad_requests(processes, n
     # link_states covers every link of every model
     links: list[list[str]] = []
     node.create_subscription(None, "/sim/link_states", lambda raw: links.append(msgpack.unpackb(raw)["name"]),
-                             inline=True, raw=True)
+                             delivery=Inline(), message=Raw())
     time.sleep(0.5)
     wait_until(lambda: call(node, Empty, "/sim/unpause_physics") is not None and links, 20,
                message="link_states")

@@ -15,6 +15,7 @@ import msgpack
 
 import msgs
 from nodes.core import Node, run_node
+from nodes.core.delivery import Inline, Raw
 from nodes.sim.interfaces import HardwareCommand, HardwareState
 
 _pack_command = msgs.packer("zenroid_msgs/msg/HardwareCommand")
@@ -39,7 +40,7 @@ class HardwareClient:
         self._lock = threading.Lock()
         self._pub = node.create_publisher(HardwareCommand, f"/{self.namespace}/hardware/command", express=True)
         node.create_subscription(HardwareState, f"/{self.namespace}/hardware/state", self._on_state,
-                                 inline=True, raw=True)
+                                 delivery=Inline(), message=Raw())
 
     def _on_state(self, payload: bytes) -> None:
         state = msgpack.unpackb(payload, raw=False)

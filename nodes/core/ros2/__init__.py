@@ -124,7 +124,7 @@ class Ros2Node:
                                           reliable=getattr(endpoint, "reliable", True),
                                           latched=getattr(endpoint, "latched", False))
             if kind == "Subscription":
-                if endpoint.raw or endpoint.msg_type is None or "*" in key:
+                if endpoint.message.raw or endpoint.msg_type is None or "*" in key:
                     return None
                 return mirror.SubscriptionMirror(self, endpoint)
             if kind == "ServiceServer":
