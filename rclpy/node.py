@@ -29,7 +29,7 @@ import rclpy.subscription  # noqa: E402, F401
 import rclpy.timer  # noqa: E402, F401
 import rclpy.utilities  # noqa: E402, F401
 from nodes.core import graph
-from nodes.core.delivery import Inline, Raw
+from nodes.core.delivery import Executed, Inline, Raw
 from nodes.core.latched import fetch_latched
 from nodes.core.names import NameError_
 from nodes.core.node import Node as CoreNode
@@ -66,6 +66,7 @@ from rclpy.qos import (
     ReliabilityPolicy,
     qos_profile_from_depth,
     qos_profile_services_default,
+    queue_depth,
 )
 
 _NODE_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
@@ -284,23 +285,24 @@ class Node:
         key = self._zr_resolve(topic)
         group = self._zr_group(callback_group)
         run = _call_maybe_async(self, callback)
-        core = self._zr.create_subscription(msg_type, "/" + key, run, message=Raw() if raw else None)
+        core = self._zr.create_subscription(msg_type, "/" + key, run, delivery=Executed(depth=queue_depth(qos)),
+                                            message=Raw() if raw else None)
         core.group = group
         subscription = Subscription(self, core, msg_type, callback, qos, group, event_callbacks, raw)
         self._zr_entities["subscriptions"].append(subscription)
         if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL:
-            threading.Thread(target=self._zr_fetch_latched, args=(core, msg_type, key, run, group, raw),
+            threading.Thread(target=self._zr_fetch_latched, args=(core, msg_type, key, raw),
                              daemon=True, name=f"latched:{key}").start()
         return subscription
 
-    def _zr_fetch_latched(self, core: Any, msg_type: Any, key: str, run: Any, group: Any, raw: bool) -> None:
+    def _zr_fetch_latched(self, core: Any, msg_type: Any, key: str, raw: bool) -> None:
         """TRANSIENT_LOCAL: the last message a latched publisher keeps, delivered like any other."""
         try:
             msg = fetch_latched(self._zr.session, msg_type, key, timeout=2.0)
         except Exception:  # noqa: BLE001 - nobody latched anything decodable: only live messages then
             return
         if msg is not None and not core.closed:
-            self._zr.executor.put((run, (msgs.encode(msg) if raw else msg,), f"subscription '{key}'", group))
+            core.delivery.run((msgs.encode(msg) if raw else msg,))
 
     # ------------------------------------------------------------------ services
     def create_service(self, srv_type: Any, srv_name: str, callback: Callable[[Any, Any], Any], *,

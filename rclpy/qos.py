@@ -3,8 +3,9 @@
 - reliability RELIABLE: a publisher that waits rather than drops under congestion; BEST_EFFORT: drops;
 - durability TRANSIENT_LOCAL: the publisher keeps its last message and a late subscription fetches it when it
   is created (``nodes/core/latched.py``); Zenoh keeps one message per publisher, not ``depth``;
-- history/depth: a subscription's callbacks wait on the spinning thread without a bound (nothing is dropped
-  for depth); deadline, lifespan and liveliness are accepted and not enforced.
+- history/depth: KEEP_LAST bounds what waits for the spinning thread to ``depth`` messages per subscription,
+  the newest kept (``queue_depth``; rmw_zenoh's subscription queue); KEEP_ALL keeps all; deadline, lifespan
+  and liveliness are accepted and not enforced.
 """
 
 from __future__ import annotations
@@ -132,6 +133,18 @@ def qos_profile_from_depth(qos: Any) -> QoSProfile:
     if isinstance(qos, int) and not isinstance(qos, bool):
         return QoSProfile(depth=qos)
     raise TypeError(f"qos_profile must be a QoSProfile or an int depth, got {type(qos).__name__}")
+
+
+# rmw_zenoh's depth for a KEEP_LAST profile that names none (depth 0, SYSTEM_DEFAULT)
+RMW_ZENOH_DEFAULT_HISTORY_DEPTH = 42
+
+
+def queue_depth(qos: QoSProfile) -> int | None:
+    """How many messages may wait for a subscription's callback, the newest kept (None: all of them), as
+    rmw_zenoh bounds its subscription queue: KEEP_LAST its depth (0: rmw_zenoh's 42), KEEP_ALL no bound."""
+    if qos.history == HistoryPolicy.KEEP_ALL:
+        return None
+    return qos.depth if qos.depth > 0 else RMW_ZENOH_DEFAULT_HISTORY_DEPTH
 
 
 qos_profile_system_default = QoSProfile(history=HistoryPolicy.SYSTEM_DEFAULT,

@@ -71,6 +71,32 @@ def test_no_router_says_so_once_and_ctrl_c_ends_it(tmp_path, ros_env) -> None:
     assert "zenroid router" in text, text
 
 
+def test_keep_last_depth_keeps_the_newest_for_a_slow_callback(processes, ros_env, session) -> None:
+    """A KEEP_LAST depth bounds what waits for a slow spinning thread, as rmw_zenoh's queue does: a burst of
+    200 to a 50 ms callback with depth 5 delivers the first message (taken at once), then only the newest 5."""
+    import msgs
+    from nodes.core import Node
+
+    Int32 = msgs.get_type("std_msgs/msg/Int32")
+    listener = processes.start(str(PROGRAMS / "slow_listener.py"), "5", name="slow_listener", env=ros_env)
+    wait_until(lambda: "ready" in processes.output(listener), timeout=30, message="the slow listener")
+    talker = Node("burst_talker", session=session)
+    try:
+        pub = talker.create_publisher(Int32, "/burst")
+        wait_until(lambda: pub.has_subscribers, timeout=15, message="the listener matched")
+        time.sleep(0.3)   # its routes settle
+        for i in range(200):
+            pub.publish(Int32(data=i))
+        wait_until(lambda: "took 199" in processes.output(listener), timeout=30,
+                   message="the last message taken\n" + processes.output(listener)[-2000:])
+        time.sleep(0.5)   # nothing else is on its way
+    finally:
+        talker.destroy()
+    taken = [int(line.split()[1]) for line in processes.output(listener).splitlines() if line.startswith("took ")]
+    assert taken[-5:] == [195, 196, 197, 198, 199], taken
+    assert len(taken) <= 5 + 3, f"depth 5 should keep the newest 5 behind the callback, took {taken}"
+
+
 @pytest.fixture
 def context(router, monkeypatch):
     """An rclpy context of this process on the test's router (no signal handlers: pytest keeps its own)."""
