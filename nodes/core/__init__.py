@@ -2,7 +2,7 @@
 
 from nodes.core.action import ActionClient, ActionServer, ClientGoalHandle, ServerGoalHandle
 from nodes.core.delivery import Batched, Decoded, Executed, Inline, Pulled, Raw
-from nodes.core.endpoints import Client, Publisher, ServiceError, ServiceServer, Subscription
+from nodes.core.endpoints import Client, Deferred, Publisher, ServiceError, ServiceServer, Subscription
 from nodes.core.executor import CallbackGroup
 from nodes.core.lifecycle import LifecycleNode
 from nodes.core.log import Logger
@@ -13,7 +13,7 @@ from nodes.core.spinner import Spinner
 
 __all__ = [
     "ActionClient", "ActionServer", "Batched", "CallbackGroup", "Client", "ClientGoalHandle", "Decoded",
-    "Executed", "Inline", "LifecycleNode", "Logger", "Node", "ParameterError", "Publisher", "Pulled", "Raw",
+    "Deferred", "Executed", "Inline", "LifecycleNode", "Logger", "Node", "ParameterError", "Publisher", "Pulled", "Raw",
     "ServerGoalHandle", "ServiceError", "ServiceServer", "Spinner", "Subscription", "Timer",
     "add_connection_arguments", "add_node_arguments", "connect_from_args", "run_node",
 ]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import os
+import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -306,8 +307,42 @@ def decode_request(node: NodeRuntime, query: zenoh.Query, cls: Any, what: str,
         return None
 
 
+class Deferred:
+    """A service response that comes later: a handler returns one and, from any thread, calls ``resolve``
+    with the response (or ``fail`` with an exception) when it has it. The request is held until then, so a
+    handler can hand slow work to another thread without keeping its node's callbacks waiting."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._outcome: tuple[Any, BaseException | None] | None = None
+        self._done: Callable[[Any, BaseException | None], None] | None = None
+
+    def resolve(self, response: Any) -> None:
+        self._finish(response, None)
+
+    def fail(self, error: BaseException) -> None:
+        self._finish(None, error)
+
+    def _finish(self, response: Any, error: BaseException | None) -> None:
+        with self._lock:
+            if self._outcome is not None:
+                return   # answered once
+            self._outcome = (response, error)
+            done = self._done
+        if done is not None:
+            done(response, error)
+
+    def on_done(self, callback: Callable[[Any, BaseException | None], None]) -> None:
+        with self._lock:
+            self._done = callback
+            outcome = self._outcome
+        if outcome is not None:
+            callback(*outcome)
+
+
 class ServiceServer:
-    """A queryable on ``key``: request map in, response map out (docs/architecture.md, Services and actions)."""
+    """A queryable on ``key``: request map in, response map out (docs/architecture.md, Services and actions).
+    A handler may return a ``Deferred`` and answer later."""
 
     def __init__(self, node: NodeRuntime, srv_type: Any, key: str, handler: Callable[[Any], Any], *,
                  inline: bool = False) -> None:
@@ -334,6 +369,18 @@ class ServiceServer:
     def _serve(self, query: zenoh.Query, request: Any) -> None:
         try:
             response = self.handler(request)
+        except Exception as exc:  # noqa: BLE001 - a failing handler answers with an error, the node lives on
+            self._answer(query, None, exc)
+            return
+        if isinstance(response, Deferred):
+            response.on_done(lambda result, error: self._answer(query, result, error))
+            return
+        self._answer(query, response, None)
+
+    def _answer(self, query: zenoh.Query, response: Any, error: BaseException | None) -> None:
+        try:
+            if error is not None:
+                raise error
             if getattr(response, "_type", None) != self.srv_type.Response._type:
                 raise TypeError(f"handler returned {type(response).__name__}, expected {self.srv_type.Response._type}")
             query.reply(self.key, msgs.encode(response), encoding=self._encoding)

@@ -11,7 +11,7 @@ import numpy as np
 from nodes.core import names
 from nodes.meshes import MeshError
 from nodes.meshes.convert import cache_dir, collision_policy
-from nodes.meshes.urdf import base_path, prepare_urdf
+from nodes.meshes.urdf import PreparedUrdf, base_path, prepare_urdf
 from nodes.sim.model import Model
 from nodes.sim.pose import Pose, SpawnError
 from nodes.sim.servo_gains import lowest_points
@@ -34,6 +34,28 @@ class EntitySpec:
     initial_positions: dict[str, float] = field(default_factory=dict)
     base_uri: str = ""            # where relative mesh paths resolve (the URDF file's path)
     auto_z: bool = False          # a floating base: lowered (or raised) until its lowest collision touches z = 0
+    # its meshes checked and converted beforehand, off the physics thread (``prepare_meshes``): (the URDF they
+    # were prepared from, the result)
+    meshes: tuple[str, PreparedUrdf] | None = None
+
+
+def _physics_xml(spec: EntitySpec, info: RobotInfo) -> str:
+    return spec.xml if info.physics is None else info.physics.xml   # frame links merged into their bodies
+
+
+def prepare_meshes(spec: EntitySpec) -> None:
+    """Read, check and convert the meshes of ``spec``'s URDF into ``spec.meshes``. No DART here: this runs
+    beside the physics (a cold conversion of a real robot's meshes takes seconds), and the spawn on the
+    stepping thread then only loads the result. A robot that fails here is left as it is: the spawn repeats
+    the work and reports the error, named, as it always does."""
+    if "<mesh" not in spec.xml:
+        return
+    try:
+        xml = _physics_xml(spec, parse_urdf(spec.xml, spec.base_uri or None))
+        spec.meshes = (xml, prepare_urdf(xml, base_path(spec.base_uri), f"robot {spec.name!r}", collision_policy(),
+                                         resolved=True))
+    except Exception:  # noqa: BLE001 - reported by the spawn itself
+        spec.meshes = None
 
 
 def sensor_keys(info: RobotInfo, xml: str, namespace: str) -> list[tuple[str, str, str]]:
@@ -102,8 +124,7 @@ class Entity(Model):
         loader = dart.utils.DartLoader()
         flags = dart.utils.DartLoaderFlags.FIXED_BASE_LINK if spec.fixed else dart.utils.DartLoaderFlags.NONE
         uri = dart.common.Uri(spec.base_uri or "file:///")
-        xml = spec.xml if info.physics is None else info.physics.xml   # frame links merged into their bodies
-        xml = self._with_meshes(spec, xml)
+        xml = self._with_meshes(spec, _physics_xml(spec, info))
         skeleton = loader.parseSkeletonString(xml, uri, dart.common.LocalResourceRetriever(), flags)
         if skeleton is None:
             raise SpawnError(f"DART could not load the URDF of {spec.name!r} (a mesh file that cannot be read? "
@@ -113,11 +134,14 @@ class Entity(Model):
     def _with_meshes(self, spec: EntitySpec, xml: str) -> str:
         """The description DART loads: its meshes checked and converted (``nodes.meshes``), so DART never
         reads a file the user named."""
-        try:
-            prepared = prepare_urdf(xml, base_path(spec.base_uri), f"robot {spec.name!r}", collision_policy(),
-                                    resolved=True)
-        except MeshError as exc:
-            raise SpawnError(str(exc)) from None
+        if spec.meshes is not None and spec.meshes[0] == xml:
+            prepared = spec.meshes[1]
+        else:
+            try:
+                prepared = prepare_urdf(xml, base_path(spec.base_uri), f"robot {spec.name!r}", collision_policy(),
+                                        resolved=True)
+            except MeshError as exc:
+                raise SpawnError(str(exc)) from None
         self.mesh_warnings = prepared.warnings
         if prepared.meshes:
             self.mesh_note = (f"{prepared.meshes} mesh(es) checked and converted, {prepared.cached} from the "

@@ -1,16 +1,19 @@
 """The simulator's ``sim/*`` services (gazebo_ros' spawn/delete/pause/reset/step/physics properties): each
 request is checked here, the reason for a refusal names the field, and the work is done through the
-simulator's public operations (``Simulator`` below) on the stepping thread, between control periods."""
+simulator's public operations (``Simulator`` below) on the stepping thread, between control periods. A robot's
+meshes are converted before, on a thread of their own, so a spawn does not stop the physics for seconds."""
 
 from __future__ import annotations
 
 import math
+import threading
+from collections.abc import Callable
 from typing import Any, Protocol
 
 from msgs.geometry_msgs import Vector3
-from nodes.core import names
+from nodes.core import Deferred, names
 from nodes.core.log import Logger
-from nodes.sim.entity import EntitySpec, Pose, SpawnError
+from nodes.sim.entity import EntitySpec, Pose, SpawnError, prepare_meshes
 from nodes.sim.interfaces import (
     MODES,
     DeleteEntity,
@@ -20,7 +23,7 @@ from nodes.sim.interfaces import (
     SpawnEntity,
     StepSimulation,
 )
-from nodes.sim.sdf import WorldError
+from nodes.sim.sdf import WorldError, is_sdf
 from nodes.sim.simulation import Simulation
 from nodes.sim.stepping import Pacer
 from nodes.sim.urdf_info import UrdfError
@@ -42,6 +45,7 @@ class Simulator(Protocol):
     sim: Simulation
     pacer: Pacer
     paused: bool
+    executor: Any     # runs a callable on the stepping thread (``dispatch``)
 
     def create_service(self, srv_type: Any, name: str, handler: Any) -> Any: ...
     def spawn_entity(self, spec: EntitySpec, reference_frame: str = "") -> str: ...
@@ -96,8 +100,23 @@ class SimServices:
                       (pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w)),
             initial_positions=dict(zip(request.initial_joint_names, request.initial_joint_positions, strict=True)),
         )
+        if "<mesh" not in spec.xml or is_sdf(spec.xml):
+            return self._spawn(spec, request.reference_frame, fail)
+        # A robot's meshes are read and converted on a thread of their own, the physics running on meanwhile;
+        # the spawn itself (DART) comes back to the stepping thread, and the request is answered then.
+        answer = Deferred()
+        self.logger.info(f"spawn_entity {names.shown(spec.name)}: reading its meshes beside the physics")
+
+        def convert() -> None:
+            prepare_meshes(spec)
+            self.simulator.executor.dispatch(
+                lambda: answer.resolve(self._spawn(spec, request.reference_frame, fail)), where="spawn_entity")
+        threading.Thread(target=convert, name="spawn-meshes", daemon=True).start()
+        return answer
+
+    def _spawn(self, spec: EntitySpec, reference_frame: str, fail: Callable[[str], Any]) -> Any:
         try:
-            message = self.simulator.spawn_entity(spec, request.reference_frame)
+            message = self.simulator.spawn_entity(spec, reference_frame)
         except (SpawnError, UrdfError, WorldError) as exc:
             return fail(str(exc))
         self.logger.info(message)

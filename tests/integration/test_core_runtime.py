@@ -464,3 +464,48 @@ def test_delivery_objects_refuse_bad_input_and_executed_depth_keeps_the_newest(r
         assert got == ["17", "18", "19"]
     finally:
         spun.destroy()
+
+
+def test_a_service_answers_later_through_a_deferred(router, client) -> None:
+    """A handler that returns a ``Deferred`` frees its node at once; the caller gets the response (or the
+    error) given later from another thread, and other requests are served meanwhile."""
+    from nodes.core import Deferred
+
+    server = Node("deferring", connect=[router])
+    try:
+        pending: list[tuple[Deferred, bool]] = []
+
+        def slow(request):
+            answer = Deferred()
+            pending.append((answer, request.data))
+            return answer
+
+        server.create_service(SetBool, "deferred/slow", slow)
+        server.create_service(Trigger, "deferred/quick", lambda _r: Trigger.Response(success=True, message="now"))
+        results: list = []
+
+        def ask(value: bool) -> None:
+            try:
+                results.append(client.create_client(SetBool, "deferred/slow").call(SetBool.Request(data=value),
+                                                                                   timeout=30))
+            except ServiceError as exc:
+                results.append(exc)
+        callers = [threading.Thread(target=ask, args=(v,)) for v in (True, False)]
+        for caller in callers:
+            caller.start()
+        wait_until(lambda: len(pending) == 2, timeout=20, message="both requests held")
+        assert client.create_client(Trigger, "deferred/quick").call(Trigger.Request(), timeout=10).message == "now"
+        assert results == []
+        for answer, value in pending:
+            if value:
+                threading.Thread(target=answer.resolve, args=(SetBool.Response(success=True, message="later"),)).start()
+            else:
+                threading.Thread(target=answer.fail, args=(RuntimeError("no luck"),)).start()
+        for caller in callers:
+            caller.join(30)
+        responses = [r for r in results if not isinstance(r, Exception)]
+        errors = [r for r in results if isinstance(r, Exception)]
+        assert len(responses) == 1 and responses[0].message == "later"
+        assert len(errors) == 1 and "RuntimeError: no luck" in str(errors[0])
+    finally:
+        server.destroy()

@@ -362,7 +362,8 @@ def test_the_viewer_records_a_package_robots_meshes_in_their_colours(processes, 
 
 def test_the_camera_sees_example_robot_datas_g1_in_its_colours(processes, router, tmp_path):
     """Unitree's G1 (51 STL meshes through package://example-robot-data) spawned over the wire 2 m ahead of
-    the humanoid's camera: the image's centre is the G1's grey, at the G1's depth."""
+    the humanoid's camera: the image's centre is the G1's grey, at the G1's depth. Its meshes, not in the
+    mesh cache yet, are converted beside the physics: the simulator answers other requests meanwhile."""
     from nodes.urdf.paths import PathError, package_root
 
     try:
@@ -372,19 +373,33 @@ def test_the_camera_sees_example_robot_datas_g1_in_its_colours(processes, router
     urdf = (root / "robots" / "g1_description" / "urdf" / "g1_29dof_rev_1_0.urdf").read_text()
     sim = processes.start("-m", "nodes.sim", "--params-file", str(ROOT / "config" / "sim.yaml"),
                           "--param", "world:=empty.world", "--param", "mode:=lockstep", "--param", "paused:=true",
-                          "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}]", name="sim")
-    renderer = processes.start("-m", "nodes.render", name="renderer")
+                          "--param", "entities:=[{name: humanoid, file: humanoid, z: 0.93}]", name="sim",
+                          env={"ZENROID_MESH_CACHE": str(tmp_path / "cold_cache")})
+    # the renderer reads big meshes by reference, from the simulator's cache
+    renderer = processes.start("-m", "nodes.render", name="renderer", env={"ZENROID_MESH_CACHE": str(tmp_path / "cold_cache")})
     node = Node("g1_camera_test", connect=[router])
     try:
         wait_ready(node, processes, sim)
         images = Images(node)
         camera = call(node, GetEntityState, "/sim/get_entity_state",
                       GetEntityState.Request(name="humanoid::camera_link")).state.pose.position
-        reply = call(node, SpawnEntity, "/sim/spawn_entity", msgs.from_dict(SpawnEntity.Request, {
-            "name": "g1", "xml": urdf, "robot_namespace": "g1",
-            "initial_pose": {"position": {"x": camera.x + 2.0, "y": 0.0, "z": camera.z - 0.3},
-                             "orientation": {"z": 1.0, "w": 0.0}}}), timeout=120)   # facing the camera
+        replies = []
+        spawning = threading.Thread(target=lambda: replies.append(call(
+            node, SpawnEntity, "/sim/spawn_entity", msgs.from_dict(SpawnEntity.Request, {
+                "name": "g1", "xml": urdf, "robot_namespace": "g1",
+                "initial_pose": {"position": {"x": camera.x + 2.0, "y": 0.0, "z": camera.z - 0.3},
+                                 "orientation": {"z": 1.0, "w": 0.0}}}), timeout=120)))   # facing the camera
+        spawning.start()
+        wait_until(lambda: "'g1': reading its meshes beside the physics" in processes.output(sim), timeout=60,
+                   message="the G1's meshes being read")
+        # seconds of conversion ahead (a cold cache): the stepping thread serves another request meanwhile
+        assert call(node, GetEntityState, "/sim/get_entity_state",
+                    GetEntityState.Request(name="humanoid::camera_link"), timeout=10).success
+        assert not replies, "the spawn was answered first: its meshes were converted on the stepping thread"
+        spawning.join(120)
+        (reply,) = replies
         assert reply.success, reply.status_message
+        assert "0 from the mesh cache" in processes.output(sim)
         wait_until(lambda: re.search(r"scene \d+: 3 models", processes.output(renderer)), timeout=60,
                    message="the renderer's scene with the G1 (over the payload limit: its big meshes by reference)")
         step(node, 100)
