@@ -514,9 +514,10 @@ def test_cart_demo_package(tmp_path: Path, zenoh_port: int, variant: str) -> Non
     after the other (load_controller or spawner chained with OnProcessExit) by the plugin's controller
     manager. The cart starts at the state interface's initial_value; position: example_position.py's
     FollowJointTrajectory goal (rclpy) takes it through -1 to 0.5; velocity and effort: a command moves it
-    in the commanded direction. Effort also: `spawner NAME -t TYPE --load-only` leaves it loaded, unconfigured."""
+    in the commanded direction; the velocity cart's IMU publishes. Effort also: `spawner NAME -t TYPE --load-only` leaves it loaded, unconfigured."""
     command = (sys.executable, "-m", "nodes.tools.ros2", "launch")
-    launch = Launch("cart_demo", f"cart_example_{variant}.launch.py", "sensors:=false", log_dir=tmp_path / "run",
+    sensors = "sensors:=true" if variant == "velocity" else "sensors:=false"   # the velocity cart has an IMU
+    launch = Launch("cart_demo", f"cart_example_{variant}.launch.py", sensors, log_dir=tmp_path / "run",
                     port=zenoh_port, command=command, env=child_env(CART_DEMO))
     try:
         session = launch.peer()
@@ -524,8 +525,11 @@ def test_cart_demo_package(tmp_path: Path, zenoh_port: int, variant: str) -> Non
         session.declare_subscriber("joint_states", lambda s: states.append(s.payload.to_bytes()))
         controller = {"position": "joint_trajectory_controller", "velocity": "velocity_controller",
                       "effort": "effort_controller"}[variant]
-        wait_output(launch, rf"(Successfully loaded controller {controller} into state active"
-                            rf"|Configured and activated {controller})", 150)
+        imu: list[bytes] = []
+        session.declare_subscriber("imu_sensor_broadcaster/imu", lambda s: imu.append(s.payload.to_bytes()))
+        last = "imu_sensor_broadcaster" if variant == "velocity" else controller   # the chain's last one
+        wait_output(launch, rf"(Successfully loaded controller {last} into state active"
+                            rf"|Configured and activated {last})", 150)
         start, _ = launch.wait(lambda: _cart_joint(states), 60, "slider_to_cart in /joint_states")
         assert start == pytest.approx(0.0 if variant == "velocity" else 1.0, abs=0.01)   # initial_value
         if variant == "position":
@@ -546,6 +550,10 @@ def test_cart_demo_package(tmp_path: Path, zenoh_port: int, variant: str) -> Non
             assert velocity * sign > 0.1, velocity
             if variant == "velocity":
                 assert velocity == pytest.approx(value, abs=0.05)
+                # the IMU riding on the cart: its frame, and gravity's reaction along z
+                reading = msgpack.unpackb(launch.wait(lambda: imu and imu[-1], 30, "/imu_sensor_broadcaster/imu"))
+                assert reading["header"]["frame_id"] == "imu"
+                assert reading["linear_acceleration"]["z"] == pytest.approx(9.81, abs=0.3), reading
             else:   # the spawner's other options: a type given on the command line, loaded only
                 ros2 = [sys.executable, "-m", "nodes.tools.ros2"]
                 done = subprocess.run([*ros2, "run", "controller_manager", "spawner", "extra_broadcaster", "-t",
@@ -561,7 +569,8 @@ def test_cart_demo_package(tmp_path: Path, zenoh_port: int, variant: str) -> Non
         launch.close()
     out = launch.output()
     order = [out.index(s) for s in ("'spawn_entity' [pid", "controller manager /controller_manager with",
-                                    "loaded controller 'joint_state_broadcaster'", f"loaded controller '{controller}'")]
+                                    "loaded controller 'joint_state_broadcaster'", f"loaded controller '{controller}'",
+                                    f"loaded controller '{last}'")]
     assert order == sorted(order), out
 
 

@@ -1,5 +1,6 @@
 """The velocity cart: as the position cart, with a JointGroupVelocityController taking m/s on
-/velocity_controller/commands. The description comes from the xacro command, the other common way.
+/velocity_controller/commands, and an IMU on the cart (/imu_sensor_broadcaster/imu). The description comes
+from the xacro command, the other common way.
 
     ros2 launch cart_demo cart_example_velocity.launch.py
     ros2 topic pub --once /velocity_controller/commands std_msgs/msg/Float64MultiArray "{data: [1.0]}"
@@ -50,11 +51,18 @@ def generate_launch_description():
         output='screen',
     )
 
+    load_imu_sensor_broadcaster = ExecuteProcess(
+        cmd=['ros2', 'control', 'load_controller', '--set-state', 'active', 'imu_sensor_broadcaster'],
+        output='screen',
+    )
+
     return LaunchDescription([
         RegisterEventHandler(OnProcessExit(target_action=spawn_entity,
                                            on_exit=[load_joint_state_broadcaster])),
         RegisterEventHandler(OnProcessExit(target_action=load_joint_state_broadcaster,
                                            on_exit=[load_velocity_controller])),
+        RegisterEventHandler(OnProcessExit(target_action=load_velocity_controller,
+                                           on_exit=[load_imu_sensor_broadcaster])),
         gazebo,
         robot_state_publisher,
         spawn_entity,

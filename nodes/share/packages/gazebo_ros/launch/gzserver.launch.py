@@ -3,7 +3,8 @@ root namespace (its services and topics where gazebo_ros puts them for the tutor
 
 Arguments as gazebo_ros's: world (a path or a name in worlds/), pause, verbose, extra_gazebo_args (accepted,
 reported when given: Gazebo's plug-in and physics options have no meaning here), plus zenroid's mode
-(realtime | lockstep) and sensors (the renderer of cameras, depth, lidar and laser beside the physics).
+(realtime | lockstep) and sensors (the URDF's IMU, force/torque and contact sensors, and the renderer of
+cameras, depth, lidar and laser beside the physics; false leaves them all out).
 """
 
 import sys
@@ -24,7 +25,9 @@ def generate_launch_description():
         DeclareLaunchArgument('verbose', default_value='false', description='debug logging'),
         DeclareLaunchArgument('extra_gazebo_args', default_value='', description='accepted; Gazebo-only options'),
         DeclareLaunchArgument('mode', default_value='realtime', description='realtime | lockstep'),
-        DeclareLaunchArgument('sensors', default_value='true', description='simulate cameras, depth, lidar, laser'),
+        DeclareLaunchArgument('sensors', default_value='true',
+                              description='simulate the URDF sensors (IMU, force/torque, contact) and render '
+                                          'cameras, depth, lidar, laser'),
         DeclareLaunchArgument('physics', default_value='dart', description='accepted (the physics is DART)'),
         LogInfo(msg=['gzserver: extra_gazebo_args "', extra, '" have no meaning here; ignored'],
                 condition=IfCondition(PythonExpression(["len('", extra, "'.strip()) > 0"]))),
