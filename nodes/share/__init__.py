@@ -76,10 +76,10 @@ def robot_file(name: str) -> Path:
         try:
             path = robot_uri_path(name)
         except PathError as exc:
-            raise FileNotFoundError(f"robot {name!r}: {exc}") from None
+            raise FileNotFoundError(str(exc)) from None   # it names the URI and the places searched
         if path is not None:
             if not path.is_file():
-                raise FileNotFoundError(f"robot {name!r}: {path} does not exist")
+                raise FileNotFoundError(f"{name!r}: {path} does not exist")
             return path
     try:
         return _find(name, ROBOTS_DIR, ROBOT_SUFFIXES, "robot")
