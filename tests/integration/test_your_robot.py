@@ -7,6 +7,7 @@ it, which are the files written, and a lab's own xacro package (examples/lab_bip
 from __future__ import annotations
 
 import math
+import os
 import time
 from importlib.metadata import PackageNotFoundError, distribution
 from pathlib import Path
@@ -303,3 +304,24 @@ def test_a_lab_xacro_package_stands_and_its_meshes_are_drawn_and_seen(tmp_path: 
         assert np.ptp(np.asarray(foot["Mesh3D:vertex_positions"]), axis=0) == pytest.approx([0.22, 0.12, 0.04],
                                                                                               abs=1e-4)
         assert set(foot["Mesh3D:vertex_colors"]) == {rgba(GREEN)}
+
+
+def test_a_lab_package_named_by_its_path_is_added_to_the_package_path(tmp_path: Path, zenoh_port: int,
+                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    """The lab biped's xacro named by a plain path, with no package path set (a repository cloned anywhere):
+    the launch resolves (xacro's $(find lab_biped_description) included) and says it added the package."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[2]
+    package = root / "examples" / "lab_biped_description"
+    monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
+    monkeypatch.delenv("AMENT_PREFIX_PATH", raising=False)
+    done = subprocess.run([sys.executable, "-m", "launch", "humanoid.yaml", "robot:=lab_biped",
+                           f"robot_file:={package / 'urdf' / 'lab_biped.urdf.xacro'}", f"zenoh_port:={zenoh_port}",
+                           "--print"], cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONPATH": str(root)})
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert f"package 'lab_biped_description' of {package}" in done.stderr
+    assert f"added {package} to ROS_PACKAGE_PATH" in done.stderr
+    assert "generated a <ros2_control> block (8 joints" in done.stderr
