@@ -109,8 +109,11 @@ class SimServices:
 
         def convert() -> None:
             prepare_meshes(spec)
-            self.simulator.executor.dispatch(
-                lambda: answer.resolve(self._spawn(spec, request.reference_frame, fail)), where="spawn_entity")
+            try:
+                self.simulator.executor.dispatch(
+                    lambda: answer.resolve(self._spawn(spec, request.reference_frame, fail)), where="spawn_entity")
+            except Exception as exc:  # noqa: BLE001 - the simulator is shutting down: the caller hears why
+                answer.fail(exc)
         threading.Thread(target=convert, name="spawn-meshes", daemon=True).start()
         return answer
 
