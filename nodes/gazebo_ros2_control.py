@@ -12,8 +12,9 @@ URDF from the latched ``sim/scene`` and, for each one carrying the plugin, start
 - ``<robot_param>``, ``<robot_param_node>``, ``<hold_joints>``: accepted (the simulator hands the hardware over
   directly and holds joints without commands).
 
-The manager stops when its model is deleted and when this node stops. Each state interface's
-``initial_value`` is applied at spawn (``zenroid spawn`` / ``spawn_entity.py``).
+The manager stops when its model is deleted and when this node stops. Each position state interface's
+``initial_value`` is applied by the simulator when the robot is spawned (nodes.sim.entity), however the spawn
+was asked for.
 """
 
 from __future__ import annotations

@@ -22,6 +22,26 @@ from nodes.urdf.xml_safety import parse_xml
 GROUND_CLEARANCE = 0.001   # m between the lowest collision geometry and the ground at an automatic spawn height
 
 
+def ros2_control_initial_positions(xml: str) -> dict[str, float]:
+    """Each ``<ros2_control>`` joint's position ``initial_value``: where gazebo_ros2_control's hardware puts the
+    joint when the robot is spawned, whoever asked for the spawn. SpawnError names a value that is no number."""
+    if "initial_value" not in xml:
+        return {}
+    found: dict[str, float] = {}
+    for joint in parse_xml(xml).iterfind("ros2_control/joint"):
+        for param in joint.iterfind("state_interface[@name='position']/param[@name='initial_value']"):
+            text = (param.text or "").strip()
+            try:
+                value = float(text)
+            except ValueError:
+                raise SpawnError(f"joint {joint.get('name')!r}: <ros2_control> initial_value {text!r:.60} is not a "
+                                 "number") from None
+            if not math.isfinite(value):
+                raise SpawnError(f"joint {joint.get('name')!r}: <ros2_control> initial_value must be finite")
+            found[joint.get("name", "")] = value
+    return found
+
+
 @dataclass
 class EntitySpec:
     """Everything a spawn needs (the SpawnEntity request plus our fixed-base / initial-joint options)."""
@@ -115,7 +135,8 @@ class Entity(Model):
             dart_joint.setLimitEnforcement(joint.type != "continuous")
             self.dof_index[joint.name] = int(dart_joint.getIndexInSkeleton(0))
         self._place(self.pose)
-        self._apply_initial_positions(spec.initial_positions)
+        # the request's own positions (spawn -J, a named pose) over the ros2_control initial_values
+        self._apply_initial_positions({**ros2_control_initial_positions(spec.xml), **spec.initial_positions})
         if spec.auto_z and self.floating:
             self._stand_on_ground()
         self.remember_spawn()

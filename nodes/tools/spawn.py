@@ -50,30 +50,6 @@ def _initial_joints(pairs: list[list[str]]) -> tuple[list[str], list[float]]:
     return names, values
 
 
-def initial_values(xml: str) -> dict[str, float]:
-    """Each ``<ros2_control>`` joint's position ``initial_value``, as gazebo_ros2_control sets it at spawn."""
-    from nodes.urdf.xml_safety import UnsafeXmlError, parse_xml
-
-    if "initial_value" not in xml:
-        return {}
-    try:
-        root = parse_xml(xml)
-    except (UnsafeXmlError, ValueError):
-        return {}  # the simulator refuses the description with the reason
-    found: dict[str, float] = {}
-    for joint in root.iterfind("ros2_control/joint"):
-        for state in joint.iterfind("state_interface[@name='position']"):
-            for param in state.iterfind("param[@name='initial_value']"):
-                try:
-                    value = float((param.text or "").strip())
-                except ValueError:
-                    raise UsageError(f"joint '{joint.get('name')}': initial_value '{param.text}' is not a number") \
-                        from None
-                if math.isfinite(value):
-                    found[joint.get("name", "")] = value
-    return found
-
-
 def run(args: argparse.Namespace) -> int:
     from nodes.sim.interfaces import Empty, SpawnEntity
     from nodes.sim.robot_files import ConfigError, fetch_robot_description, read_model_xml, resolve_robot_file
@@ -112,10 +88,6 @@ def run(args: argparse.Namespace) -> int:
             print(f"zenroid spawn: service 'sim/spawn_entity' not available after {args.timeout:g} s "
                   "(is the simulator running?)")
             return 1
-        for name, value in initial_values(xml).items():   # gazebo_ros2_control's initial_value
-            if name not in joint_names:
-                joint_names.append(name)
-                joint_values.append(value)
         position, orientation = pose_from_xyz_rpy(*pose_values)
         request = SpawnEntity.Request(
             name=args.entity, xml=xml, robot_namespace=args.robot_namespace,

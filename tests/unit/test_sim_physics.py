@@ -176,6 +176,25 @@ def test_reference_frame_and_initial_joints(make_sim):
     assert names == ["base", "child"]
 
 
+def test_ros2_control_initial_value_is_where_a_joint_starts(make_sim):
+    """gazebo_ros2_control's initial_value applies to every spawn (a bare SpawnEntity request too); the
+    request's own initial positions win; reset returns there; a value that is no number is refused by name."""
+    valued = ARM.replace('<joint name="elbow">\n      <command_interface name="position"/>\n      <state_interface name="position"/>',
+                         '<joint name="elbow">\n      <command_interface name="position"/>\n      <state_interface name="position">'
+                         '<param name="initial_value">0.7</param></state_interface>')
+    assert valued != ARM
+    sim = make_sim(ground=False)
+    hw = sim.spawn(EntitySpec("a", valued, fixed=True)) and sim.hardware["a"]
+    assert hw.positions()[1] == pytest.approx(0.7)
+    sim.step(200)
+    sim.reset_world()
+    assert hw.positions()[1] == pytest.approx(0.7, abs=1e-6)
+    sim.spawn(EntitySpec("b", valued, fixed=True, namespace="b", initial_positions={"elbow": -0.2}))
+    assert sim.hardware["b"].positions()[1] == pytest.approx(-0.2)
+    with pytest.raises(SpawnError, match="joint 'elbow': <ros2_control> initial_value 'x' is not a number"):
+        sim.spawn(EntitySpec("c", valued.replace(">0.7<", ">x<"), fixed=True, namespace="c"))
+
+
 def test_humanoid_stands_balanced_and_knee_bend_reaches_target(make_sim):
     sim = make_sim()
     sim.spawn(EntitySpec("humanoid", HUMANOID, pose=Pose.from_xyz_rpy(0, 0, 0.915)))
