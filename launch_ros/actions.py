@@ -101,12 +101,12 @@ class LifecycleNode(Node):
         autostart = self.autostart if isinstance(self.autostart, bool) else parse_bool(
             resolver.perform(self.autostart, scope, self.source, "autostart"), "autostart", self.source)
         if autostart:   # launch_ros' autostart: configured, then activated, once it is up
-            helper = _LifecycleChange(self, fqn, "configure", "activate")
+            helper = LifecycleChangeProcess(self, fqn, "configure", "activate")
             helper.source = self.source
             resolver.walk([helper], scope)
 
 
-class _LifecycleChange(ExecuteProcess):
+class LifecycleChangeProcess(ExecuteProcess):
     """The helper process of a ChangeState event for one lifecycle node (launch_ros.lifecycle_change)."""
 
     def __init__(self, node: LifecycleNode, fqn: str, *transitions: str) -> None:

@@ -32,9 +32,9 @@ class OnStateTransition(EventHandler):
         self.handled = False
 
     def matches(self, action: Any) -> bool:
-        from launch_ros.actions import _LifecycleChange
+        from launch_ros.actions import LifecycleChangeProcess
 
-        if not isinstance(action, _LifecycleChange):
+        if not isinstance(action, LifecycleChangeProcess):
             return False
         if self.target_lifecycle_node is not None and action.node is not self.target_lifecycle_node:
             return False

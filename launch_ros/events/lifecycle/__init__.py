@@ -35,7 +35,7 @@ class ChangeState(Event):
 
     def emit(self, resolver: Any, scope: Any, source: Any) -> None:
         """What ``EmitEvent`` does with this event: a helper process per matching lifecycle node."""
-        from launch_ros.actions import LifecycleNode, _LifecycleChange
+        from launch_ros.actions import LifecycleChangeProcess, LifecycleNode
 
         targets = [(node, fqn) for node in resolver.lifecycle_nodes for fqn in node.fully_qualified_names
                    if self.lifecycle_node_matcher(node)]
@@ -43,7 +43,7 @@ class ChangeState(Event):
             resolver.log(f"{source}: ChangeState({TRANSITION_LABELS[self.transition_id]}) matched no "
                          f"{LifecycleNode.__name__} resolved before it; ignored", level="WARN")
         for node, fqn in targets:
-            helper = _LifecycleChange(node, fqn, TRANSITION_LABELS[self.transition_id])
+            helper = LifecycleChangeProcess(node, fqn, TRANSITION_LABELS[self.transition_id])
             helper.source = source
             resolver.walk([helper], scope)
 
