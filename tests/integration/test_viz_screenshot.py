@@ -96,6 +96,11 @@ def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int)
 
         session.declare_subscriber("humanoid/joint_states", on_state)
         session.declare_subscriber("sim/clock", on_clock)
+        # A pose every 4 s, not 2: the knee then rests 3 s of each 4, so a pause lands in a still stretch on
+        # most tries (each miss opens the page anew and waits for it to catch up again).
+        subprocess.run([sys.executable, "-m", "nodes.tools", "param", "set", "/humanoid/joint_commander", "period",
+                        "4.0"], env={**env, "ZENOH_CONNECT": f"tcp/127.0.0.1:{zenoh_port}"}, check=True,
+                       capture_output=True, timeout=60)
         time.sleep(20.0)  # the main job runs for a while before anyone looks
 
         def sim_time(recording) -> float | None:
