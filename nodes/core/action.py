@@ -272,7 +272,10 @@ class ActionServer:
         self._status.destroy()
         self._token.undeclare()
         if self._mirror is not None:
-            self._mirror.close()
+            mirror, self._mirror = self._mirror, None
+            mirror.close()
+        # the owner's methods (see Subscription.destroy): no request reaches them any more
+        self.callbacks = _ServerCallbacks(None, None, None, None, None)
 
 
 @dataclass(eq=False)
@@ -350,4 +353,6 @@ class ActionClient:
         self._feedback_sub.undeclare()
         self._token.undeclare()
         if self._mirror is not None:
-            self._mirror.close()
+            mirror, self._mirror = self._mirror, None
+            mirror.close()
+        self._feedback_callbacks.clear()

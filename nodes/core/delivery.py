@@ -290,9 +290,18 @@ class Batched(Delivery):
         return f"Batched(max_rate={self.max_rate:g}, backlog={self.backlog})"
 
     def declare(self, sub: Subscription) -> None:
+        self._closed = False
         self._sub = sub.node.session.declare_subscriber(sub.key, zenoh.handlers.RingChannel(self.backlog))
         threading.Thread(target=self._drain, args=(sub, 1.0 / self.max_rate), daemon=True,
                          name=f"sub:{sub.key}").start()
+
+    def close(self) -> None:
+        # The drain thread blocks in the channel's recv, which holds the channel (undeclaring it meanwhile
+        # fails: "Already borrowed"): a wake-up only this session sees ends the wait, then the thread ends.
+        self._closed = True
+        sub = self.subscription
+        sub.node.session.put(sub.key, b"", attachment=WAKE, allowed_destination=zenoh.Locality.SESSION_LOCAL)
+        _undeclare_when_free(self._sub)
 
     def run(self, args: tuple[Any, ...]) -> None:
         self.executor.dispatch(self.callback, *args, where=self.where, group=self.subscription.group)
@@ -307,6 +316,8 @@ class Batched(Delivery):
                 batch = [self._sub.recv()]          # blocks (without the GIL) until something arrives
                 while (sample := self._sub.try_recv()) is not None:
                     batch.append(sample)
+                if self._closed:
+                    return
                 with self.executor.lock:   # the batch in one go: work queued meanwhile sees all of it
                     for sample in batch:
                         sub.handle_sample(sample)
@@ -454,13 +465,17 @@ class Pulled(Delivery):
         self._wake_pub.put(b"", attachment=WAKE)   # end a wait in progress: it holds the channel
         with self._watchdog:
             self._watchdog.notify()   # and the watchdog thread's sleep: it sees the subscription closed
-        for _ in range(500):
-            try:
-                self._sub.undeclare()
-                break
-            except RuntimeError:   # "Already borrowed": the waiting thread has not let go yet
-                time.sleep(0.01)
+        _undeclare_when_free(self._sub)
         self._wake_pub.undeclare()
+
+
+def _undeclare_when_free(subscriber: Any) -> None:
+    for _ in range(500):
+        try:
+            subscriber.undeclare()
+            break
+        except RuntimeError:   # "Already borrowed": the waiting thread has not let go yet
+            time.sleep(0.01)
 
 
 def _backlog(backlog: Any) -> int:

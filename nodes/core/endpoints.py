@@ -183,7 +183,8 @@ class Publisher:
             self._bus.remove_publisher(self)
         self._token.undeclare()
         if self._mirror is not None:
-            self._mirror.close()
+            mirror, self._mirror = self._mirror, None
+            mirror.close()
         self._pub.undeclare()
         for twin in ("_drop_pub", "_remote_pub", "_remote_drop_pub"):
             if self.__dict__.get(twin) is not None:
@@ -274,10 +275,23 @@ class Subscription:
             self._bus.remove_subscription(self)
         self._token.undeclare()
         if self._mirror is not None:
-            self._mirror.close()
+            mirror, self._mirror = self._mirror, None   # it refers back to us: no cycle left behind
+            mirror.close()
         self.closed = True
         self.delivery.close()
+        # The owner often holds this subscription and gave it one of its own methods: let go of that method,
+        # so the owner is freed by reference counting once dropped, not at the cyclic GC's next full
+        # collection (which a process with many long-lived objects runs rarely).
+        self.callback = self.delivery.callback = _closed_callback
 
+
+
+def _closed_callback(*_: Any) -> None:
+    """A destroyed subscription's callback (a message already on its way ends here)."""
+
+
+def _closed_handler(_request: Any) -> Any:
+    raise RuntimeError("the service was destroyed")
 
 
 def _error_payload(reason: str) -> bytes:
@@ -396,8 +410,10 @@ class ServiceServer:
     def destroy(self) -> None:
         self._token.undeclare()
         if self._mirror is not None:
-            self._mirror.close()
+            mirror, self._mirror = self._mirror, None
+            mirror.close()
         self._queryable.undeclare()
+        self.handler = _closed_handler   # the owner's method: see Subscription.destroy
 
 
 def call_raw(session: zenoh.Session, key: str, payload: bytes, timeout: float) -> bytes:
@@ -464,4 +480,5 @@ class Client:
     def destroy(self) -> None:
         self._token.undeclare()
         if self._mirror is not None:
-            self._mirror.close()
+            mirror, self._mirror = self._mirror, None
+            mirror.close()

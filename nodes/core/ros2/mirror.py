@@ -142,6 +142,7 @@ class TopicMirror:
         if not self._latched:
             for kind, watcher in self._watchers.items():
                 self.owner.graph.unwatch(kind, self.entity.data_key, watcher)
+            self._watchers = {}   # partials of our own method: a cycle that only the cyclic GC would free
             self._matching.undeclare()
         self.entity.close()
         self._pub.undeclare()
