@@ -2,7 +2,7 @@
 RSS and CPU drift per process.
 
     python bench/soak.py [--minutes 5] [--mode realtime] [--sample 10] [--sensors]
-    python bench/soak.py --churn [--rounds 3] [--pairs 200]
+    python bench/soak.py --churn [--rounds 3] [--pairs 200] [--names unique|reused]
 
 Starts ``python -m launch humanoid.yaml gui:=false`` (the joint commander bends the knees every 2 s) on a free
 port and, in a separate process, an outside subscriber written with zenoh + msgpack alone: it takes
@@ -19,8 +19,11 @@ within 10 % of the first). Prints a table, then a JSON line.
 ``--churn``: spawn/delete churn instead. After a warm-up of 20 pairs, each round spawns and deletes ``--pairs``
 entities one after the other (each reply awaited), then as many again sent without waiting for any reply
 (URDF robots and SDF models alternately, each with a name of its own). After each round (the job settled) the
-RSS of the simulator, the renderer, the state publisher and the controller manager is sampled; it passes when
-every one ends within 10 MB of where it started.
+RSS of the simulator, the renderer, the state publisher and the controller manager (and of the launcher, whose
+embedded router sees every key) is sampled; it passes when each of the four ends within 10 MB of where it
+started. The warm-up also spawns a model with an OBJ mesh, so the mesh readers the simulator and the renderer
+import in the background at start-up are loaded before the first sample. ``--names reused``: each round
+spawns the same names (what is left then is not per distinct name: not Zenoh's state of distinct keys).
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import signal
 import struct
 import subprocess
@@ -184,18 +188,35 @@ CHURN_SDF = ("<?xml version='1.0'?><sdf version='1.7'><model name='churn'><link 
              "<sphere><radius>0.1</radius></sphere></geometry></visual></link></model></sdf>")
 
 
-def churn_request(index: int) -> tuple[str, dict[str, Any]]:
-    name = f"churn_{index}"
+CHURN_MESH_SDF = ("<?xml version='1.0'?><sdf version='1.7'><model name='churn_mesh'><link name='l'><visual name='v'>"
+                  "<geometry><mesh><uri>model://churn_mesh/meshes/cube.obj</uri></mesh></geometry></visual>"
+                  "</link></model></sdf>")
+CUBE_OBJ = "".join(f"v {x} {y} {z}\n" for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)) + (
+    "f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n")
+
+
+def churn_mesh_model_path(log_dir: Path) -> str:
+    """A model folder with a text mesh (OBJ): spawned once in the warm-up, so the mesh readers that the
+    simulator and the renderer import in the background at start-up are loaded before the first sample."""
+    meshes = log_dir / "models" / "churn_mesh" / "meshes"
+    meshes.mkdir(parents=True, exist_ok=True)
+    (meshes / "cube.obj").write_text(CUBE_OBJ)
+    return str(log_dir / "models")
+
+
+def churn_request(index: int, reuse: int = 0) -> tuple[str, dict[str, Any]]:
+    """The ``index``-th spawn request; ``reuse``: names repeat every ``reuse`` requests (0: never)."""
+    name = f"churn_{index % reuse if reuse else index}"
     return name, {"name": name, "xml": CHURN_URDF if index % 2 == 0 else CHURN_SDF,
                   "initial_pose": {"position": {"x": 3.0 + (index % 10) * 0.5, "y": 3.0, "z": 0.2},
                                    "orientation": {"w": 1.0}}}
 
 
-def churn_round(job: Job, first: int, pairs: int) -> int:
+def churn_round(job: Job, first: int, pairs: int, reuse: int = 0) -> int:
     """``pairs`` spawn/delete pairs awaited one by one, then ``pairs`` sent without waiting; the next index."""
     index = first
     for _ in range(pairs):
-        name, request = churn_request(index)
+        name, request = churn_request(index, reuse)
         index += 1
         reply = job.call("sim/spawn_entity", request, timeout=30)
         if not reply.get("success"):
@@ -205,7 +226,7 @@ def churn_round(job: Job, first: int, pairs: int) -> int:
 
     pending = []
     for _ in range(pairs):   # fire and forget: the replies are collected (and dropped) by Zenoh
-        name, request = churn_request(index)
+        name, request = churn_request(index, reuse)
         index += 1
         pending.append(job.session.get("sim/spawn_entity", payload=msgpack.packb(request), timeout=120))
         pending.append(job.session.get("sim/delete_entity", payload=msgpack.packb({"name": name}), timeout=120))
@@ -222,14 +243,35 @@ def churn_round(job: Job, first: int, pairs: int) -> int:
     return index
 
 
-def run_churn(rounds: int, pairs: int, log_dir: Path, progress=print) -> dict[str, Any]:  # noqa: ANN001
-    job = Job(log_dir, "realtime", commander="none")
-    report: dict[str, Any] = {"rounds": rounds, "pairs": pairs}
+def run_churn(rounds: int, pairs: int, log_dir: Path, progress=print,  # noqa: ANN001
+              names: str = "unique") -> dict[str, Any]:
+    """``names``: "unique" (every spawn a name of its own) or "reused" (each round the same 2 x ``pairs``
+    names: what is left then is not per distinct name, i.e. not the Zenoh state of distinct keys)."""
+    model_path = os.pathsep.join(p for p in (churn_mesh_model_path(log_dir), os.environ.get("ZENROID_MODEL_PATH"))
+                                 if p)
+    saved = os.environ.get("ZENROID_MODEL_PATH")
+    os.environ["ZENROID_MODEL_PATH"] = model_path   # the job's processes inherit it
+    try:
+        job = Job(log_dir, "realtime", commander="none")
+    finally:
+        if saved is None:
+            os.environ.pop("ZENROID_MODEL_PATH")
+        else:
+            os.environ["ZENROID_MODEL_PATH"] = saved
+    reuse = 2 * pairs if names == "reused" else 0
+    report: dict[str, Any] = {"rounds": rounds, "pairs": pairs, "names": names}
     try:
         job.start()
-        processes = {n: p for n, p in job.processes().items() if n in CHURNED}
+        processes = {n: p for n, p in job.processes().items() if n in CHURNED or n == "launch"}
         started = job.started()
-        index = churn_round(job, 0, 10)   # warm-up: lazily imported code, first-use caches, the allocator
+        # warm-up: lazily imported code (the mesh readers too), first-use caches, the allocator
+        reply = job.call("sim/spawn_entity", {"name": "churn_mesh", "xml": CHURN_MESH_SDF}, timeout=120)
+        if not reply.get("success"):
+            raise RuntimeError(f"spawn churn_mesh: {reply.get('status_message')}")
+        job.call("sim/delete_entity", {"name": "churn_mesh"}, timeout=30)
+        index = churn_round(job, 0, 10)
+        if reuse:
+            index = reuse   # the rounds' names start over (the warm-up's are among them)
 
         def settled() -> dict[str, float]:
             time.sleep(5.0)
@@ -239,7 +281,7 @@ def run_churn(rounds: int, pairs: int, log_dir: Path, progress=print) -> dict[st
         progress(f"churn: warmed up, RSS {rss[-1]}")
         for number in range(1, rounds + 1):
             t0 = time.monotonic()
-            index = churn_round(job, index, pairs)
+            index = churn_round(job, index, pairs, reuse)
             rss.append(settled())
             progress(f"churn: round {number} in {time.monotonic() - t0:.0f} s, RSS {rss[-1]}")
         models = job.call("sim/get_model_list", {}).get("model_names", [])
@@ -247,7 +289,8 @@ def run_churn(rounds: int, pairs: int, log_dir: Path, progress=print) -> dict[st
         restarted = {n: c - started.get(n, 0) for n, c in job.started().items() if c > started.get(n, 0)}
         report.update(rss_per_round=rss, growth_mb=growth, leftover_models=[m for m in models if "churn" in m],
                       restarted=restarted, deletes_before_their_spawn=getattr(job, "overtaken", 0))
-        report["pass"] = bool(all(abs(g) <= CHURN_LIMIT_MB for g in growth.values()) and not restarted
+        report["pass"] = bool(all(abs(g) <= CHURN_LIMIT_MB for n, g in growth.items() if n in CHURNED)
+                              and not restarted
                               and not report["leftover_models"])
     finally:
         job.close()
@@ -268,7 +311,8 @@ def churn_table(report: dict[str, Any]) -> str:
     lines = [f"{'process':<24}{'start MB':>10}" + "".join(f"{f'round {i}':>10}" for i in range(1, len(rounds)))
              + f"{'growth MB':>11}"]
     for name in rounds[0]:
-        lines.append(f"{name:<24}" + "".join(f"{r[name]:>10.1f}" for r in rounds) + f"{report['growth_mb'][name]:>11.1f}")
+        label = "launcher (router)" if name == "launch" else name
+        lines.append(f"{label:<24}" + "".join(f"{r[name]:>10.1f}" for r in rounds) + f"{report['growth_mb'][name]:>11.1f}")
     lines.append(f"{report['pairs']} awaited + {report['pairs']} unawaited spawn/delete pairs a round; leftover models "
                  f"{report['leftover_models'] or 'none'}, restarts {report['restarted'] or 'none'}; deletes served "
                  f"before their spawn (then deleted again) {report['deletes_before_their_spawn']}")
@@ -332,6 +376,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rounds", type=int, default=3, help="--churn: rounds (default 3)")
     parser.add_argument("--pairs", type=int, default=200,
                         help="--churn: awaited pairs a round, and as many unawaited (default 200)")
+    parser.add_argument("--names", default="unique", choices=["unique", "reused"],
+                        help="--churn: a name of its own for every spawn (default), or the same ones each round")
     parser.add_argument("--subscriber", nargs=3, metavar=("PORT", "SECONDS", "KEYS"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.subscriber:
@@ -340,7 +386,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.churn:
         with tempfile.TemporaryDirectory(prefix="zenroid-churn-") as tmp:
             report = run_churn(args.rounds, args.pairs, Path(tmp),
-                               progress=lambda s: print(s, file=sys.stderr, flush=True))
+                               progress=lambda s: print(s, file=sys.stderr, flush=True), names=args.names)
         print(churn_table(report))
         print(json.dumps(report, default=str))
         return 0 if report.get("pass") else 1
