@@ -201,6 +201,7 @@ def churn_mesh_model_path(log_dir: Path) -> str:
     meshes = log_dir / "models" / "churn_mesh" / "meshes"
     meshes.mkdir(parents=True, exist_ok=True)
     (meshes / "cube.obj").write_text(CUBE_OBJ)
+    (meshes.parent / "model.sdf").write_text(CHURN_MESH_SDF)   # what makes the folder a model of the path
     return str(log_dir / "models")
 
 
