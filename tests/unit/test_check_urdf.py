@@ -24,6 +24,7 @@ EXPECTED = {
     "several_roots.urdf": (2, "several root links: base, other"),
     "duplicate_link.urdf": (2, "duplicate link name 'a'"),
     "duplicate_joint.urdf": (2, "duplicate joint name 'j1'"),
+    "link_name_wildcard.urdf": (2, "link 'a/*/b': has '*'"),
     "limits_inverted.urdf": (2, "joint 'j1': lower limit 1.5 > upper limit -1.5"),
     "zero_mass.urdf": (2, "link 'a': mass 0 is not positive"),
     "negative_mass.urdf": (2, "link 'a': mass -2 is not positive"),
