@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from lxml import etree
 
+from nodes.core import names
 from nodes.urdf.rendered_sensors import RenderedSensorSpec, parse_rendered_sensors
 from nodes.urdf.rotation import rpy_matrix
 from nodes.urdf.sensors import (
@@ -393,6 +394,9 @@ def parse_urdf(xml: str | bytes) -> RobotModel:
         link_name = element.get("name")
         if not link_name:
             raise UrdfError(f"{_where(element)}: link without a name", element.sourceline)
+        # each link is a frame of tf, of the sensors mounted on it and of the viewer
+        if (problem := names.frame_problem(link_name)) is not None:
+            raise UrdfError(f"link {names.shown(link_name)}: {problem}", element.sourceline)
         if link_name in links:
             duplicate_links.append(link_name)
             duplicate_lines.setdefault(("link", link_name), element.sourceline)

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from nodes.core import names
 from nodes.urdf.frames import frame_links
 from nodes.urdf.model import RobotModel
 from nodes.urdf.rendered_sensors import rendered_sensor_problems
@@ -46,9 +45,6 @@ def _tree_errors(model: RobotModel) -> list[str]:
     errors: list[str] = []
     for name in model.duplicate_links:
         errors.append(f"duplicate link name '{name}'")
-    for name in model.links:   # each link is a TF frame: its name is a frame id for tf, sensors and the viewer
-        if (problem := names.frame_problem(name)) is not None:
-            errors.append(f"link {names.shown(name)}: {problem}")
     for name in model.duplicate_joints:
         errors.append(f"duplicate joint name '{name}'")
     parent_of: dict[str, str] = {}
