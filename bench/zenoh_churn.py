@@ -1,13 +1,15 @@
 """Zenoh alone: what declaring and undeclaring entities on ever new keys leaves in the other sessions.
 
-    python bench/zenoh_churn.py [--rounds 3] [--keys 500] [--observer peer|client] [--churner peer|client]
-                                [--kinds pub,sub,queryable,token] [--no-router]
+    python bench/zenoh_churn.py [--rounds 3] [--keys 500] [--observer peer|client] [--churner peer|client|runtime]
+                                [--kinds pub,sub,queryable,token,matching] [--observer-declares]
+    python bench/zenoh_churn.py --sim [--rounds 3] [--keys 200] [--reuse]
 
 One process hosts a router (as the launcher does), one *observer* session declares nothing (or, with
 ``--observer-declares``, a subscriber on ``**`` as a graph watcher would), and one *churner* session declares,
 per round, ``--keys`` entities of each ``--kinds`` on keys never used before (``r<round>/e<i>/...``) and
-undeclares them all. After each round (settled 2 s) the RSS of every process is sampled. Prints a table, then
-a JSON line.
+undeclares them all (``--churner runtime``: through ``nodes.core`` endpoints, each with its graph token and
+ROS 2 twin). After each round (settled 2 s) the RSS of every process is sampled. Prints a table, then a JSON
+line. ``--sim``: the simulator alone instead, ``--keys`` spawn/delete pairs a round over the wire.
 """
 
 from __future__ import annotations
@@ -154,6 +156,58 @@ def _start(*args: str) -> subprocess.Popen:
     return proc
 
 
+def simulator_alone(rounds: int, entities: int, reuse: bool) -> None:
+    """``--sim``: the simulator alone (this process hosts the router), ``entities`` spawned and deleted a round
+    over the wire, each awaited (URDF robots and SDF models alternately, as bench/soak.py's churn)."""
+    import msgpack
+    import zenoh
+
+    from bench.common import child_env, free_port, loopback, spawn, stop
+    from bench.soak import churn_request
+    from nodes.core.session import open_router
+
+    port = free_port()
+    router = open_router(port)
+    sim = spawn([sys.executable, "-m", "nodes.sim", "--params-file", str(ROOT / "config" / "sim.yaml"),
+                 "--param", "entities:=[]"], env=child_env({"ZENOH_CONNECT": loopback(port)}))
+    session = zenoh.open(_config("client", port, listen=False))
+
+    def call(key: str, request: dict, timeout: float = 30.0) -> dict | None:
+        for reply in session.get(key, payload=msgpack.packb(request), timeout=timeout):
+            if reply.ok is not None:
+                return msgpack.unpackb(reply.ok.payload.to_bytes())
+        return None
+
+    def churn(first: int, count: int) -> None:
+        for index in range(first, first + count):
+            name, request = churn_request(index % 2 if reuse else index)
+            if not (call("sim/spawn_entity", request) or {}).get("success"):
+                print(f"spawn {name} failed", file=sys.stderr)
+            call("sim/delete_entity", {"name": name})
+
+    try:
+        deadline = time.monotonic() + 60
+        while call("sim/get_model_list", {}, 1.0) is None and time.monotonic() < deadline:
+            time.sleep(0.5)
+        churn(0, 20)   # warm-up
+        time.sleep(3.0)
+        rows = [_rss_mb(sim.pid)]
+        for round_ in range(rounds):
+            churn(20 + round_ * entities, entities)
+            time.sleep(3.0)
+            rows.append(_rss_mb(sim.pid))
+            print(f"round {round_ + 1}: simulator {rows[-1]:.1f} MB", file=sys.stderr, flush=True)
+    finally:
+        session.close()
+        stop(sim, 5)
+        router.close()
+    print(f"simulator alone, {entities} spawn/delete pairs a round, names {'reused' if reuse else 'unique'}: "
+          + " -> ".join(f"{r:.1f}" for r in rows) + f" MB ({rows[-1] - rows[0]:+.1f})")
+    print(json.dumps({"bench": "zenoh_churn", "simulator_alone": True, "entities": entities, "rounds": rounds,
+                      "reuse": reuse, "rss_mb": [round(r, 1) for r in rows],
+                      "growth_mb": round(rows[-1] - rows[0], 1)}))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--role", default="")
@@ -164,8 +218,11 @@ def main() -> None:
     parser.add_argument("--observer-declares", action="store_true")
     parser.add_argument("--churner", default="peer")
     parser.add_argument("--kinds", default="pub,sub,queryable,token")
-    parser.add_argument("--no-router", action="store_true")
+    parser.add_argument("--sim", action="store_true", help="the simulator alone, spawning and deleting entities")
+    parser.add_argument("--reuse", action="store_true", help="--sim: the same two names over and over")
     args = parser.parse_args()
+    if args.sim:
+        return simulator_alone(args.rounds, args.keys, args.reuse)
     kinds = args.kinds.split(",")
     _maybe_trim()
     if args.role == "router":
@@ -181,10 +238,7 @@ def main() -> None:
 
     port = free_port()
     procs: dict[str, subprocess.Popen] = {}
-    if not args.no_router:
-        procs["router"] = _start("--role", "router", "--port", str(port))
-    else:   # the observer (a peer) listens on the port, the churner connects to it
-        raise SystemExit("--no-router: not implemented")
+    procs["router"] = _start("--role", "router", "--port", str(port))
     procs["observer"] = _start("--role", "observer", "--port", str(port), "--observer", args.observer,
                                *(["--observer-declares"] if args.observer_declares else []))
     procs["churner"] = _start("--role", "churner", "--port", str(port), "--churner", args.churner,
