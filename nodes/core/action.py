@@ -268,6 +268,9 @@ class ActionServer:
                 h.abort()
         for q in self._queryables:
             q.undeclare()
+        # zenoh-python may keep an undeclared queryable's callback (our bound method) until the object goes:
+        # a cycle through native code, which the cyclic GC cannot see
+        self._queryables = []
         self._feedback.destroy()
         self._status.destroy()
         self._token.undeclare()
@@ -351,6 +354,7 @@ class ActionClient:
 
     def destroy(self) -> None:
         self._feedback_sub.undeclare()
+        self._feedback_sub = None   # and its callback, our bound method (see ActionServer.destroy)
         self._token.undeclare()
         if self._mirror is not None:
             mirror, self._mirror = self._mirror, None

@@ -413,6 +413,7 @@ class ServiceServer:
             mirror, self._mirror = self._mirror, None
             mirror.close()
         self._queryable.undeclare()
+        self._queryable = None   # zenoh-python may keep its callback, our bound method, while it exists
         self.handler = _closed_handler   # the owner's method: see Subscription.destroy
 
 
