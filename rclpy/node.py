@@ -302,7 +302,7 @@ class Node:
         except Exception:  # noqa: BLE001 - nobody latched anything decodable: only live messages then
             return
         if msg is not None and not core.closed:
-            core.delivery.run((msgs.encode(msg) if raw else msg,))
+            core.delivery.run(msgs.encode(msg) if raw else msg)
 
     # ------------------------------------------------------------------ services
     def create_service(self, srv_type: Any, srv_name: str, callback: Callable[[Any, Any], Any], *,

@@ -100,9 +100,19 @@ class Decoded:
     def __init__(self, *, with_key: bool = False, with_source: bool = False) -> None:
         self.with_key = with_key
         self.with_source = with_source
+        if not (with_key or with_source):   # the common case, one call less per message
+            self.sample_arguments = self._value_only   # type: ignore[method-assign]
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(with_key={self.with_key}, with_source={self.with_source})"
+
+    def _value_only(self, sub: Subscription, sample: zenoh.Sample) -> tuple[Any, ...] | None:
+        try:
+            return (msgs.decode(sub.msg_type, sample.payload.to_bytes(), decode_limits()),)
+        except DecodeError as exc:
+            sub.node.logger.warn_throttle(1.0, f"dropped a message on '{sample.key_expr}': {exc}",
+                                          key=f"decode:{sub.key}")
+            return None
 
     def value(self, sub: Subscription, payload: bytes, key: Any) -> Any | None:
         """What the callback gets for ``payload`` (None: refused, and logged)."""
@@ -163,6 +173,19 @@ class Raw(Decoded):
     def value(self, sub: Subscription, payload: bytes, key: Any) -> Any | None:
         return payload
 
+    def _value_only(self, sub: Subscription, sample: zenoh.Sample) -> tuple[Any, ...] | None:
+        return (sample.payload.to_bytes(),)
+
+    def sample_arguments(self, sub: Subscription, sample: zenoh.Sample) -> tuple[Any, ...] | None:
+        # the hardware frames' path (with_source): no call per message beyond this one
+        payload = sample.payload.to_bytes()
+        args: tuple[Any, ...] = (payload, str(sample.key_expr)) if self.with_key else (payload,)
+        if not self.with_source:
+            return args
+        att = sample.attachment
+        raw = att.to_bytes() if att is not None else b""
+        return (*args, ATTACHMENT.unpack(raw)[1] if len(raw) == ATTACHMENT.size else None)
+
     def _takes_object(self, sub: Subscription, published_type: str) -> bool:
         return self.objects and sub.msg_type is not None and published_type == sub.msg_type._type
 
@@ -202,11 +225,11 @@ class Delivery:
         """The Zenoh subscriber: a callback by default (Zenoh's thread delivers)."""
         self._sub = sub.node.session.declare_subscriber(sub.key, sub.handle_sample)
 
-    def run(self, args: tuple[Any, ...]) -> None:
+    def run(self, *args: Any) -> None:
         raise NotImplementedError
 
-    def run_in_process(self, args: tuple[Any, ...]) -> None:
-        self.run(args)
+    def run_in_process(self, *args: Any) -> None:
+        self.run(*args)
 
     def take_pending(self) -> int:
         raise TypeError(f"{self.where} is delivered by {self!r}: take_pending() and wait() need "
@@ -237,18 +260,33 @@ class Executed(Delivery):
 
     def open(self, sub: Subscription) -> None:
         super().open(sub)
-        if self.depth is not None and self.executor.on_spin_thread:
+        # what Executor.dispatch would do, chosen once instead of per message
+        if not self.executor.on_spin_thread:
+            self.run = self._run_locked   # type: ignore[method-assign]
+        elif self.depth is not None:
             self.run = self._run_bounded   # type: ignore[method-assign]
             self.run_in_process = self._run_bounded   # type: ignore[method-assign]
+        else:
+            self.run = self._run_queued   # type: ignore[method-assign]
 
-    def run(self, args: tuple[Any, ...]) -> None:
+    def run(self, *args: Any) -> None:
         self.executor.dispatch(self.callback, *args, where=self.where, group=self.subscription.group)
 
-    def run_in_process(self, args: tuple[Any, ...]) -> None:
+    def _run_locked(self, *args: Any) -> None:
+        """On the delivering thread, one at a time with the node's other callbacks (its executor's lock)."""
+        executor = self.executor
+        with executor.lock:
+            executor.run_callback(self.callback, *args, where=self.where)
+
+    def _run_queued(self, *args: Any) -> None:
+        """Queued for the thread that spins, under the subscription's callback group."""
+        self.executor.put((self.callback, args, self.where, self.subscription.group))
+
+    def run_in_process(self, *args: Any) -> None:
         self.executor.dispatch_in_process(self.callback, *args, where=self.where,
                                           group=self.subscription.group)
 
-    def _run_bounded(self, args: tuple[Any, ...]) -> None:
+    def _run_bounded(self, *args: Any) -> None:
         """The message waits in this subscription's own queue of ``depth``; the executor's queue holds one
         turn per waiting message. When the queue is full the oldest gives way and takes no new turn, so the
         turns always match the messages."""
@@ -271,7 +309,12 @@ class Executed(Delivery):
 class Inline(Delivery):
     """On the delivering Zenoh thread (or the publishing thread in-process), without the node's lock."""
 
-    def run(self, args: tuple[Any, ...]) -> None:
+    def open(self, sub: Subscription) -> None:
+        super().open(sub)
+        run = functools.partial(self.executor.run_callback, self.callback, where=self.where)
+        self.run = self.run_in_process = run   # type: ignore[method-assign]
+
+    def run(self, *args: Any) -> None:
         self.executor.run_callback(self.callback, *args, where=self.where)
 
 
@@ -303,10 +346,10 @@ class Batched(Delivery):
         sub.node.session.put(sub.key, b"", attachment=WAKE, allowed_destination=zenoh.Locality.SESSION_LOCAL)
         _undeclare_when_free(self._sub)
 
-    def run(self, args: tuple[Any, ...]) -> None:
+    def run(self, *args: Any) -> None:
         self.executor.dispatch(self.callback, *args, where=self.where, group=self.subscription.group)
 
-    def run_in_process(self, args: tuple[Any, ...]) -> None:
+    def run_in_process(self, *args: Any) -> None:
         self.executor.dispatch_in_process(self.callback, *args, where=self.where,
                                           group=self.subscription.group)
 
@@ -357,12 +400,14 @@ class Pulled(Delivery):
 
     def declare(self, sub: Subscription) -> None:
         self._sub = sub.node.session.declare_subscriber(sub.key, zenoh.handlers.RingChannel(self.backlog))
+        # the taking thread (the one the owner chose) runs the callback
+        run = functools.partial(self.executor.run_callback, self.callback, where=self.where)
+        self.run = run   # type: ignore[method-assign]
 
-    def run(self, args: tuple[Any, ...]) -> None:
-        """The taking thread (the one the owner chose) runs the callback."""
+    def run(self, *args: Any) -> None:
         self.executor.run_callback(self.callback, *args, where=self.where)
 
-    def run_in_process(self, args: tuple[Any, ...]) -> None:
+    def run_in_process(self, *args: Any) -> None:
         self._in_process.append(args)
         if self._waiting:   # the owner is blocked in Zenoh's recv: an empty local message ends it
             self._wake_pub.put(b"", attachment=WAKE)

@@ -246,7 +246,7 @@ class Subscription:
             return
         args = self.message.object_arguments(self, message, payload, key, source)
         if args is not None:
-            self.delivery.run_in_process(args)
+            self.delivery.run_in_process(*args)
 
     def take_pending(self) -> int:
         """``Pulled``: handle every message that has arrived, on this thread; returns how many."""
@@ -268,7 +268,7 @@ class Subscription:
             return
         args = self._arguments(self, sample)
         if args is not None:
-            self._run(args)
+            self._run(*args)
 
     def destroy(self) -> None:
         if self._bus is not None:
@@ -283,6 +283,8 @@ class Subscription:
         # so the owner is freed by reference counting once dropped, not at the cyclic GC's next full
         # collection (which a process with many long-lived objects runs rarely).
         self.callback = self.delivery.callback = _closed_callback
+        # and of what the delivery bound it into (a partial, a bound method of its own)
+        self._run = self.delivery.run = self.delivery.run_in_process = _closed_callback
 
 
 
