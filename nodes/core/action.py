@@ -20,6 +20,7 @@ from nodes.core import graph
 from nodes.core.endpoints import Publisher, ServiceError, call_raw, decode_request, encoding_for
 from nodes.core.executor import CallbackGroup
 from nodes.core.runtime import NodeRuntime
+from nodes.core.weak_callback import weak_callback
 
 ACCEPTED, EXECUTING, CANCELING, SUCCEEDED, CANCELED, ABORTED = 1, 2, 3, 4, 5, 6
 TERMINAL = frozenset({SUCCEEDED, CANCELED, ABORTED})
@@ -114,9 +115,9 @@ class ActionServer:
         self._status = Publisher(node, GoalStatusArray, f"{key}/status")
         s = node.session
         self._queryables = [
-            s.declare_queryable(f"{key}/send_goal", self.handle_send_goal, complete=True),
-            s.declare_queryable(f"{key}/cancel_goal", self.handle_cancel_goal, complete=True),
-            s.declare_queryable(f"{key}/get_result", self.handle_get_result, complete=True),
+            s.declare_queryable(f"{key}/send_goal", weak_callback(self.handle_send_goal), complete=True),
+            s.declare_queryable(f"{key}/cancel_goal", weak_callback(self.handle_cancel_goal), complete=True),
+            s.declare_queryable(f"{key}/get_result", weak_callback(self.handle_get_result), complete=True),
         ]
         self._token = node.presence.token("act", key, action_type._type)
         self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
@@ -314,7 +315,7 @@ class ActionClient:
         self.action_type = action_type
         self.key = key
         self._feedback_callbacks: dict[bytes, Callable[[Any], None]] = {}
-        self._feedback_sub = node.session.declare_subscriber(f"{key}/feedback", self._on_feedback)
+        self._feedback_sub = node.session.declare_subscriber(f"{key}/feedback", weak_callback(self._on_feedback))
         self._token = node.presence.token("actc", key, action_type._type)
         self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 

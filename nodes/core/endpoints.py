@@ -30,6 +30,7 @@ from nodes.core.graph import parse_key
 from nodes.core.log import truncate
 from nodes.core.runtime import NodeRuntime
 from nodes.core.session import max_payload_bytes
+from nodes.core.weak_callback import weak_callback
 
 ENCODING = "application/msgpack"
 
@@ -369,7 +370,7 @@ class ServiceServer:
         self.inline = inline
         self.group: CallbackGroup | None = None   # on a spinning thread: its callback group (rclpy's)
         self._encoding = encoding_for(srv_type.Response._type)
-        self._queryable = node.session.declare_queryable(key, self.handle_query, complete=True)
+        self._queryable = node.session.declare_queryable(key, weak_callback(self.handle_query), complete=True)
         self._token = node.presence.token("srv", key, srv_type._type)
         self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 

@@ -16,6 +16,7 @@ import zenoh
 import msgs
 from nodes.core.endpoints import Publisher, encoding_for
 from nodes.core.runtime import NodeRuntime
+from nodes.core.weak_callback import weak_callback
 
 
 class LatchedPublisher:
@@ -27,7 +28,7 @@ class LatchedPublisher:
         self._encoding = encoding_for(msg_type._type)
         self._last: bytes | None = None
         self._lock = threading.Lock()
-        self._queryable = node.session.declare_queryable(self.key, self._on_query, complete=True)
+        self._queryable = node.session.declare_queryable(self.key, weak_callback(self._on_query), complete=True)
 
     def publish(self, msg: Any) -> None:
         if getattr(msg, "_type", None) != self.msg_type._type:

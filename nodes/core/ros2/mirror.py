@@ -25,6 +25,7 @@ from msgs.compiled import packb
 from nodes.core.ros2 import attachment, names
 from nodes.core.ros2.graph import RosGraph
 from nodes.core.session import max_payload_bytes
+from nodes.core.weak_callback import weak_callback
 
 
 class MirrorOwner(Protocol):
@@ -109,10 +110,13 @@ class TopicMirror:
         self._lock = threading.Lock()
         self._foreign = {names.PUBLISHER: False, names.SUBSCRIPTION: False}  # ROS 2 tokens on our data key
         self._watchers = {kind: functools.partial(self._update, kind) for kind in self._foreign}
-        self._matching = self._pub.declare_matching_listener(lambda _status: self._update())
+        self._matching = self._pub.declare_matching_listener(weak_callback(self._on_matching))
         for kind, watcher in self._watchers.items():
             owner.graph.watch(kind, self.entity.data_key, watcher)
         self._update()  # the listener reports changes only: a subscriber may already be there
+
+    def _on_matching(self, _status: Any) -> None:
+        self._update()
 
     def _update(self, kind: str | None = None, present: bool = False) -> None:
         # Reads the matching status itself rather than trusting an event (the first read and a listener call
@@ -197,7 +201,7 @@ class SubscriptionMirror:
                 return
             try:
                 if publishers:
-                    self._sub = self.owner.session.declare_subscriber(self.entity.data_key, self._on_sample)
+                    self._sub = self.owner.session.declare_subscriber(self.entity.data_key, weak_callback(self._on_sample))
                 else:
                     sub, self._sub = self._sub, None
                     sub.undeclare()
@@ -273,7 +277,7 @@ class ServiceMirror:
         self.handle = handle
         self.request_type, self.response_type = f"{srv_type}_Request", f"{srv_type}_Response"
         self.entity = _Entity(owner, names.SERVICE, ros_name, srv_type)
-        self._queryable = owner.session.declare_queryable(self.entity.data_key, self._on_query, complete=True)
+        self._queryable = owner.session.declare_queryable(self.entity.data_key, weak_callback(self._on_query), complete=True)
 
     def _on_query(self, query: zenoh.Query) -> None:
         att = attachment.unpack(query.attachment.to_bytes() if query.attachment is not None else None)
