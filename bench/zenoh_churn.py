@@ -91,6 +91,12 @@ def role_observer(mode: str, port: int, declares: bool) -> None:
         sys.stdin.readline()
 
 
+def _round_keys(line: str, keys: int) -> list[str]:
+    """The key prefixes of the round ``line`` names: new ones every round, or round 0's again (CHURN_REUSE=1)."""
+    round_ = 0 if os.environ.get("CHURN_REUSE") == "1" else int(line)
+    return [f"r{round_}/e{i}" for i in range(keys)]
+
+
 def role_runtime_churner(port: int, keys: int, kinds: list[str]) -> None:
     """The same churn through our node runtime (``nodes.core``): each endpoint with its graph token and, unless
     ZENROID_ROS2=0, its ROS 2 twin."""
@@ -101,16 +107,14 @@ def role_runtime_churner(port: int, keys: int, kinds: list[str]) -> None:
     node = Node("churner", connect=[f"tcp/127.0.0.1:{port}"])
     print("ready", flush=True)
     for line in sys.stdin:
-        round_ = int(line)
         held = []
-        for i in range(keys):
-            base = f"/r{0 if os.environ.get('CHURN_REUSE') == '1' else round_}/e{i}"
+        for base in _round_keys(line, keys):
             if "pub" in kinds:
-                held.append(node.create_publisher(joint_state, f"{base}/pub"))
+                held.append(node.create_publisher(joint_state, f"/{base}/pub"))
             if "sub" in kinds:
-                held.append(node.create_subscription(joint_state, f"{base}/sub", lambda _m: None))
+                held.append(node.create_subscription(joint_state, f"/{base}/sub", lambda _m: None))
             if "queryable" in kinds:
-                held.append(node.create_service(trigger, f"{base}/srv", lambda _r: trigger.Response()))
+                held.append(node.create_service(trigger, f"/{base}/srv", lambda _r: trigger.Response()))
         time.sleep(0.5)
         for entity in held:
             node.destroy_entity(entity)
@@ -125,10 +129,8 @@ def role_churner(mode: str, port: int, keys: int, kinds: list[str]) -> None:
     with zenoh.open(_config(mode, port, listen=True)) as session:
         print("ready", flush=True)
         for line in sys.stdin:
-            round_ = int(line)
             held = []
-            for i in range(keys):
-                base = f"r{0 if os.environ.get('CHURN_REUSE') == '1' else round_}/e{i}"
+            for base in _round_keys(line, keys):
                 if "pub" in kinds:
                     held.append(session.declare_publisher(f"{base}/pub"))
                 if "matching" in kinds:   # a publisher that follows its matching status (our ROS 2 twins)
