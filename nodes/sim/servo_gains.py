@@ -10,7 +10,8 @@ an inertia ``I`` with a natural frequency ``sqrt(kp / I)``. So for each joint, i
   in the worst pose of the joints around it; for a prismatic joint: the mass times g);
 - its inertia about the axis (the mass, for a prismatic joint);
 - ``kp = max(load / STATIC_ERROR, inertia * BANDWIDTH**2)``, at most what the links beyond it alone can follow
-  at the physics' rate (``inertia_beyond * MAX_FREQUENCY**2``), ``kd = 2 * DAMPING_RATIO * sqrt(kp * inertia)``.
+  at the physics' rate (``inertia_beyond * MAX_FREQUENCY**2``), ``kd = 2 * ratio * sqrt(kp * inertia)``, where the
+  damping ratio is light for a floating-base robot and near critical for a fixed-base one.
 
 One rule for a 1 kg cart, a 57 kg humanoid and a 35 kg G1; ``gains:`` in config/sim.yaml overrides it per
 joint pattern.
@@ -28,7 +29,12 @@ from nodes.sim.config import Gains
 GRAVITY = 9.81
 STATIC_ERROR = 0.015         # rad (m for a prismatic joint) off target under the full static load
 BANDWIDTH = 2 * math.pi * 4  # rad/s: the servo's natural frequency on the inertia it moves, at least
-DAMPING_RATIO = 0.05         # of the inertia's critical damping (DART's implicit spring adds its own)
+# Of the inertia's critical damping (DART's implicit spring adds its own). A standing robot needs light damping:
+# near-critical damping on every joint tips a humanoid over. Nothing tips a fixed-base robot (an arm, a cart
+# on its rail) over, and lightly damped it rings for seconds after each move, outside a trajectory goal's
+# stopped-velocity tolerance.
+FLOATING_DAMPING_RATIO = 0.05
+FIXED_BASE_DAMPING_RATIO = 0.7
 # rad/s: the fastest a servo may make the links beyond it move. Stiffer, a light foot on point contacts
 # rings at the physics' step (1 kHz by default) and the robot chatters off its feet.
 MAX_FREQUENCY = 1000.0
@@ -85,6 +91,7 @@ def physics_gains(skeleton, joint_names: list[str], floating: bool) -> dict[str,
         if lows:
             ground = min(lows.values())
             supports = {name for name, z in lows.items() if z <= ground + SUPPORT_BAND}
+    damping_ratio = FLOATING_DAMPING_RATIO if floating else FIXED_BASE_DAMPING_RATIO
     out: dict[str, Gains] = {}
     for name in joint_names:
         joint = skeleton.getJoint(name)
@@ -119,6 +126,6 @@ def physics_gains(skeleton, joint_names: list[str], floating: bool) -> dict[str,
             inertia_beyond = _axis_inertia(beyond, point, axis)
         own = inertia_beyond if held else inertia   # what the servo alone swings (a foot, not the body)
         kp = max(min(max(load / STATIC_ERROR, inertia * BANDWIDTH ** 2), own * MAX_FREQUENCY ** 2), MIN_GAINS.kp)
-        kd = max(2 * DAMPING_RATIO * math.sqrt(kp * inertia), MIN_GAINS.kd)
+        kd = max(2 * damping_ratio * math.sqrt(kp * inertia), MIN_GAINS.kd)
         out[name] = Gains(kp=kp, kd=kd)
     return out
