@@ -33,6 +33,7 @@ from nodes.core.delivery import Executed, Inline, Raw
 from nodes.core.latched import fetch_latched
 from nodes.core.names import NameError_
 from nodes.core.node import Node as CoreNode
+from nodes.core.parameter_values import list_parameters as list_parameter_names
 from rclpy._entities import (
     Client,
     GuardCondition,
@@ -60,6 +61,7 @@ from rclpy.exceptions import (
 )
 from rclpy.logging import RcutilsLogger, _register
 from rclpy.parameter import Parameter
+from rclpy.parameter_service import ParameterService
 from rclpy.qos import (
     DurabilityPolicy,
     QoSProfile,
@@ -162,6 +164,10 @@ class Node:
         if self._zr.use_sim_time:
             self._zr_clock._sim_source = self._zr_sim_now
         self._zr.parameters.add_on_set_callback(self._zr_on_core_set)
+        if start_parameter_services:   # the ROS 2 wire's six services answer from this node (rclpy's)
+            self._zr.ros_parameters.backend = ParameterService(self)
+        else:
+            self._zr.ros_parameters.close()
         self._zr_context._add_node(self)
         if automatically_declare_parameters_from_overrides:
             for pname, value in overrides.items():
@@ -642,12 +648,13 @@ class Node:
         return self.get_parameter(name).get_parameter_value()
 
     def list_parameters(self, prefixes: list[str], depth: int) -> Any:
-        names = sorted(n for n in self._zr_parameters
-                       if not prefixes or any(n == p or n.startswith(p + ".") for p in prefixes))
-        if depth:
-            names = [n for n in names if n.count(".") < depth]
-        found_prefixes = sorted({n.rsplit(".", 1)[0] for n in names if "." in n})
-        return _rcl("ListParametersResult", names=names, prefixes=found_prefixes)
+        if not isinstance(prefixes, list) or not all(isinstance(p, str) for p in prefixes):
+            raise TypeError("The prefixes argument must be a list of str")
+        if not isinstance(depth, int):
+            raise TypeError("The depth must be instance of type int")
+        if depth < 0:
+            raise ValueError("The depth must be greater than or equal to zero")
+        return list_parameter_names(list(self._zr_parameters), prefixes, depth)
 
     def add_on_set_parameters_callback(self, callback: Callable[[list[Parameter]], Any]) -> Any:
         self._zr_on_set.insert(0, callback)
@@ -711,6 +718,8 @@ class Node:
                     if problem:
                         return SetParametersResult(False, problem)
                 old = self._zr_parameters[p.name]
+                if p.type_ == Parameter.Type.NOT_SET and not getattr(descriptor, "dynamic_typing", False):
+                    return SetParametersResult(False, "Static parameter cannot be undeclared")
                 if not getattr(descriptor, "dynamic_typing", False) and old.type_ != Parameter.Type.NOT_SET \
                         and p.type_ != old.type_ and p.type_ != Parameter.Type.NOT_SET:
                     return SetParametersResult(

@@ -1,41 +1,50 @@
-"""``AsyncParameterClient``: another node's parameters through the services every zenroid node offers
-(``~/get_parameters``, ``~/set_parameters``: names and YAML values). Futures complete on the spinning thread
-with rcl_interfaces-shaped responses (``.values``, ``.results``)."""
+"""``AsyncParameterClient``: another node's parameters through rcl_interfaces' six parameter services on the
+ROS 2 wire, as rclpy's does. It reaches zenroid nodes, rclpy-on-zenroid nodes and real ROS 2 nodes over
+rmw_zenoh alike. Futures complete on the spinning thread with the services' responses."""
 
 from __future__ import annotations
 
 import time
 from typing import Any
 
-from msgs.zenroid_msgs import GetParameters, SetParameters
-from nodes.core.params import dump_value, parse_value
+import msgs
+from nodes.core.params import load_params_file
 from rclpy._entities import _calls
-from rclpy.exceptions import not_implemented
 from rclpy.parameter import Parameter
 from rclpy.task import Future
 
+_SERVICES = {
+    "get_parameters": "GetParameters",
+    "set_parameters": "SetParameters",
+    "set_parameters_atomically": "SetParametersAtomically",
+    "list_parameters": "ListParameters",
+    "describe_parameters": "DescribeParameters",
+    "get_parameter_types": "GetParameterTypes",
+}
+_TIMEOUT_S = 10.0
 
-class _Result:
-    def __init__(self, **fields: Any) -> None:
-        self.__dict__.update(fields)
 
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self.__dict__})"
+def _srv(name: str) -> Any:
+    return msgs.get_type(f"rcl_interfaces/srv/{name}")
+
+
+def _parameter_msgs(parameters: list[Any]) -> list[Any]:
+    return [p.to_parameter_msg() if isinstance(p, Parameter) else p for p in parameters]
 
 
 class AsyncParameterClient:
     def __init__(self, node: Any, remote_node_name: str, qos_profile: Any = None, callback_group: Any = None
                  ) -> None:
         self._node = node
-        name = remote_node_name if remote_node_name.startswith("/") else \
-            "/" + "/".join(p for p in (node.get_namespace().strip("/"), remote_node_name) if p)
-        self.remote_node_name = name
-        self._get = node._zr.create_client(GetParameters, f"{name}/get_parameters")
-        self._set = node._zr.create_client(SetParameters, f"{name}/set_parameters")
+        self.remote_node_name = remote_node_name
         self._group = node._zr_group(callback_group)
+        self._clients: dict[str, Any] = {}
+        for service, type_name in _SERVICES.items():
+            key = node._zr_resolve(f"{remote_node_name}/{service}")
+            self._clients[service] = node._zr.create_ros2_client(_srv(type_name), "/" + key)
 
     def services_are_ready(self) -> bool:
-        return self._get.service_is_ready() and self._set.service_is_ready()
+        return all(client.service_is_ready() for client in self._clients.values())
 
     def wait_for_services(self, timeout_sec: float | None = None) -> bool:
         deadline = None if timeout_sec is None else time.monotonic() + timeout_sec
@@ -45,15 +54,18 @@ class AsyncParameterClient:
             time.sleep(0.05)
         return True
 
-    def _async(self, work: Any, callback: Any = None) -> Future:
+    def _call(self, service: str, request: Any, callback: Any = None) -> Future:
+        """The response on a Future completed on the node's spinning thread (the call waits on a thread of
+        its own)."""
         future = Future()
         if callback is not None:
             future.add_done_callback(callback)
         executor = self._node._zr.executor
+        client = self._clients[service]
 
         def run() -> None:
             try:
-                result, error = work(), None
+                result, error = client.call(request, timeout=_TIMEOUT_S), None
             except Exception as exc:  # noqa: BLE001 - the future carries it
                 result, error = None, exc
 
@@ -68,54 +80,47 @@ class AsyncParameterClient:
         _calls.submit(run)
         return future
 
+    def list_parameters(self, prefixes: list[str] | None = None, depth: int | None = None,
+                        callback: Any = None) -> Future:
+        request = _srv("ListParameters").Request(prefixes=list(prefixes or []), depth=int(depth or 0))
+        return self._call("list_parameters", request, callback)
+
     def get_parameters(self, names: list[str], callback: Any = None) -> Future:
-        def work() -> Any:
-            response = self._get.call(GetParameters.Request(names=list(names)), timeout=10.0)
-            values = dict(zip(response.names, response.values_yaml))
-            return _Result(values=[Parameter(n, value=parse_value(values[n])).get_parameter_value()
-                                   if n in values else Parameter(n).get_parameter_value() for n in names])
-        return self._async(work, callback)
+        return self._call("get_parameters", _srv("GetParameters").Request(names=list(names)), callback)
 
-    def set_parameters(self, parameters: list[Parameter], callback: Any = None) -> Future:
-        def work() -> Any:
-            response = self._set.call(SetParameters.Request(
-                names=[p.name for p in parameters], values_yaml=[dump_value(p.value) for p in parameters]),
-                timeout=10.0)
-            from rclpy.node import SetParametersResult
-
-            return _Result(results=[SetParametersResult(ok, reason)
-                                    for ok, reason in zip(response.successful, response.reasons)])
-        return self._async(work, callback)
-
-    def list_parameters(self, prefixes: list[str] | None = None, depth: int = 0, callback: Any = None) -> Future:
-        def work() -> Any:
-            response = self._get.call(GetParameters.Request(names=[]), timeout=10.0)
-            names = [n for n in response.names
-                     if not prefixes or any(n == p or n.startswith(p + ".") for p in prefixes)]
-            return _Result(result=_Result(names=names, prefixes=sorted({n.rsplit(".", 1)[0]
-                                                                        for n in names if "." in n})))
-        return self._async(work, callback)
-
-    def set_parameters_atomically(self, parameters: list[Parameter], callback: Any = None) -> Future:
-        raise not_implemented("AsyncParameterClient.set_parameters_atomically")
+    def set_parameters(self, parameters: list[Any], callback: Any = None) -> Future:
+        request = _srv("SetParameters").Request(parameters=_parameter_msgs(parameters))
+        return self._call("set_parameters", request, callback)
 
     def describe_parameters(self, names: list[str], callback: Any = None) -> Future:
-        raise not_implemented("AsyncParameterClient.describe_parameters")
+        return self._call("describe_parameters", _srv("DescribeParameters").Request(names=list(names)), callback)
 
     def get_parameter_types(self, names: list[str], callback: Any = None) -> Future:
-        raise not_implemented("AsyncParameterClient.get_parameter_types")
+        return self._call("get_parameter_types", _srv("GetParameterTypes").Request(names=list(names)), callback)
+
+    def set_parameters_atomically(self, parameters: list[Any], callback: Any = None) -> Future:
+        request = _srv("SetParametersAtomically").Request(parameters=_parameter_msgs(parameters))
+        return self._call("set_parameters_atomically", request, callback)
 
     def delete_parameters(self, names: list[str], callback: Any = None) -> Future:
-        raise not_implemented("AsyncParameterClient.delete_parameters")
+        """Each name set to NOT_SET, as rclpy does: the remote node refuses it for a statically typed
+        parameter ("Static parameter cannot be undeclared")."""
+        request = _srv("SetParameters").Request(parameters=[Parameter(n).to_parameter_msg() for n in names])
+        return self._call("set_parameters", request, callback)
+
+    def _file_parameters(self, parameter_file: str) -> list[Parameter]:
+        node_name = self.remote_node_name.rstrip("/").rsplit("/", 1)[-1]
+        values = load_params_file(parameter_file, node_name)
+        return [Parameter(n, value=v) for n, v in values.items() if not isinstance(v, dict)]
 
     def load_parameter_file(self, parameter_file: str, use_wildcard: bool = False, callback: Any = None) -> Future:
-        from nodes.core.params import load_params_file
+        return self.set_parameters(self._file_parameters(parameter_file), callback)
 
-        node_name = self.remote_node_name.rsplit("/", 1)[-1]
-        values = load_params_file(parameter_file, node_name)
-        return self.set_parameters([Parameter(n, value=v) for n, v in values.items() if not isinstance(v, dict)],
-                                   callback)
+    def load_parameter_file_atomically(self, parameter_file: str, use_wildcard: bool = False,
+                                       callback: Any = None) -> Future:
+        return self.set_parameters_atomically(self._file_parameters(parameter_file), callback)
 
     def destroy(self) -> None:
-        self._node._zr.destroy_entity(self._get)
-        self._node._zr.destroy_entity(self._set)
+        for client in self._clients.values():
+            self._node._zr.destroy_entity(client)
+        self._clients.clear()

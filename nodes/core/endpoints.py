@@ -359,10 +359,11 @@ class Deferred:
 
 class ServiceServer:
     """A queryable on ``key``: request map in, response map out (docs/architecture.md, Services and actions).
-    A handler may return a ``Deferred`` and answer later."""
+    A handler may return a ``Deferred`` and answer later. ``ros2_only``: served on the ROS 2 wire alone (no
+    queryable or graph token on our key, which another service of ours may use)."""
 
     def __init__(self, node: NodeRuntime, srv_type: Any, key: str, handler: Callable[[Any], Any], *,
-                 inline: bool = False) -> None:
+                 inline: bool = False, ros2_only: bool = False) -> None:
         self.node = node
         self.srv_type = srv_type
         self.key = key
@@ -370,8 +371,11 @@ class ServiceServer:
         self.inline = inline
         self.group: CallbackGroup | None = None   # on a spinning thread: its callback group (rclpy's)
         self._encoding = encoding_for(srv_type.Response._type)
-        self._queryable = node.session.declare_queryable(key, weak_callback(self.handle_query), complete=True)
-        self._token = node.presence.token("srv", key, srv_type._type)
+        self._queryable: Any = None
+        self._token: Any = None
+        if not ros2_only:
+            self._queryable = node.session.declare_queryable(key, weak_callback(self.handle_query), complete=True)
+            self._token = node.presence.token("srv", key, srv_type._type)
         self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
 
     def handle_query(self, query: zenoh.Query) -> None:
@@ -411,11 +415,13 @@ class ServiceServer:
             query.drop()
 
     def destroy(self) -> None:
-        self._token.undeclare()
+        if self._token is not None:
+            self._token.undeclare()
         if self._mirror is not None:
             mirror, self._mirror = self._mirror, None
             mirror.close()
-        self._queryable.undeclare()
+        if self._queryable is not None:
+            self._queryable.undeclare()
         self._queryable = None   # zenoh-python may keep its callback, our bound method, while it exists
         self.handler = _closed_handler   # the owner's method: see Subscription.destroy
 
@@ -486,3 +492,39 @@ class Client:
         if self._mirror is not None:
             mirror, self._mirror = self._mirror, None
             mirror.close()
+
+
+class Ros2Client:
+    """A client of a service on the ROS 2 wire (CDR, rmw_zenoh): ROS 2 nodes' services and the ones our
+    nodes offer there only. Same calls as ``Client``."""
+
+    def __init__(self, node: NodeRuntime, srv_type: Any, key: str) -> None:
+        self.node = node
+        self.srv_type = srv_type
+        self.key = key
+        self._wire = node.presence.ros2_client(key, srv_type._type)
+
+    def call(self, request: Any | None = None, timeout: float = 2.0) -> Any:
+        request = self.srv_type.Request() if request is None else request
+        try:
+            data = self._wire.call_msgpack(msgs.encode(request), timeout)
+        except RuntimeError as exc:
+            raise ServiceError(str(exc)) from None
+        try:
+            return msgs.decode(self.srv_type.Response, data)
+        except DecodeError as exc:
+            raise ServiceError(f"service '/{self.key}' sent a bad response: {exc}") from None
+
+    def service_is_ready(self) -> bool:
+        return self._wire.server_is_ready()
+
+    def wait_for_service(self, timeout: float = 5.0) -> bool:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.service_is_ready():
+                return True
+            time.sleep(0.05)
+        return False
+
+    def destroy(self) -> None:
+        self._wire.close()

@@ -10,7 +10,7 @@ import zenoh
 
 from nodes.core.action import ActionClient, ActionServer
 from nodes.core.delivery import Decoded, Delivery
-from nodes.core.endpoints import Client, Publisher, ServiceServer, Subscription
+from nodes.core.endpoints import Client, Publisher, Ros2Client, ServiceServer, Subscription
 from nodes.core.latched import LatchedPublisher, fetch_latched
 from nodes.core.runtime import NodeRuntime
 
@@ -40,11 +40,16 @@ class EndpointFactory:
         return self._keep(Subscription(self._runtime, msg_type, self._resolve(topic, wildcards=True), callback,
                                        delivery=delivery, message=message))
 
-    def service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *, inline: bool) -> ServiceServer:
-        return self._keep(ServiceServer(self._runtime, srv_type, self._resolve(name), handler, inline=inline))
+    def service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *, inline: bool,
+                ros2_only: bool = False) -> ServiceServer:
+        return self._keep(ServiceServer(self._runtime, srv_type, self._resolve(name), handler, inline=inline,
+                                        ros2_only=ros2_only))
 
     def client(self, srv_type: Any, name: str) -> Client:
         return self._keep(Client(self._runtime, srv_type, self._resolve(name)))
+
+    def ros2_client(self, srv_type: Any, name: str) -> Ros2Client:
+        return self._keep(Ros2Client(self._runtime, srv_type, self._resolve(name)))
 
     def action_server(self, action_type: Any, name: str, **kwargs: Any) -> ActionServer:
         return self._keep(ActionServer(self._runtime, action_type, self._resolve(name), **kwargs))

@@ -30,13 +30,14 @@ from nodes.core import graph, names
 from nodes.core.action import ActionClient, ActionServer
 from nodes.core.clock import NodeClock
 from nodes.core.delivery import Decoded, Delivery, Inline, legacy_subscription_options
-from nodes.core.endpoints import Client, Publisher, ServiceServer, Subscription
+from nodes.core.endpoints import Client, Publisher, Ros2Client, ServiceServer, Subscription
 from nodes.core.executor import Executor, Timer
 from nodes.core.factory import EndpointFactory
 from nodes.core.log import Logger
 from nodes.core.log_services import LoggerLevelServices
 from nodes.core.node_parameters import NodeParameters
 from nodes.core.presence import GraphPresence
+from nodes.core.ros_parameters import CoreParameterBackend, RosParameterServices
 from nodes.core.session import open_peer
 
 
@@ -117,6 +118,9 @@ class Node:
         if self.use_sim_time:
             self.create_subscription(Clock, "/sim/clock", self.clock.on_clock, delivery=Inline())
         self.parameters.serve(self.create_service)
+        # rcl_interfaces' six, on the ROS 2 wire only (our keys of the same names keep the two above)
+        self.ros_parameters = RosParameterServices(functools.partial(Node.create_service, self),
+                                                   self.destroy_entity, CoreParameterBackend(self.parameters))
         LoggerLevelServices(self.logger, (self.name, self.fully_qualified_name)).serve(self.create_service)
         # the launcher's liveness probe, answered here on Zenoh's thread (a flood of requests does not delay
         # it); the mark it queues shows, at the next probe, whether the spinner still takes work
@@ -204,11 +208,18 @@ class Node:
         return self._endpoints.subscription(msg_type, topic, callback, delivery=delivery, message=message)
 
     def create_service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *,
-                       inline: bool = False) -> ServiceServer:
-        return self._endpoints.service(srv_type, name, handler, inline=inline)
+                       inline: bool = False, ros2_only: bool = False) -> ServiceServer:
+        """``ros2_only=True``: the service exists on the ROS 2 wire only (nothing while that is off), so
+        its name may be one that a zenroid service of another type already uses on our key."""
+        return self._endpoints.service(srv_type, name, handler, inline=inline, ros2_only=ros2_only)
 
     def create_client(self, srv_type: Any, name: str) -> Client:
         return self._endpoints.client(srv_type, name)
+
+    def create_ros2_client(self, srv_type: Any, name: str) -> Ros2Client:
+        """A client of a service on the ROS 2 wire (CDR): a ROS 2 node's, or one of ours offered there only
+        (rcl_interfaces' parameter services). RuntimeError when the wire is off (``ZENROID_ROS2=0``)."""
+        return self._endpoints.ros2_client(srv_type, name)
 
     def create_action_server(self, action_type: Any, name: str, **kwargs: Any) -> ActionServer:
         return self._endpoints.action_server(action_type, name, **kwargs)

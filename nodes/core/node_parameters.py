@@ -50,6 +50,19 @@ class NodeParameters:
         return dict(self._overrides)
 
     def set(self, name: str, value: Any) -> Any:
+        value = self.check(name, value)
+        self._values[name] = value
+        return value
+
+    def set_all(self, values: dict[str, Any]) -> dict[str, Any]:
+        """All or nothing: every value is checked (declaration, then the on-set callbacks) before any is
+        stored; the first problem raises ParameterError and nothing changes."""
+        checked = {name: self.check(name, value) for name, value in values.items()}
+        self._values.update(checked)
+        return checked
+
+    def check(self, name: str, value: Any) -> Any:
+        """The value ``set`` would store (coerced), or ParameterError saying why it would be refused."""
         desc = self._descriptors.get(name)
         if desc is None:
             raise ParameterError(f"parameter '{name}' is not declared")
@@ -61,8 +74,14 @@ class NodeParameters:
             problem = callback(name, value)
             if problem:
                 raise ParameterError(f"parameter '{name}': {problem}")
-        self._values[name] = value
         return value
+
+    def descriptor(self, name: str) -> ParameterDescriptor | None:
+        return self._descriptors.get(name)
+
+    def names(self) -> list[str]:
+        """Declared names, in declaration order."""
+        return list(self._values)
 
     def store(self, name: str, value: Any) -> None:
         """Record a value another layer has checked (rclpy's parameters, with their own descriptors and

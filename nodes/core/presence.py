@@ -53,6 +53,12 @@ class GraphPresence:
         """The endpoint's twin on the ROS 2 wire (an object with ``close()``), None when not mirrored."""
         return self._ros2.mirror(endpoint) if self._ros2 is not None else None
 
+    def ros2_client(self, key: str, type_name: str) -> Any:
+        """A client of the ROS 2 service ``/key`` on rmw_zenoh's wire; RuntimeError when the wire is off."""
+        if self._ros2 is None:
+            raise RuntimeError(f"service '/{key}': the ROS 2 wire is off in this process ({ros2.ENV_ENABLE}=0)")
+        return self._ros2.service_client(key, type_name)
+
     def close(self) -> None:
         if self._ros2 is not None:
             self._ros2.close()

@@ -1,16 +1,25 @@
 """A ROS 2 node played by zenoh-ros2-sdk (an independent rmw_zenoh client; nothing of zenroid is imported):
 ``listen TOPIC TYPE DEFINITION HASH SECONDS`` prints each message as a JSON line; ``talk TOPIC TYPE
 DEFINITION HASH FIELDS_JSON SECONDS`` publishes the message every 0.1 s; ``call SERVICE TYPE REQUEST_DEF
-RESPONSE_DEF HASH FIELDS_JSON`` prints the response as a JSON line."""
+RESPONSE_DEF HASH FIELDS_JSON`` prints the response as a JSON line; ``param DEFINITIONS NODE REQUESTS_JSON
+[HASHES_JSON]`` calls a node's rcl_interfaces parameter services as ``ros2 param`` does and prints each
+response as a JSON line. DEFINITIONS is a folder of rcl_interfaces' upstream .msg/.srv files: the peer builds
+the message types and computes the type hashes from them itself, except for the services HASHES_JSON names
+(``{"DescribeParameters": "RIHS01_..."}``). Each request is ``["get", [names]]``, ``["types", [names]]``,
+``["describe", [names]]``, ``["list", [prefixes], depth]``, ``["set", [[name, type, value], ...]]`` or
+``["set_atomically", [[name, type, value], ...]]`` (type: rcl_interfaces/ParameterType's number)."""
 
 from __future__ import annotations
 
 import dataclasses
 import json
+import re
 import sys
 import time
+from pathlib import Path
 
 from zenoh_ros2_sdk import ROS2Publisher, ROS2ServiceClient, ROS2Subscriber
+from zenoh_ros2_sdk.utils import compute_service_type_hash
 
 
 def plain(value):
@@ -20,7 +29,92 @@ def plain(value):
         return value.tolist()
     if isinstance(value, (list, tuple)):
         return [plain(v) for v in value]
+    if isinstance(value, bytes):
+        return list(value)
     return value
+
+
+_SERVICES = {"get": ("GetParameters", "get_parameters"), "types": ("GetParameterTypes", "get_parameter_types"),
+             "describe": ("DescribeParameters", "describe_parameters"),
+             "list": ("ListParameters", "list_parameters"), "set": ("SetParameters", "set_parameters"),
+             "set_atomically": ("SetParametersAtomically", "set_parameters_atomically")}
+_VALUE_FIELDS = [None, "bool_value", "integer_value", "double_value", "string_value", "byte_array_value",
+                 "bool_array_value", "integer_array_value", "double_array_value", "string_array_value"]
+
+
+def _strip(text: str) -> str:
+    return "\n".join(line for line in text.splitlines() if line.strip() and not line.lstrip().startswith("#"))
+
+
+def _used(definition: str, known: dict[str, str]) -> list[str]:
+    """The rcl_interfaces messages a definition needs, transitively (each once, dependencies after)."""
+    out: list[str] = []
+    todo = [definition]
+    while todo:
+        for line in todo.pop().splitlines():
+            base = re.split(r"[\[<]", line.split()[0])[0] if line.split() else ""
+            if base in known and base not in out:
+                out.append(base)
+                todo.append(known[base])
+    return out
+
+
+def _qualified(definition: str, known: dict[str, str]) -> str:
+    """Field types of the package spelled ``rcl_interfaces/Name`` (a service's own parts would otherwise
+    look for them under ``srv``)."""
+    return "\n".join(f"rcl_interfaces/{line}" if line.split() and re.split(r"[\[<]", line.split()[0])[0] in known
+                     else line for line in definition.splitlines())
+
+
+def _full(definition: str, known: dict[str, str]) -> str:
+    """A definition followed by its dependencies' (``MSG: pkg/Name``), as ROS 2 bags store them."""
+    parts = [_qualified(definition, known)]
+    for name in _used(definition, known):
+        parts.append("=" * 80 + f"\nMSG: rcl_interfaces/{name}\n{_qualified(known[name], known)}")
+    return "\n".join(parts) + "\n"
+
+
+def call_parameter_services(common: dict, definitions: Path, node: str, requests: list, hashes: dict) -> None:
+    import numpy as np
+
+    known = {p.stem: _strip(p.read_text()) for p in sorted((definitions / "msg").glob("*.msg"))}
+    clients: dict[str, ROS2ServiceClient] = {}
+    for op, *args in requests:
+        srv, service = _SERVICES[op]
+        if op not in clients:
+            request_def, response_def = (_strip(part) for part in
+                                         (definitions / "srv" / f"{srv}.srv").read_text().split("---", 1))
+            type_hash = hashes.get(srv) or compute_service_type_hash(
+                f"rcl_interfaces/srv/{srv}", request_def, response_def,
+                dependencies={f"rcl_interfaces/msg/{n}": known[n] for n in known})
+            clients[op] = ROS2ServiceClient(f"{node}/{service}", f"rcl_interfaces/srv/{srv}",
+                                            request_definition=_full(request_def, known),
+                                            response_definition=_full(response_def, known),
+                                            type_hash=type_hash, timeout=20.0, **common)
+        client = clients[op]
+        if op in ("get", "types", "describe"):
+            response = client.call(names=list(args[0]))
+        elif op == "list":
+            response = client.call(prefixes=list(args[0]), depth=int(args[1]))
+        else:
+            types = client.session_mgr.store.types
+            value_cls = types["rcl_interfaces/msg/ParameterValue"]
+            parameter_cls = types["rcl_interfaces/msg/Parameter"]
+            parameters = []
+            for name, ptype, value in args[0]:
+                fields = dict(type=ptype, bool_value=False, integer_value=0, double_value=0.0, string_value="",
+                              byte_array_value=np.array([], np.uint8), bool_array_value=np.array([], bool),
+                              integer_array_value=np.array([], np.int64),
+                              double_array_value=np.array([], np.float64), string_array_value=[])
+                field = _VALUE_FIELDS[ptype]
+                if field is not None:
+                    kind = {5: np.uint8, 6: bool, 7: np.int64, 8: np.float64}.get(ptype)
+                    fields[field] = np.array(value, kind) if kind is not None else value
+                parameters.append(parameter_cls(name=name, value=value_cls(**fields)))
+            response = client.call(parameters=parameters)
+        if response is None:
+            raise SystemExit(f"no response from {node}/{service}")
+        print(json.dumps({"op": op, "response": plain(response)}), flush=True)
 
 
 def main(argv: list[str]) -> int:
@@ -48,6 +142,11 @@ def main(argv: list[str]) -> int:
         response = client.call(**json.loads(fields))
         print(json.dumps(plain(response)), flush=True)
         return 0 if response is not None else 1
+    if mode == "param":
+        definitions, node, requests = argv[2:5]
+        hashes = json.loads(argv[5]) if len(argv) > 5 else {}
+        call_parameter_services(common, Path(definitions), node, json.loads(requests), hashes)
+        return 0
     print(f"unknown mode {mode}", file=sys.stderr)
     return 2
 

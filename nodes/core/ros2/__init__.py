@@ -17,7 +17,7 @@ from typing import Any
 
 import zenoh
 
-from nodes.core.ros2 import mirror, names
+from nodes.core.ros2 import client, mirror, names
 from nodes.core.ros2.graph import RosGraph
 
 ENV_ENABLE = "ZENROID_ROS2"
@@ -139,6 +139,12 @@ class Ros2Node:
         except Exception as exc:  # noqa: BLE001 - the ROS 2 wire must never break our own endpoint
             self.warn(f"ROS 2 wire: '{key}' not offered to ROS 2: {type(exc).__name__}: {exc}")
         return None
+
+    def service_client(self, key: str, srv_type: str) -> client.ServiceClient:
+        """A client of the ROS 2 service named by our ``key`` (``/`` + key), in CDR on rmw_zenoh's wire."""
+        if self._closed:
+            raise RuntimeError("the node is closed")
+        return client.ServiceClient(self, names.ros_service_name(key), srv_type)
 
     def close(self) -> None:
         if self._closed:

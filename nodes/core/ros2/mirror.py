@@ -54,7 +54,7 @@ def _to_msgpack(type_name: str, cdr_payload: bytes) -> bytes:
     return packb(cdr.decode(type_name, cdr_payload))
 
 
-class _Entity:
+class Entity:
     """One liveliness token of ours (and the GID derived from it)."""
 
     def __init__(self, owner: MirrorOwner, kind: str, ros_name: str, type_name: str,
@@ -90,7 +90,7 @@ class TopicMirror:
         qos = names.LATCHED_QOS if latched else names.Qos(reliable=reliable)
         self.owner = owner
         self.type_name = type_name
-        self.entity = _Entity(owner, names.PUBLISHER, names.ros_topic_name(key, type_name), type_name, qos)
+        self.entity = Entity(owner, names.PUBLISHER, names.ros_topic_name(key, type_name), type_name, qos)
         session = owner.session
         if latched:
             # rmw_zenoh's transient local: zenoh-ext's advanced publisher with a one-sample cache that late
@@ -184,7 +184,7 @@ class SubscriptionMirror:
         self.owner = owner
         self.target = subscription
         self.type_name = subscription.msg_type._type
-        self.entity = _Entity(owner, names.SUBSCRIPTION, names.ros_topic_name(subscription.key, self.type_name),
+        self.entity = Entity(owner, names.SUBSCRIPTION, names.ros_topic_name(subscription.key, self.type_name),
                               self.type_name)
         self._lock = threading.Lock()
         self._sub: zenoh.Subscriber | None = None
@@ -276,7 +276,7 @@ class ServiceMirror:
         self.key = key
         self.handle = handle
         self.request_type, self.response_type = f"{srv_type}_Request", f"{srv_type}_Response"
-        self.entity = _Entity(owner, names.SERVICE, ros_name, srv_type)
+        self.entity = Entity(owner, names.SERVICE, ros_name, srv_type)
         self._queryable = owner.session.declare_queryable(self.entity.data_key, weak_callback(self._on_query), complete=True)
 
     def _on_query(self, query: zenoh.Query) -> None:
@@ -327,16 +327,16 @@ def action_server(owner: MirrorOwner, server: Any) -> Group:
 
 
 def service_client(owner: MirrorOwner, client: Any) -> Group:
-    return Group([_Entity(owner, names.CLIENT, names.ros_service_name(client.key), client.srv_type._type)])
+    return Group([Entity(owner, names.CLIENT, names.ros_service_name(client.key), client.srv_type._type)])
 
 
 def action_client(owner: MirrorOwner, client: Any) -> Group:
     action = client.action_type._type
     key = client.key
     return Group([
-        _Entity(owner, names.CLIENT, names.ros_action_service(key, "send_goal"), f"{action}_SendGoal"),
-        _Entity(owner, names.CLIENT, names.ros_action_service(key, "cancel_goal"), "action_msgs/srv/CancelGoal"),
-        _Entity(owner, names.CLIENT, names.ros_action_service(key, "get_result"), f"{action}_GetResult"),
-        _Entity(owner, names.SUBSCRIPTION, f"/{key}/_action/feedback", f"{action}_FeedbackMessage"),
-        _Entity(owner, names.SUBSCRIPTION, f"/{key}/_action/status", "action_msgs/msg/GoalStatusArray"),
+        Entity(owner, names.CLIENT, names.ros_action_service(key, "send_goal"), f"{action}_SendGoal"),
+        Entity(owner, names.CLIENT, names.ros_action_service(key, "cancel_goal"), "action_msgs/srv/CancelGoal"),
+        Entity(owner, names.CLIENT, names.ros_action_service(key, "get_result"), f"{action}_GetResult"),
+        Entity(owner, names.SUBSCRIPTION, f"/{key}/_action/feedback", f"{action}_FeedbackMessage"),
+        Entity(owner, names.SUBSCRIPTION, f"/{key}/_action/status", "action_msgs/msg/GoalStatusArray"),
     ])
