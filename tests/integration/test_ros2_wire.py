@@ -258,7 +258,9 @@ def test_ros2_wire_off_and_internal_keys(router, session, monkeypatch):
                    message="the joint_states MP token")
         time.sleep(0.5)
         tokens = ros_tokens(session)
-        assert not any("hardware" in t or "get_parameters" in t for t in tokens), tokens
+        assert not any("hardware" in t or "zenroid_msgs" in t for t in tokens), tokens
+        # get_parameters on the ROS 2 wire is rcl_interfaces' (zenroid's YAML one stays on our key)
+        assert any("%sim%get_parameters/rcl_interfaces::srv::dds_::GetParameters_/" in t for t in tokens), tokens
     finally:
         node.destroy()
     monkeypatch.setenv("ZENROID_ROS2", "0")
