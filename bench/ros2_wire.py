@@ -1,6 +1,8 @@
 """What the ROS 2 wire (rmw_zenoh mirror) costs: CDR codec speed, publish cost and one-way latency of a
 22-joint JointState (the humanoid's joint_states) with the wire off, on without a ROS 2 subscriber (idle,
-the lazy case) and on with one (CDR encoded and sent). Prints a table, then one JSON line.
+the lazy case) and on with one (CDR encoded and sent), and what a node costs to create with the wire off and
+on (its graph tokens and, on the wire, rcl_interfaces' six parameter services). Prints a table, then one JSON
+line.
 
     python bench/ros2_wire.py [--rate 1000] [--seconds 3] [--runs 3]
 """
@@ -121,9 +123,32 @@ def run_once(mode: str, endpoint: str, rate: float, seconds: float) -> dict:
             "publish_us": cost_ns / count / 1000, "lost": count - received, "cdr": cdr_received[0]}
 
 
+def node_cost(nodes: int = 40, rounds: int = 7) -> dict[str, float]:
+    """Median ms to create one node (``nodes`` sharing a session, then destroyed), wire off and on in turn."""
+    from nodes.core import Node
+    from nodes.core.session import open_peer
+
+    def once(mode: str, endpoint: str) -> dict:
+        os.environ["ZENROID_ROS2"] = "0" if mode == "off" else "1"
+        session = open_peer([endpoint])
+        try:
+            start = time.perf_counter()
+            made = [Node(f"n{i}", namespace="cost", session=session, log_level="warn") for i in range(nodes)]
+            took = time.perf_counter() - start
+            for node in made:
+                node.destroy()
+        finally:
+            session.close()
+        return {"ms": took / nodes * 1000}
+
+    runs = interleaved_runs(("off", "on"), rounds, once)
+    return {f"node_ms_{mode}": statistics.median(r["ms"] for r in results) for mode, results in runs.items()}
+
+
 def main() -> None:
     args = pacing_arguments(__doc__.splitlines()[0])
 
+    node_ms = node_cost()
     codec_us = codec()
     results = interleaved_runs(MODES, args.runs, lambda mode, endpoint: run_once(mode, endpoint, args.rate,
                                                                                   args.seconds))
@@ -141,9 +166,12 @@ def main() -> None:
     for m in MODES:
         print(f"{labels[m]:<34}{med[m]['publish_us']:>11.1f}{med[m]['p50']:>9.1f}{med[m]['p99']:>9.1f}{lost[m]:>6}")
     print(f"CDR messages received by the ROS 2 side: {cdr_sent} of {int(args.rate * args.seconds) * args.runs}")
+    print(f"creating a node (40 on one session, median of 7): {node_ms['node_ms_off']:.2f} ms with the wire off, "
+          f"{node_ms['node_ms_on']:.2f} ms on")
     summary = {f"{m}_{k}": round(med[m][k], 1) for m in MODES for k in ("publish_us", "p50", "p99")}
     summary.update({f"{m}_lost": lost[m] for m in MODES})
     summary.update({k: round(v, 1) for k, v in codec_us.items()})
+    summary.update({k: round(v, 2) for k, v in node_ms.items()})
     summary.update({"cdr_received": cdr_sent, "messages_per_run": int(args.rate * args.seconds), "runs": args.runs})
     print(json.dumps(summary))
 

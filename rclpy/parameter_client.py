@@ -10,6 +10,7 @@ from typing import Any
 import msgs
 from nodes.core.params import load_params_file
 from rclpy._entities import _calls
+from rclpy.exceptions import not_implemented
 from rclpy.parameter import Parameter
 from rclpy.task import Future
 
@@ -119,6 +120,9 @@ class AsyncParameterClient:
     def load_parameter_file_atomically(self, parameter_file: str, use_wildcard: bool = False,
                                        callback: Any = None) -> Future:
         return self.set_parameters_atomically(self._file_parameters(parameter_file), callback)
+
+    def on_parameter_event(self, callback: Any) -> Any:
+        raise not_implemented("AsyncParameterClient.on_parameter_event (no /parameter_events topic)")
 
     def destroy(self) -> None:
         for client in self._clients.values():
