@@ -1,7 +1,8 @@
 """``zenroid param``: list, get, set, dump and load parameters of a running node (``ros2 param``).
 
 ``set`` reports what the node did: a parameter the node only reads at start-up is refused with the reason
-(read-only), never answered "successful" while nothing changes.
+(read-only), never answered "successful" while nothing changes. ``describe`` and ``delete`` ask rcl_interfaces'
+parameter services on the ROS 2 wire, as ``ros2 param`` does; the others zenroid's YAML services.
 """
 
 from __future__ import annotations
@@ -12,12 +13,17 @@ from typing import Any
 
 import yaml
 
+import msgs
 from msgs.zenroid_msgs import GetParameters as _Get
 from msgs.zenroid_msgs import SetParameters as _Set
 from nodes.core import ServiceError
 from nodes.core.params import ParameterError, dump_value, load_params_file, parse_value
 from nodes.tools.common import add_common, cli_node, require_node, write_line
 from nodes.tools.errors import Failed, UsageError
+
+_Describe = msgs.get_type("rcl_interfaces/srv/DescribeParameters")
+_RosSet = msgs.get_type("rcl_interfaces/srv/SetParameters")
+_RosParameter = msgs.get_type("rcl_interfaces/msg/Parameter")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -33,6 +39,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p.add_argument("node")
     p.add_argument("name")
     p.add_argument("value", help="YAML value")
+    add_common(p)
+    p = sub.add_parser("describe", help="parameters' type, description and constraints (ROS 2 wire)")
+    p.add_argument("node")
+    p.add_argument("names", nargs="+")
+    add_common(p)
+    p = sub.add_parser("delete", help="undeclare a parameter (refused for a statically typed one; ROS 2 wire)")
+    p.add_argument("node")
+    p.add_argument("name")
     add_common(p)
     p = sub.add_parser("dump", help="every parameter as a ROS params file (YAML)")
     p.add_argument("node")
@@ -59,6 +73,8 @@ def run(args: argparse.Namespace) -> int:
                 loaded = load_params_file(args.file, name, ns)
             except ParameterError as exc:
                 raise UsageError(str(exc)) from None
+        if args.cmd in ("describe", "delete"):
+            return _over_ros2(node, target, args)
         try:
             get = node.create_client(_Get, f"{target}/get_parameters")
             if args.cmd == "set":
@@ -90,6 +106,52 @@ def run(args: argparse.Namespace) -> int:
     for pname, value in values.items():
         write_line(f"  {pname}: {dump_value(value)}")
     return 0
+
+
+_TYPE_NAMES = ("not set", "boolean", "integer", "double", "string", "byte array", "boolean array",
+               "integer array", "double array", "string array")   # ros2param's spelling
+
+
+def _over_ros2(node: Any, target: str, args: argparse.Namespace) -> int:
+    """``describe`` and ``delete`` through rcl_interfaces' services, printed as ``ros2 param`` prints them."""
+    try:
+        if args.cmd == "describe":
+            client = node.create_ros2_client(_Describe, f"{target}/describe_parameters")
+            descriptors = client.call(_Describe.Request(names=list(args.names)), timeout=10.0).descriptors
+            if not descriptors:
+                raise Failed(f"{target} does not declare all of {', '.join(args.names)}")
+            for d in descriptors:
+                _print_descriptor(d)
+            return 0
+        client = node.create_ros2_client(_RosSet, f"{target}/set_parameters")
+        request = _RosSet.Request(parameters=[_RosParameter(name=args.name)])   # NOT_SET: delete, as rclpy's
+        results = client.call(request, timeout=10.0).results
+    except (ServiceError, RuntimeError) as exc:
+        raise Failed(str(exc)) from None
+    if results and results[0].successful:
+        write_line("Deleted parameter successfully")
+        return 0
+    reason = results[0].reason if results else "no answer"
+    write_line(f"Deleting parameter failed: {reason}")
+    return 1
+
+
+def _print_descriptor(d: Any) -> None:
+    write_line(f"Parameter name: {d.name}")
+    write_line(f"  Type: {_TYPE_NAMES[d.type] if d.type < len(_TYPE_NAMES) else d.type}")
+    if d.description:
+        write_line(f"  Description: {d.description}")
+    write_line("  Constraints:")
+    if d.read_only:
+        write_line("    Read only: true")
+    ranges = [*d.floating_point_range, *d.integer_range]
+    if ranges:
+        write_line(f"    Min value: {ranges[0].from_value}")
+        write_line(f"    Max value: {ranges[0].to_value}")
+        if ranges[0].step:
+            write_line(f"    Step: {ranges[0].step}")
+    if d.additional_constraints:
+        write_line(f"    Additional constraints: {d.additional_constraints}")
 
 
 def _values(response: Any) -> dict[str, Any]:

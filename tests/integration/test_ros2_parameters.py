@@ -53,6 +53,11 @@ def ros2_param(zenoh_port: int, node: str, *requests: list) -> dict[str, list]:
     return answers
 
 
+def zenroid(router: str, *args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "nodes.tools.cli", *args], capture_output=True, text=True,
+                          env=child_env({"ZENOH_CONNECT": router}), cwd=ROOT, timeout=60)
+
+
 def value_of(value: dict):
     field = [None, "bool_value", "integer_value", "double_value", "string_value", "byte_array_value",
              "bool_array_value", "integer_array_value", "double_array_value", "string_array_value"][value["type"]]
@@ -151,5 +156,14 @@ def test_a_ros2_client_gets_lists_describes_and_sets_a_core_nodes_parameters(rou
         zenroid_get = msgs.get_type("zenroid_msgs/srv/GetParameters")
         client = node.create_client(zenroid_get, "/lab/tuned/get_parameters")
         assert client.call(zenroid_get.Request(names=["gain"]), timeout=10.0).values_yaml == ["2.5"]
+        # zenroid param describe / delete speak the ROS 2 services, printing as ros2 param does
+        described = zenroid(router, "param", "describe", "/lab/tuned", "gain", "mode")
+        assert described.returncode == 0, described.stdout + described.stderr
+        assert ("Parameter name: gain\n  Type: double\n  Description: controller gain\n  Constraints:\n"
+                "    Min value: 0.0\n    Max value: 10.0\n") in described.stdout, described.stdout
+        assert "Parameter name: mode\n  Type: string\n  Constraints:\n    Read only: true" in described.stdout
+        deleted = zenroid(router, "param", "delete", "/lab/tuned", "gain")
+        assert deleted.returncode == 1 and "Deleting parameter failed: parameter 'gain': static parameter " \
+            "cannot be undeclared" in deleted.stdout, deleted.stdout + deleted.stderr
     finally:
         node.destroy()
