@@ -38,12 +38,15 @@ def ros_env(tmp_path: Path) -> dict[str, str]:
     return env
 
 
+def _peer_env() -> dict[str, str]:
+    return {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "ZENOH_CONNECT", "ROS_DOMAIN_ID")}
+
+
 def ros2_param(zenoh_port: int, node: str, *requests: list) -> dict[str, list]:
     """The peer's answers to ``requests`` (ros2_peer.py ``param``), by operation in order."""
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "ZENOH_CONNECT", "ROS_DOMAIN_ID")}
     done = subprocess.run([sys.executable, str(PEER), "param", str(zenoh_port), str(RCL_INTERFACES), node,
                            json.dumps(list(requests)), json.dumps(HASHES)],
-                          capture_output=True, text=True, timeout=120, env=env, cwd=PEER.parent)
+                          capture_output=True, text=True, timeout=120, env=_peer_env(), cwd=PEER.parent)
     assert done.returncode == 0, done.stdout + done.stderr[-3000:]
     answers: dict[str, list] = {}
     for line in done.stdout.splitlines():
@@ -167,3 +170,30 @@ def test_a_ros2_client_gets_lists_describes_and_sets_a_core_nodes_parameters(rou
             "cannot be undeclared" in deleted.stdout, deleted.stdout + deleted.stderr
     finally:
         node.destroy()
+
+
+def test_rclpys_parameter_client_reaches_a_ros2_node_played_by_zenoh_ros2_sdk(processes, zenoh_port,
+                                                                               ros_env) -> None:
+    parameters = {"gain": [DOUBLE, 1.0], "gain_doubled": [DOUBLE, 2.0], "mode": [STRING, "idle"]}
+    server = subprocess.Popen([sys.executable, str(PEER), "param_server", str(zenoh_port), str(RCL_INTERFACES),
+                               "/gain_node", json.dumps(parameters), "90", json.dumps(HASHES)],
+                              env=_peer_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              cwd=PEER.parent)
+    try:
+        tuner = processes.start(str(PROGRAMS / "parameter_client.py"), "2.5", name="tuner", env=ros_env)
+        assert tuner.wait(timeout=60) == 0, processes.output(tuner)
+        out = processes.output(tuner)
+        assert "set gain: successful=True" in out and "gain values now [2.5, 2.0]" in out, out
+        inspector = processes.start(str(PROGRAMS / "parameter_inspector.py"), name="inspector", env=ros_env)
+        assert inspector.wait(timeout=60) == 0, processes.output(inspector)
+        out = processes.output(inspector)
+        assert ("describe: [('gain', 3, 'played by zenoh-ros2-sdk', False), "
+                "('mode', 4, 'played by zenoh-ros2-sdk', False)]") in out, out
+        assert "types: [3, 4]" in out and "atomically with mode: successful=True" in out, out
+        assert "delete: successful=False reason='gain: not a 0 parameter of this node'" in out, out
+        assert "list: ['gain', 'gain_doubled', 'mode']" in out and "values now [4.0, 2.0]" in out, out
+    finally:
+        server.terminate()
+        seen, errors = server.communicate(timeout=30)
+    applied = [json.loads(line) for line in seen.splitlines() if line.startswith("{")]
+    assert {"set": "gain", "value": 2.5} in applied and {"set": "mode", "value": "run"} in applied, seen + errors
