@@ -1,7 +1,8 @@
 """rcl_interfaces' parameter services on the ROS 2 wire, proved from the other side: zenoh-ros2-sdk
 (tests/support/ros2_peer.py, an independent rmw_zenoh client that builds the types and computes the hashes
 from rcl_interfaces' upstream definitions) gets, lists, describes and sets the parameters of an rclpy program
-and of a nodes.core node; rclpy's AsyncParameterClient describes, types, sets atomically and deletes."""
+and of a nodes.core node; rclpy's AsyncParameterClient describes, types, sets atomically and deletes, on an
+rclpy program and on a ROS 2 node's parameter services played by zenoh-ros2-sdk."""
 
 from __future__ import annotations
 
