@@ -136,7 +136,10 @@ class Parameter:
                  T.INTEGER_ARRAY: "integer_array_value", T.DOUBLE_ARRAY: "double_array_value",
                  T.STRING_ARRAY: "string_array_value"}.get(self._type_)
         if field is not None:
-            setattr(value, field, list(self._value) if isinstance(self._value, (tuple, array.array)) else self._value)
+            data = self._value
+            if self._type_ == T.BYTE_ARRAY and isinstance(data, (list, tuple)):   # rclpy's: a list of bytes
+                data = b"".join(x if isinstance(x, bytes) else bytes([x]) for x in data)
+            setattr(value, field, list(data) if isinstance(data, (tuple, array.array)) else data)
         return value
 
     def to_parameter_msg(self) -> Any:

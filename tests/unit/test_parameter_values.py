@@ -129,3 +129,14 @@ def test_a_core_node_answers_as_rclpy_does() -> None:
     assert not result.successful and params.get("gain") == 3.0
     assert backend.set_atomically([_set("gain", pv.to_msg(4)), _set("gains", pv.to_msg("{}"))]).successful
     assert params.get("gain") == 4.0 and isinstance(params.get("gain"), float)
+
+
+def test_rclpy_parameters_become_values_the_wire_carries() -> None:
+    from rclpy.parameter import Parameter as RclpyParameter
+
+    for value in ([b"\x01", b"\x02"], b"\x01\x02", [1, 2]):   # rclpy's byte arrays are lists of bytes
+        msg = RclpyParameter("b", RclpyParameter.Type.BYTE_ARRAY, value).get_parameter_value()
+        assert msg.byte_array_value == b"\x01\x02"
+        assert pv.from_msg(msgs.decode(ParameterValue, msgs.encode(msg))) == b"\x01\x02"
+    back = RclpyParameter.from_parameter_msg(Parameter(name="g", value=pv.to_msg([0.5, 1.0])))
+    assert (back.type_, back.value) == (RclpyParameter.Type.DOUBLE_ARRAY, [0.5, 1.0])
