@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import msgs
 from nodes.core.endpoints import MAX_ARRAY_LENGTH, ServiceError, call_raw, decode_limits
+from rclpy._qos_events import PublisherEvents, SubscriptionEvents
 from rclpy.exceptions import not_implemented
 from rclpy.qos import QoSProfile
 from rclpy.task import Future
@@ -53,6 +54,8 @@ class Publisher:
         self._node, self._core, self.msg_type = node, core, msg_type
         self.qos_profile, self.callback_group, self.event_callbacks = qos, callback_group, event_callbacks
         self._raw = hasattr(core, "publish_raw")   # checked once encoded: sent as those bytes
+        self._events = PublisherEvents(node, core.key, qos, event_callbacks, callback_group) \
+            if PublisherEvents.needed(qos, event_callbacks) else None
 
     @property
     def topic_name(self) -> str:
@@ -74,6 +77,8 @@ class Publisher:
             self._core.publish_raw(payload)
         else:
             self._core.publish(msg)   # a latched publisher keeps the message for late joiners
+        if self._events is not None:
+            self._events.published()
 
     def get_subscription_count(self) -> int:
         return self._node.count_subscribers(self.topic_name)
@@ -82,7 +87,14 @@ class Publisher:
         raise not_implemented("Publisher.wait_for_all_acked")
 
     def assert_liveliness(self) -> None:
-        raise not_implemented("Publisher.assert_liveliness")
+        """MANUAL_BY_TOPIC: tell the subscriptions this publisher is alive (publishing does too); with the
+        other policies there is nothing to assert."""
+        if self._events is not None:
+            self._events.asserted()
+
+    def _close_events(self) -> None:
+        if self._events is not None:
+            self._events.close()
 
     def destroy(self) -> None:
         self._node.destroy_publisher(self)
@@ -96,10 +108,15 @@ class Publisher:
 
 class Subscription:
     def __init__(self, node: Node, core: Any, msg_type: Any, callback: Any, qos: QoSProfile, callback_group: Any,
-                 event_callbacks: Any, raw: bool) -> None:
+                 event_callbacks: Any, raw: bool, events: SubscriptionEvents | None = None) -> None:
         self._node, self._core, self.msg_type, self.callback = node, core, msg_type, callback
         self.qos_profile, self.callback_group, self.event_callbacks, self.raw = qos, callback_group, \
             event_callbacks, raw
+        self._events = events
+
+    def _close_events(self) -> None:
+        if self._events is not None:
+            self._events.close()
 
     @property
     def topic_name(self) -> str:

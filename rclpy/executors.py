@@ -15,6 +15,7 @@ from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
+from nodes.core.executor import CallbackGroup as CoreCallbackGroup
 from nodes.core.executor import Executor as CoreExecutor
 from nodes.core.spinner import Spinner
 from rclpy.context import Context, get_default_context
@@ -51,6 +52,9 @@ class Executor:
         # tasks (create_task, done callbacks, coroutine steps): a queue of their own in the same spin
         self._tasks = CoreExecutor(self._report, on_spin_thread=True)
         self._tasks.propagate_errors = True
+        # tasks run side by side on a multithreaded executor, as in rclpy (a task that blocks, such as an
+        # execute callback that sleeps, leaves the others their threads); each task is one at a time by itself
+        self._tasks.default_group = CoreCallbackGroup(exclusive=False)
         self._tasks_spun = False   # the task queue joins the spin with the first task (one queue less to look at)
 
     @staticmethod

@@ -45,6 +45,8 @@ from rclpy._entities import (
     _call_maybe_async,
     ros_name,
 )
+from rclpy._qos_events import SubscriptionEvents, wire_qos
+from rclpy._qos_timing import seconds
 from rclpy.callback_groups import CallbackGroup, MutuallyExclusiveCallbackGroup
 from rclpy.clock import Clock, ROSClock
 from rclpy.context import Context, get_default_context
@@ -274,7 +276,8 @@ class Node:
         key = self._zr_resolve(topic)
         core = self._zr.create_publisher(
             msg_type, "/" + key, reliable=qos.reliability != ReliabilityPolicy.BEST_EFFORT,
-            latched=qos.durability == DurabilityPolicy.TRANSIENT_LOCAL)
+            latched=qos.durability == DurabilityPolicy.TRANSIENT_LOCAL, lifespan=seconds(qos.lifespan),
+            ros2_qos=wire_qos(qos))
         cls = publisher_class or Publisher
         publisher = cls(self, core, msg_type, qos, self._zr_group(callback_group), event_callbacks)
         self._zr_entities["publishers"].append(publisher)
@@ -291,10 +294,14 @@ class Node:
         key = self._zr_resolve(topic)
         group = self._zr_group(callback_group)
         run = _call_maybe_async(self, callback)
-        core = self._zr.create_subscription(msg_type, "/" + key, run, delivery=Executed(depth=queue_depth(qos)),
-                                            message=Raw() if raw else None)
+        events = SubscriptionEvents(self, key, qos, event_callbacks, group) \
+            if SubscriptionEvents.needed(qos, event_callbacks) else None
+        delivery = Executed(depth=queue_depth(qos)) if events is None else events.delivery(queue_depth(qos))
+        core = self._zr.create_subscription(msg_type, "/" + key, run if events is None else events.callback(run),
+                                            delivery=delivery, message=Raw() if raw else None,
+                                            ros2_qos=wire_qos(qos))
         core.group = group
-        subscription = Subscription(self, core, msg_type, callback, qos, group, event_callbacks, raw)
+        subscription = Subscription(self, core, msg_type, callback, qos, group, event_callbacks, raw, events)
         self._zr_entities["subscriptions"].append(subscription)
         if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL:
             threading.Thread(target=self._zr_fetch_latched, args=(core, msg_type, key, raw),
@@ -380,12 +387,14 @@ class Node:
 
     def destroy_publisher(self, publisher: Publisher) -> bool:
         if self._zr_drop("publishers", publisher):
+            publisher._close_events()
             self._zr.destroy_entity(publisher._core)
             return True
         return False
 
     def destroy_subscription(self, subscription: Subscription) -> bool:
         if self._zr_drop("subscriptions", subscription):
+            subscription._close_events()
             self._zr.destroy_entity(subscription._core)
             return True
         return False
@@ -428,6 +437,8 @@ class Node:
         self._zr_destroyed = True
         for timer in self._zr_entities["timers"]:
             timer._core.cancel()
+        for entity in [*self._zr_entities["publishers"], *self._zr_entities["subscriptions"]]:
+            entity._close_events()
         for items in self._zr_entities.values():
             items.clear()
         self._zr.destroy()
@@ -498,11 +509,15 @@ class Node:
     def count_services(self, service_name: str) -> int:
         return self._zr_count("srv", service_name)
 
-    def get_publishers_info_by_topic(self, topic_name: str, no_mangle: bool = False) -> Any:
-        raise not_implemented("Node.get_publishers_info_by_topic")
+    def get_publishers_info_by_topic(self, topic_name: str, no_mangle: bool = False) -> list[Any]:
+        from rclpy._graph_info import topic_info
 
-    def get_subscriptions_info_by_topic(self, topic_name: str, no_mangle: bool = False) -> Any:
-        raise not_implemented("Node.get_subscriptions_info_by_topic")
+        return topic_info(self._zr.session, self._zr_resolve(topic_name), publishers=True)
+
+    def get_subscriptions_info_by_topic(self, topic_name: str, no_mangle: bool = False) -> list[Any]:
+        from rclpy._graph_info import topic_info
+
+        return topic_info(self._zr.session, self._zr_resolve(topic_name), publishers=False)
 
     def wait_for_node(self, fully_qualified_node_name: str, timeout: float) -> bool:
         import time

@@ -4,8 +4,8 @@
 - durability TRANSIENT_LOCAL: the publisher keeps its last message and a late subscription fetches it when it
   is created (``nodes/core/latched.py``); Zenoh keeps one message per publisher, not ``depth``;
 - history/depth: KEEP_LAST bounds what waits for the spinning thread to ``depth`` messages per subscription,
-  the newest kept (``queue_depth``; rmw_zenoh's subscription queue); KEEP_ALL keeps all; deadline, lifespan
-  and liveliness are accepted and not enforced.
+  the newest kept (``queue_depth``; rmw_zenoh's subscription queue); KEEP_ALL keeps all;
+- deadline, lifespan and liveliness: ``rclpy/_qos_events.py`` (docs/rclpy.md, QoS events).
 """
 
 from __future__ import annotations

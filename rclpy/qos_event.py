@@ -1,11 +1,4 @@
-"""rclpy.qos_event: the older name of ``rclpy.event_handler``."""
+"""rclpy.qos_event: the older name of ``rclpy.event_handler`` (Humble)."""
 
-from rclpy.event_handler import (
-    PublisherEventCallbacks,
-    QoSPublisherEventType,
-    QoSSubscriptionEventType,
-    SubscriptionEventCallbacks,
-)
-
-__all__ = ["PublisherEventCallbacks", "QoSPublisherEventType", "QoSSubscriptionEventType",
-           "SubscriptionEventCallbacks"]
+from rclpy.event_handler import *  # noqa: F403
+from rclpy.event_handler import __all__  # noqa: F401

@@ -17,7 +17,7 @@ import msgs
 from msgs.action_msgs import CancelGoal, GoalInfo, GoalStatus, GoalStatusArray
 from msgs.unique_identifier_msgs import UUID
 from nodes.core import graph
-from nodes.core.endpoints import Publisher, ServiceError, call_raw, decode_request, encoding_for
+from nodes.core.endpoints import Deferred, Publisher, ServiceError, call_raw, decode_request, encoding_for
 from nodes.core.executor import CallbackGroup
 from nodes.core.runtime import NodeRuntime
 from nodes.core.weak_callback import weak_callback
@@ -158,15 +158,24 @@ class ActionServer:
     # -- executor side
     def _handle_goal(self, query: zenoh.Query, request: Any) -> None:
         goal_id = bytes(request.goal_id.uuid)
-        accepted, reason = True, ""
+        verdict: Any = True
         try:
             if goal_id in self.goals:
-                accepted, reason = False, "duplicate goal id"
+                verdict = (False, "duplicate goal id")
             elif self.callbacks.goal is not None:
                 verdict = self.callbacks.goal(request.goal)
-                accepted, reason = verdict if isinstance(verdict, tuple) else (bool(verdict), "")
         except Exception as exc:  # noqa: BLE001 - a failing goal callback rejects the goal
-            accepted, reason = False, f"{type(exc).__name__}: {exc}"
+            verdict = (False, f"{type(exc).__name__}: {exc}")
+        if isinstance(verdict, Deferred):   # decided later (rclpy's coroutine goal callback): back on the executor
+            verdict.on_done(lambda result, error: self.node.executor.dispatch(
+                self._decide_goal, query, request, (False, f"{type(error).__name__}: {error}") if error else result,
+                where=f"action '{self.key}' goal", group=self.group))
+            return
+        self._decide_goal(query, request, verdict)
+
+    def _decide_goal(self, query: zenoh.Query, request: Any, verdict: Any) -> None:
+        goal_id = bytes(request.goal_id.uuid)
+        accepted, reason = verdict if isinstance(verdict, tuple) else (bool(verdict), "")
         stamp = self.node.now_msg()
         response = self.action_type.SendGoalResponse(accepted=accepted, stamp=stamp)
         if not accepted:
@@ -210,23 +219,52 @@ class ActionServer:
         goal_id = bytes(request.goal_info.goal_id.uuid)
         cancel_all = goal_id == bytes(16)
         targets = [h for h in self.goals.values() if cancel_all or h.goal_id == goal_id]
-        canceling = []
         code = 0
         if not targets:
             code = 2  # ERROR_UNKNOWN_GOAL_ID
+        verdicts: list[tuple[ServerGoalHandle, Any]] = []
         for handle in targets:
             if not handle.is_active:
                 if not cancel_all:
                     code = 3  # ERROR_GOAL_TERMINATED
                 continue
-            allowed = True
+            allowed: Any = True
             if self.callbacks.cancel is not None:
                 try:
-                    allowed = bool(self.callbacks.cancel(handle))
+                    allowed = self.callbacks.cancel(handle)
                 except Exception as exc:  # noqa: BLE001
                     self.node.logger.error(f"cancel callback failed: {exc}")
                     allowed = False
-            if allowed:
+            verdicts.append((handle, allowed))
+        pending = [v for _, v in verdicts if isinstance(v, Deferred)]
+        if not pending:
+            self._decide_cancel(query, targets, code, verdicts)
+            return
+        # some are decided later (rclpy's coroutine cancel callback): answer once all are, on the executor
+        remaining = [len(pending)]
+        lock = threading.Lock()
+
+        def one_done(_result: Any, error: BaseException | None) -> None:
+            if error is not None:
+                self.node.logger.error(f"cancel callback failed: {type(error).__name__}: {error}")
+            with lock:
+                remaining[0] -= 1
+                last = remaining[0] == 0
+            if last:
+                self.node.executor.dispatch(self._decide_cancel, query, targets, code, verdicts,
+                                            where=f"action '{self.key}' cancel", group=self.group)
+
+        for deferred in pending:
+            deferred.on_done(one_done)
+
+    def _decide_cancel(self, query: zenoh.Query, targets: list[ServerGoalHandle], code: int,
+                       verdicts: list[tuple[ServerGoalHandle, Any]]) -> None:
+        canceling = []
+        for handle, allowed in verdicts:
+            if isinstance(allowed, Deferred):
+                outcome = allowed.outcome
+                allowed = outcome is not None and outcome[1] is None and outcome[0]
+            if bool(allowed) and handle.is_active:
                 handle._set(CANCELING)
                 canceling.append(GoalInfo(goal_id=UUID(uuid=handle.goal_id), stamp=handle.stamp))
         if targets and not canceling and code == 0:

@@ -74,11 +74,13 @@ class ServiceError(RuntimeError):
 
 class Publisher:
     def __init__(self, node: NodeRuntime, msg_type: Any, key: str, *, reliable: bool = True,
-                 priority: zenoh.Priority | None = None, express: bool = False, latched: bool = False) -> None:
+                 priority: zenoh.Priority | None = None, express: bool = False, latched: bool = False,
+                 ros2_qos: Any = None) -> None:
         self.node = node
         self.msg_type = msg_type
         self.key = key
         self.reliable, self.latched = reliable, latched
+        self.ros2_qos = ros2_qos   # the QoS its ROS 2 twin announces (ros2.names.Qos), None: from the above
         self._priority, self._express = priority, express
         self._pub = node.session.declare_publisher(
             key, encoding=encoding_for(msg_type._type),
@@ -198,7 +200,7 @@ class Subscription:
     ``msg_type``); both are objects of ``nodes/core/delivery.py``, one pair per subscription."""
 
     def __init__(self, node: NodeRuntime, msg_type: Any, key: str, callback: Callable[..., None], *,
-                 delivery: Delivery | None = None, message: Decoded | None = None) -> None:
+                 delivery: Delivery | None = None, message: Decoded | None = None, ros2_qos: Any = None) -> None:
         if not callable(callback):
             raise TypeError(f"the subscription to '{key}' needs a callback")
         delivery = Executed() if delivery is None else delivery
@@ -221,6 +223,7 @@ class Subscription:
         self.max_payload = max_payload_bytes()   # bigger messages are dropped (logged) before decoding
         self.closed = False
         self.group: CallbackGroup | None = None   # on a spinning thread: its callback group (rclpy's)
+        self.ros2_qos = ros2_qos   # the QoS its ROS 2 twin announces (ros2.names.Qos), None: the default
         self._arguments = message.sample_arguments
         delivery.open(self)
         self._run = delivery.run
@@ -348,6 +351,11 @@ class Deferred:
             done = self._done
         if done is not None:
             done(response, error)
+
+    @property
+    def outcome(self) -> tuple[Any, BaseException | None] | None:
+        """``(response, error)`` once resolved or failed, else None."""
+        return self._outcome
 
     def on_done(self, callback: Callable[[Any, BaseException | None], None]) -> None:
         with self._lock:

@@ -26,19 +26,22 @@ class EndpointFactory:
         return entity
 
     def publisher(self, msg_type: Any, topic: str, *, reliable: bool = True,
-                  priority: zenoh.Priority | None = None, express: bool = False, latched: bool = False) -> Any:
+                  priority: zenoh.Priority | None = None, express: bool = False, latched: bool = False,
+                  lifespan: float | None = None, ros2_qos: Any = None) -> Any:
         if latched:
-            return self._keep(LatchedPublisher(self._runtime, msg_type, self._resolve(topic)))
+            return self._keep(LatchedPublisher(self._runtime, msg_type, self._resolve(topic), lifespan=lifespan,
+                                               ros2_qos=ros2_qos))
         return self._keep(Publisher(self._runtime, msg_type, self._resolve(topic), reliable=reliable,
-                                    priority=priority, express=express))
+                                    priority=priority, express=express, ros2_qos=ros2_qos))
 
     def fetch_latched(self, msg_type: Any, topic: str, timeout: float) -> Any | None:
         return fetch_latched(self._runtime.session, msg_type, self._resolve(topic), timeout)
 
     def subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *,
-                     delivery: Delivery | None = None, message: Decoded | None = None) -> Subscription:
+                     delivery: Delivery | None = None, message: Decoded | None = None,
+                     ros2_qos: Any = None) -> Subscription:
         return self._keep(Subscription(self._runtime, msg_type, self._resolve(topic, wildcards=True), callback,
-                                       delivery=delivery, message=message))
+                                       delivery=delivery, message=message, ros2_qos=ros2_qos))
 
     def service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *, inline: bool,
                 ros2_only: bool = False) -> ServiceServer:

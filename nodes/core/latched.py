@@ -20,13 +20,16 @@ from nodes.core.weak_callback import weak_callback
 
 
 class LatchedPublisher:
-    def __init__(self, node: NodeRuntime, msg_type: Any, key: str) -> None:
+    def __init__(self, node: NodeRuntime, msg_type: Any, key: str, *, lifespan: float | None = None,
+                 ros2_qos: Any = None) -> None:
         self.node = node
         self.msg_type = msg_type
         self.key = key
-        self._publisher = Publisher(node, msg_type, self.key, latched=True)
+        self.lifespan = lifespan   # s a message is answered for after it was published (None: for ever)
+        self._publisher = Publisher(node, msg_type, self.key, latched=True, ros2_qos=ros2_qos)
         self._encoding = encoding_for(msg_type._type)
         self._last: bytes | None = None
+        self._last_at = 0.0
         self._lock = threading.Lock()
         self._queryable = node.session.declare_queryable(self.key, weak_callback(self._on_query), complete=True)
 
@@ -35,13 +38,15 @@ class LatchedPublisher:
             raise TypeError(f"latched publisher on '{self.key}' sends {self.msg_type._type}, got {type(msg).__name__}")
         payload = msgs.encode(msg)
         with self._lock:
-            self._last = payload
+            self._last, self._last_at = payload, time.monotonic()
         self._publisher.publish_raw(payload)
 
     def _on_query(self, query: zenoh.Query) -> None:
         # Runs on a Zenoh thread: only reads the last payload (swapped atomically under the lock).
         with self._lock:
             payload = self._last
+            if self.lifespan is not None and time.monotonic() - self._last_at > self.lifespan:
+                payload = None   # expired: a late joiner gets nothing, as DDS drops it from the history
         try:
             if payload is not None:
                 query.reply(self.key, payload, encoding=self._encoding)

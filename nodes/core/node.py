@@ -183,11 +183,13 @@ class Node:
     # ------------------------------------------------------------ endpoints (nodes/core/factory.py)
     def create_publisher(self, msg_type: Any, topic: str, *, reliable: bool = True,
                          priority: zenoh.Priority | None = None, express: bool = False,
-                         latched: bool = False) -> Any:
+                         latched: bool = False, lifespan: float | None = None, ros2_qos: Any = None) -> Any:
         """``latched=True``: the last message is also answered as a queryable on the key, so late joiners
-        get it with ``fetch_latched`` (ROS "transient local", as for robot_description and tf_static)."""
+        get it with ``fetch_latched`` (ROS "transient local", as for robot_description and tf_static), for
+        ``lifespan`` s after it was published (None: for ever). ``ros2_qos`` (``ros2.names.Qos``): the QoS
+        its ROS 2 twin announces."""
         return self._endpoints.publisher(msg_type, topic, reliable=reliable, priority=priority, express=express,
-                                         latched=latched)
+                                         latched=latched, lifespan=lifespan, ros2_qos=ros2_qos)
 
     def fetch_latched(self, msg_type: Any, topic: str, timeout: float = 2.0) -> Any | None:
         """The last message of a latched topic (None when nobody answers within ``timeout`` s)."""
@@ -195,7 +197,7 @@ class Node:
 
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *,
                             delivery: Delivery | None = None, message: Decoded | None = None,
-                            **legacy: Any) -> Subscription:
+                            ros2_qos: Any = None, **legacy: Any) -> Subscription:
         """``callback`` gets each message of ``topic``. ``delivery`` (``nodes.core.delivery``) says where and
         when it runs: ``Executed()`` by default (with the node's other callbacks), ``Inline()`` on Zenoh's
         thread, ``Batched(max_rate)`` at most that many wake-ups a second, ``Pulled(backlog)`` when the node's
@@ -205,7 +207,8 @@ class Node:
         ``with_source=True``."""
         if legacy:
             raise TypeError(f"create_subscription('{topic}'): {legacy_subscription_options(legacy)}")
-        return self._endpoints.subscription(msg_type, topic, callback, delivery=delivery, message=message)
+        return self._endpoints.subscription(msg_type, topic, callback, delivery=delivery, message=message,
+                                            ros2_qos=ros2_qos)
 
     def create_service(self, srv_type: Any, name: str, handler: Callable[[Any], Any], *,
                        inline: bool = False, ros2_only: bool = False) -> ServiceServer:

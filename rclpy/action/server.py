@@ -1,7 +1,8 @@
 """``ActionServer`` as rclpy has it, over ``nodes.core.action.ActionServer``.
 
-The goal, cancel and accepted callbacks run on the spinning thread (the server's callback group); the
-execute callback runs as a task of the node's executor, a coroutine if it is ``async def``. The goal ends
+The goal, cancel and accepted callbacks run on the spinning thread (the server's callback group), goal and
+cancel callbacks that are ``async def`` as tasks of the node's executor (the request is answered when they
+return); the execute callback runs as a task of the node's executor, a coroutine if it is ``async def``. The goal ends
 with the status the execute callback chose (``succeed``/``abort``/``canceled``) and the result it returned.
 """
 
@@ -13,8 +14,8 @@ import threading
 from typing import Any
 
 from nodes.core.action import ABORTED, ACCEPTED, CANCELED, CANCELING, EXECUTING, SUCCEEDED, TERMINAL
+from nodes.core.endpoints import Deferred
 from rclpy.action.endpoint import ActionEndpoint
-from rclpy.exceptions import not_implemented
 
 
 class GoalResponse(enum.Enum):
@@ -176,12 +177,30 @@ class ActionServer(ActionEndpoint):
     def register_handle_accepted_callback(self, handle_accepted_callback: Any) -> None:
         self._accepted_callback = handle_accepted_callback or default_handle_accepted_callback
 
-    def _on_goal(self, goal: Any) -> bool:
+    def _on_goal(self, goal: Any) -> Any:
         verdict = self._goal_callback(goal)
         if inspect.iscoroutine(verdict):
-            verdict.close()
-            raise not_implemented("ActionServer goal_callback as a coroutine")
+            return self._later(verdict, GoalResponse.ACCEPT)
         return verdict == GoalResponse.ACCEPT
+
+    def _later(self, coroutine: Any, yes: Any) -> Deferred:
+        """A coroutine callback's verdict: it runs as a task of the node's executor (so it may await
+        service calls and other futures); the request is answered when it returns."""
+        answer = Deferred()
+        executor = self._node.executor
+        if executor is None:
+            coroutine.close()
+            raise RuntimeError("a coroutine goal or cancel callback needs the node added to an executor")
+
+        def done(task: Any) -> None:
+            error = task.exception()
+            if error is not None:
+                answer.fail(error)
+            else:
+                answer.resolve(task.result() == yes)
+
+        executor.create_task(coroutine).add_done_callback(done)
+        return answer
 
     def _on_accepted(self, core_handle: Any) -> None:
         handle = ServerGoalHandle(self, core_handle)
@@ -197,6 +216,5 @@ class ActionServer(ActionEndpoint):
             return False
         verdict = self._cancel_callback(handle)
         if inspect.iscoroutine(verdict):
-            verdict.close()
-            raise not_implemented("ActionServer cancel_callback as a coroutine")
+            return self._later(verdict, CancelResponse.ACCEPT)
         return verdict == CancelResponse.ACCEPT

@@ -180,3 +180,15 @@ def test_use_sim_time_follows_the_clock(processes, router, zenoh_port, ros_env) 
         assert all(h.startswith("sim now 1") for h in heard), heard
     finally:
         clock_node.destroy()
+
+
+def test_fibonacci_with_coroutine_goal_and_cancel_callbacks(processes, ros_env) -> None:
+    """``async def`` goal and cancel callbacks: each awaits a future before it answers; the goal is accepted
+    and, while its execute callback blocks one thread, the cancel is decided on another."""
+    server = processes.start(str(PROGRAMS / "fibonacci_async_callbacks_server.py"), name="server", env=ros_env)
+    client = processes.start(str(PROGRAMS / "fibonacci_action_client.py"), "cancel", name="cancel", env=ros_env)
+    assert client.wait(timeout=60) == 0, processes.output(client) + processes.output(server)[-2000:]
+    out, served = processes.output(client), processes.output(server)
+    assert "Goal accepted :)" in out and "Goal successfully canceled" in out, out
+    assert "Goal canceled, status CANCELED" in out, out
+    assert "Goal approved" in served and "Cancel approved" in served and "Goal canceled" in served, served

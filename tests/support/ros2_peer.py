@@ -10,7 +10,9 @@ the message types and computes the type hashes from them itself, except for the 
 ``["set_atomically", [[name, type, value], ...]]`` (type: rcl_interfaces/ParameterType's number).
 ``param_server DEFINITIONS NODE PARAMETERS_JSON SECONDS [HASHES_JSON]`` plays a ROS 2 node's six parameter
 services for SECONDS (PARAMETERS_JSON: ``{name: [type, value]}``; a set of a known name with its type is
-applied, anything else refused) and prints each applied set as a JSON line."""
+applied, anything else refused) and prints each applied set as a JSON line. ``info TOPIC`` prints each
+publisher and subscription of the topic with the QoS its liveliness token announces (``ros2 topic info -v``),
+a JSON line each."""
 
 from __future__ import annotations
 
@@ -22,6 +24,8 @@ import time
 from pathlib import Path
 
 from zenoh_ros2_sdk import ROS2Publisher, ROS2ServiceClient, ROS2ServiceServer, ROS2Subscriber
+from zenoh_ros2_sdk.discovery import get_topic_info
+from zenoh_ros2_sdk.qos import QosProfile
 from zenoh_ros2_sdk.utils import compute_service_type_hash
 
 
@@ -227,6 +231,21 @@ def main(argv: list[str]) -> int:
         definitions, node, requests = argv[2:5]
         hashes = json.loads(argv[5]) if len(argv) > 5 else {}
         call_parameter_services(common, Path(definitions), node, json.loads(requests), hashes)
+        return 0
+    if mode == "info":
+        info = get_topic_info(argv[2], domain_id=0, router_port=port, timeout=2.0, verbose=True)
+        for kind, endpoints in (("publisher", info.publishers if info else []),
+                                ("subscription", info.subscribers if info else [])):
+            for endpoint in endpoints:
+                qos = QosProfile.decode(endpoint.qos)
+                print(json.dumps({"kind": kind, "node": endpoint.node_name, "namespace": endpoint.node_namespace,
+                                  "type": endpoint.topic_type, "qos": {
+                                      "reliability": qos.reliability.name, "durability": qos.durability.name,
+                                      "depth": qos.history_depth, "liveliness": qos.liveliness.name,
+                                      "deadline": [qos.deadline.sec, qos.deadline.nsec],
+                                      "lifespan": [qos.lifespan.sec, qos.lifespan.nsec],
+                                      "lease": [qos.liveliness_lease_duration.sec,
+                                                qos.liveliness_lease_duration.nsec]}}), flush=True)
         return 0
     print(f"unknown mode {mode}", file=sys.stderr)
     return 2

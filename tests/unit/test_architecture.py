@@ -61,15 +61,17 @@ def test_the_zenoh_check_sees_a_zenoh_import() -> None:
 
 # ------------------------------------------------------------------------------------------ imports
 PACKAGES = ("ament_index_python", "launch", "launch_ros", "msgs", "nodes")
+# what ROS 2 programs import as written (``import rclpy``): they start the product as entry points do
+USER_PACKAGES = ("rclpy", "tf2_ros", "sensor_msgs_py")
 
 
-def project_modules() -> dict[str, Path]:
+def project_modules(packages: tuple[str, ...] = PACKAGES) -> dict[str, Path]:
     """Every module of the installable packages by dotted name (``__main__`` files run programs: left out)."""
     found: dict[str, Path] = {}
     for path in tracked_python_files():
         relative = path.relative_to(ROOT)
         # a ROS launch file shipped as data (nodes/share/packages/*/launch/*.launch.py) is not a module
-        if relative.parts[0] not in PACKAGES or path.name == "__main__.py" or path.name.endswith(".launch.py"):
+        if relative.parts[0] not in packages or path.name == "__main__.py" or path.name.endswith(".launch.py"):
             continue
         parts = list(relative.with_suffix("").parts)
         if parts[-1] == "__init__":
@@ -307,19 +309,20 @@ def entry_points(modules: dict[str, Path], root: Path = ROOT) -> set[str]:
 
 
 def unreached_modules(modules: dict[str, Path], root: Path = ROOT) -> list[str]:
-    """Product modules that no entry point reaches through product code: code only tests or benches use
-    (it belongs in tests/support or bench), or nothing at all. Product code reaches a module by importing it
+    """Product modules that no entry point (or package ROS 2 programs import) reaches through product code:
+    code only tests or benches use (it belongs in tests/support or bench), or nothing at all. Product code reaches a module by importing it
     (importing ``a.b`` runs ``a`` first) or by naming it in a string (``"-m", "launch.reaper"``, a CLI verb's
     module for ``importlib``)."""
     mains = {f"{name}.__main__": path.parent / "__main__.py" for name, path in modules.items()
              if path.name == "__init__.py" and (path.parent / "__main__.py").is_file()}
-    everything = {**modules, **mains}
+    users = project_modules(USER_PACKAGES)
+    everything = {**modules, **mains, **users}
     graph = import_graph(everything)
     for name, path in everything.items():
         graph[name] |= _named_modules({node.value for node in ast.walk(ast.parse(path.read_text()))
                                        if isinstance(node, ast.Constant) and isinstance(node.value, str)}, modules)
     reached: set[str] = set()
-    todo = [*entry_points(modules, root), *mains]
+    todo = [*entry_points(modules, root), *mains, *users]
     while todo:
         name = todo.pop()
         if name in reached:

@@ -122,7 +122,8 @@ class Ros2Node:
             if kind == "Publisher":
                 return mirror.TopicMirror(self, key, endpoint.msg_type._type,
                                           reliable=getattr(endpoint, "reliable", True),
-                                          latched=getattr(endpoint, "latched", False))
+                                          latched=getattr(endpoint, "latched", False),
+                                          qos=getattr(endpoint, "ros2_qos", None))
             if kind == "Subscription":
                 if endpoint.message.raw or endpoint.msg_type is None or "*" in key:
                     return None

@@ -86,8 +86,9 @@ class TopicMirror:
     subscribers."""
 
     def __init__(self, owner: MirrorOwner, key: str, type_name: str, *, reliable: bool = True,
-                 latched: bool = False) -> None:
-        qos = names.LATCHED_QOS if latched else names.Qos(reliable=reliable)
+                 latched: bool = False, qos: names.Qos | None = None) -> None:
+        if qos is None:
+            qos = names.LATCHED_QOS if latched else names.Qos(reliable=reliable)
         self.owner = owner
         self.type_name = type_name
         self.entity = Entity(owner, names.PUBLISHER, names.ros_topic_name(key, type_name), type_name, qos)
@@ -185,7 +186,7 @@ class SubscriptionMirror:
         self.target = subscription
         self.type_name = subscription.msg_type._type
         self.entity = Entity(owner, names.SUBSCRIPTION, names.ros_topic_name(subscription.key, self.type_name),
-                              self.type_name)
+                             self.type_name, getattr(subscription, "ros2_qos", None) or names.DEFAULT_QOS)
         self._lock = threading.Lock()
         self._sub: zenoh.Subscriber | None = None
         self._closed = False

@@ -77,20 +77,59 @@ def data_key(domain: int, ros_name: str, type_name: str) -> str:
     return f"{domain}/{ros_name.strip('/')}/{dds_type(type_name)}/{rihs01(type_name)}"
 
 
+_INFINITE_S = 9223372036   # rmw's infinite duration: 9223372036 s 854775807 ns (elided, as rmw_zenoh does)
+
+
 @dataclass(frozen=True)
 class Qos:
     """The QoS we advertise. rmw_zenoh writes only what differs from its defaults (reliable, volatile,
-    keep-last 42, infinite durations, automatic liveliness)."""
+    keep-last 42, infinite durations, automatic liveliness). Durations in ns, 0 for infinite; ``liveliness``
+    is rmw's kind (1 automatic, 3 manual by topic)."""
 
     reliable: bool = True
     transient_local: bool = False
     depth: int = 10
+    keep_all: bool = False
+    deadline_ns: int = 0
+    lifespan_ns: int = 0
+    liveliness: int = 1
+    lease_ns: int = 0
 
     def token(self) -> str:
         reliability = "" if self.reliable else "2"
         durability = "1" if self.transient_local else ""
-        depth = "" if self.depth == 42 else str(self.depth)
-        return f"{reliability}:{durability}:,{depth}:,:,:,,"
+        history = "2," if self.keep_all else ("," if self.depth == 42 else f",{self.depth}")
+        liveliness = "" if self.liveliness == 1 else str(self.liveliness)
+        return (f"{reliability}:{durability}:{history}:{_duration(self.deadline_ns)}:"
+                f"{_duration(self.lifespan_ns)}:{liveliness},{_duration(self.lease_ns)}")
+
+    @classmethod
+    def parse(cls, token: str) -> Qos:
+        """The QoS of a liveliness token's last chunk (rmw_zenoh's, ours or zenoh-ros2-sdk's); ValueError when
+        it is not one."""
+        parts = token.split(":")
+        if len(parts) != 6:
+            raise ValueError(f"not an rmw_zenoh QoS: {token!r}")
+        reliability, durability, history, deadline, lifespan, liveliness = parts
+        kind, _, depth = history.partition(",")
+        live_kind, _, lease = liveliness.partition(",")
+        return cls(reliable=reliability != "2", transient_local=durability == "1",
+                   depth=int(depth) if depth else 42, keep_all=kind == "2",
+                   deadline_ns=_parse_duration(deadline), lifespan_ns=_parse_duration(lifespan),
+                   liveliness=int(live_kind) if live_kind else 1, lease_ns=_parse_duration(lease))
+
+
+def _duration(ns: int) -> str:
+    if ns <= 0:
+        return ","
+    return f"{ns // 1_000_000_000},{ns % 1_000_000_000}"
+
+
+def _parse_duration(text: str) -> int:
+    sec, _, nsec = text.partition(",")
+    if (not sec and not nsec) or int(sec or _INFINITE_S) >= _INFINITE_S:
+        return 0
+    return int(sec or 0) * 1_000_000_000 + int(nsec or 0)
 
 
 DEFAULT_QOS = Qos()
