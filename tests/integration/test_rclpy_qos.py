@@ -125,8 +125,11 @@ def test_deadline_liveliness_and_lifespan_between_programs(processes, zenoh_port
     subs = node.get_subscriptions_info_by_topic("/manual_heartbeat")
     assert [(i.node_name, i.qos_profile.liveliness) for i in subs] == [
         ("qos_listener", LivelinessPolicy.MANUAL_BY_TOPIC)]
-    seen = wait_until(lambda: peer_info(zenoh_port, "/heartbeat"), timeout=30, interval=0.5,
-                      message="zenoh-ros2-sdk listing /heartbeat")
+    def both_sides() -> list[dict]:   # a fresh session's first liveliness answer may be partial: ask again
+        seen = peer_info(zenoh_port, "/heartbeat")
+        return seen if {e["kind"] for e in seen} == {"publisher", "subscription"} else []
+
+    seen = wait_until(both_sides, timeout=30, interval=0.5, message="zenoh-ros2-sdk listing /heartbeat")
     by_kind = {e["kind"]: e for e in seen}
     assert by_kind["publisher"]["node"] == "qos_talker", seen
     assert by_kind["publisher"]["qos"]["deadline"] == [0, 300_000_000], seen

@@ -3,6 +3,7 @@ rmw_zenoh's liveliness tokens (``@ros2_lv``), ours and those of real ROS 2 nodes
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import zenoh
@@ -37,12 +38,19 @@ def parse(key: str) -> EndpointInfo | None:
                         names.demangle(parts[9]), type_name, parts[11], attachment.make_gid(str(key)), qos)
 
 
-def topic_endpoints(session: zenoh.Session, domain: int, ros_name: str, timeout: float = 0.5) -> list[EndpointInfo]:
-    """Every publisher and subscription of ``ros_name`` announced on ``domain`` now."""
-    found = []
-    for reply in session.liveliness().get(f"{names.ADMIN_SPACE}/{domain}/**", timeout=timeout):
-        if reply.ok is not None:
-            info = parse(str(reply.ok.key_expr))
-            if info is not None and info.ros_name == ros_name:
-                found.append(info)
+def topic_endpoints(session: zenoh.Session, domain: int, ros_name: str, timeout: float = 1.0) -> list[EndpointInfo]:
+    """Every publisher and subscription of ``ros_name`` announced on ``domain`` now.
+
+    One liveliness query may answer only part of the router's tokens (as ``graph.snapshot`` finds), so it is
+    asked again until two answers in a row agree (or ``timeout`` passes)."""
+    deadline = time.monotonic() + timeout
+    previous: set[str] | None = None
+    while True:
+        keys = {str(reply.ok.key_expr) for reply in session.liveliness().get(
+            f"{names.ADMIN_SPACE}/{domain}/**", timeout=max(0.05, deadline - time.monotonic())) if reply.ok is not None}
+        if (keys and keys == previous) or time.monotonic() >= deadline:
+            break
+        previous = keys
+        time.sleep(0.03)
+    found = [info for info in map(parse, sorted(keys)) if info is not None and info.ros_name == ros_name]
     return found
