@@ -11,15 +11,25 @@ from __future__ import annotations
 import time
 from typing import Any
 
+from nodes.core import graph
 from nodes.core.delivery import Executed
 from nodes.core.liveliness import ManualAssertion, PublisherLiveliness, Writer
 from nodes.core.ros2 import names as ros2_names
-from rclpy._qos_timing import DeadlineWatch, LeaseWatch, LivelinessTracker, check_period, seconds
+from rclpy._qos_timing import (
+    DeadlineWatch,
+    LeaseWatch,
+    LivelinessTracker,
+    MatchedCounter,
+    check_period,
+    seconds,
+)
 from rclpy.event_handler import (
     QoSLivelinessChangedInfo,
     QoSLivelinessLostInfo,
     QoSOfferedDeadlineMissedInfo,
+    QoSPublisherMatchedInfo,
     QoSRequestedDeadlineMissedInfo,
+    QoSSubscriptionMatchedInfo,
 )
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
 
@@ -62,6 +72,23 @@ class _Watches:
     def on_executor(self, fn: Any, where: str) -> None:
         self._node._zr.executor.put((fn, (), where, self._group))
 
+    def watch_matches(self, kind: str, key: str, callback: Any, info: Any) -> None:
+        """``callback(info(...))`` whenever the ``kind`` endpoints (``pub``/``sub``) this one matches change."""
+        counter = MatchedCounter()
+        on_matched = _run(self._node, callback)
+
+        def report() -> None:
+            counts = counter.report()
+            if counts is not None:
+                on_matched(info(total_count=counts[0], total_count_change=counts[1], current_count=counts[2],
+                                current_count_change=counts[3]))
+
+        def changed(entry: graph.GraphEntry, present: bool) -> None:   # a Zenoh thread
+            counter.change((entry.session_id, entry.node), present)
+            self.on_executor(report, "matched")
+
+        self._closers.append(graph.EndpointWatch(self._node._zr.session, kind, key, changed))
+
     def close(self) -> None:
         for timer in self._timers:
             timer.cancel()
@@ -103,11 +130,14 @@ class PublisherEvents(_Watches):
                         on_lost(QoSLivelinessLostInfo(total_count=lost[0], total_count_change=lost[1]))
 
                 self.every(check_period(lease), poll_lease)
+        if getattr(callbacks, "matched", None) is not None:
+            self.watch_matches("sub", key, callbacks.matched, QoSPublisherMatchedInfo)
 
     @classmethod
     def needed(cls, qos: QoSProfile, callbacks: Any) -> bool:
         return qos.liveliness == LivelinessPolicy.MANUAL_BY_TOPIC or (
-            seconds(qos.deadline) is not None and getattr(callbacks, "deadline", None) is not None)
+            seconds(qos.deadline) is not None and getattr(callbacks, "deadline", None) is not None) or (
+            getattr(callbacks, "matched", None) is not None)
 
     def published(self) -> None:
         """A message went out: it meets the deadline and, as in DDS, asserts a manual publisher's liveliness."""
@@ -153,12 +183,13 @@ class SubscriptionEvents(_Watches):
                     self._report()
 
                 self.every(check_period(lease), expire)
+        if getattr(callbacks, "matched", None) is not None:
+            self.watch_matches("pub", key, callbacks.matched, QoSSubscriptionMatchedInfo)
 
     @classmethod
     def needed(cls, qos: QoSProfile, callbacks: Any) -> bool:
-        return seconds(qos.lifespan) is not None or (
-            seconds(qos.deadline) is not None and getattr(callbacks, "deadline", None) is not None) or (
-            getattr(callbacks, "liveliness", None) is not None)
+        return seconds(qos.lifespan) is not None or any(
+            getattr(callbacks, name, None) is not None for name in ("deadline", "liveliness", "matched"))
 
     # -- Zenoh threads: the change is counted now, reported on the executor
     def _writer(self, writer: Writer, present: bool) -> None:
@@ -179,9 +210,13 @@ class SubscriptionEvents(_Watches):
                 alive_count=status.alive_count, not_alive_count=status.not_alive_count,
                 alive_count_change=status.alive_count_change, not_alive_count_change=status.not_alive_count_change))
 
-    # -- delivery: each message stamped when it arrives
+    # -- delivery: each message stamped when it arrives (only when a deadline or a lifespan needs the time)
+    @property
+    def _stamps(self) -> bool:
+        return self._deadline is not None or self.lifespan is not None
+
     def delivery(self, depth: int | None) -> Executed:
-        return _Stamped(depth, self._arrived)
+        return _Stamped(depth, self._arrived) if self._stamps else Executed(depth=depth)
 
     def _arrived(self, now: float) -> None:
         if self._deadline is not None:
@@ -191,6 +226,8 @@ class SubscriptionEvents(_Watches):
         """The subscription's callback behind the stamp: a message older than the lifespan when its turn
         comes is dropped."""
         lifespan = self.lifespan
+        if not self._stamps:
+            return run
         if lifespan is None:
             return lambda _stamp, *args: run(*args)
 

@@ -141,6 +141,35 @@ class LivelinessTracker:
         return LivelinessStatus(alive, not_alive, alive - before[0], not_alive - before[1])
 
 
+class MatchedCounter:
+    """The peers an endpoint matches (a publisher's subscriptions, a subscription's publishers): how many now
+    and how many ever."""
+
+    def __init__(self) -> None:
+        self._current: set[Hashable] = set()
+        self.total_count = 0
+        self._reported = (0, 0)
+        self._lock = threading.Lock()
+
+    def change(self, peer: Hashable, present: bool) -> None:
+        with self._lock:
+            if present and peer not in self._current:
+                self._current.add(peer)
+                self.total_count += 1
+            elif not present:
+                self._current.discard(peer)
+
+    def report(self) -> tuple[int, int, int, int] | None:
+        """``(total_count, total_count_change, current_count, current_count_change)`` when either changed since
+        the last report, else None."""
+        with self._lock:
+            now = (self.total_count, len(self._current))
+            before, self._reported = self._reported, now
+        if now == before:
+            return None
+        return now[0], now[0] - before[0], now[1], now[1] - before[1]
+
+
 def check_period(period: float) -> float:
     """How often a watch of ``period`` s is polled: a quarter of it, between 2 ms and 100 ms."""
     return min(max(period / 4.0, 0.002), 0.1)

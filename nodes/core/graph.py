@@ -13,6 +13,8 @@ from urllib.parse import quote, unquote
 import msgpack
 import zenoh
 
+from nodes.core.weak_callback import weak_callback
+
 ROOT = "@graph"
 KINDS = ("node", "pub", "sub", "srv", "cli", "act", "actc")
 
@@ -96,6 +98,31 @@ class NodeWatch:
         entry = parse_key(str(sample.key_expr))
         if entry is not None and entry.kind == "node":
             self._on_change(entry.node, sample.kind == zenoh.SampleKind.PUT)
+
+    def close(self) -> None:
+        try:
+            self._subscriber.undeclare()
+        except Exception:  # noqa: BLE001 - the session may already be closing; nothing to clean up then
+            pass
+
+
+class EndpointWatch:
+    """Calls ``on_change(entry, present)`` for every ``kind`` endpoint (``pub``, ``sub`` ...) on ``key`` (already
+    resolved) that appears or goes away, those already there included. Endpoints of one node on one key share
+    a token: they count as one."""
+
+    def __init__(self, session: zenoh.Session, kind: str, key: str,
+                 on_change: Callable[[GraphEntry, bool], None]) -> None:
+        if kind not in KINDS or kind == "node":
+            raise ValueError(f"bad graph endpoint kind {kind!r}")
+        self._on_change = on_change
+        self._subscriber = session.liveliness().declare_subscriber(
+            f"{ROOT}/{kind}/*/*/{_enc(key)}/*", weak_callback(self._on_sample), history=True)
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        entry = parse_key(str(sample.key_expr))
+        if entry is not None:
+            self._on_change(entry, sample.kind == zenoh.SampleKind.PUT)
 
     def close(self) -> None:
         try:

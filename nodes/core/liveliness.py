@@ -71,18 +71,15 @@ class PublisherLiveliness:
                  on_manual: Callable[[Writer], None], on_assert: Callable[[Writer], None]) -> None:
         self._on_writer, self._on_manual, self._on_assert = on_writer, on_manual, on_assert
         enc = _chunk(key)
-        liveliness = session.liveliness()
+        self._publishers = graph.EndpointWatch(session, "pub", key, weak_callback(self._publisher))
         self._subs = [
-            liveliness.declare_subscriber(f"{graph.ROOT}/pub/*/*/{enc}/*", weak_callback(self._graph_sample),
-                                          history=True),
-            liveliness.declare_subscriber(f"{MANUAL}/{enc}/*/*", weak_callback(self._manual_sample), history=True),
+            session.liveliness().declare_subscriber(f"{MANUAL}/{enc}/*/*", weak_callback(self._manual_sample),
+                                                    history=True),
             session.declare_subscriber(f"{ASSERT}/{enc}/*/*", weak_callback(self._assert_sample)),
         ]
 
-    def _graph_sample(self, sample: zenoh.Sample) -> None:
-        entry = graph.parse_key(str(sample.key_expr))
-        if entry is not None:
-            self._on_writer((entry.session_id, entry.node), sample.kind == zenoh.SampleKind.PUT)
+    def _publisher(self, entry: graph.GraphEntry, present: bool) -> None:
+        self._on_writer((entry.session_id, entry.node), present)
 
     def _manual_sample(self, sample: zenoh.Sample) -> None:
         writer = _writer_of(str(sample.key_expr))
@@ -95,6 +92,7 @@ class PublisherLiveliness:
             self._on_assert(writer)
 
     def close(self) -> None:
+        self._publishers.close()
         for sub in self._subs:
             try:
                 sub.undeclare()

@@ -176,10 +176,10 @@ def test_a_subscription_drops_what_waited_longer_than_its_lifespan(context) -> N
     assert got == ["fresh"]
 
 
-def test_deadline_and_liveliness_callbacks_run_on_the_executor(context) -> None:
-    """The deadline and liveliness callbacks run on the spinning thread (the entity's callback group), a
-    coroutine callback as a task; a publisher destroyed goes not alive; assert_liveliness keeps a manual
-    publisher alive without publishing."""
+def test_deadline_liveliness_and_matched_callbacks_run_on_the_executor(context) -> None:
+    """The deadline, liveliness and matched callbacks run on the spinning thread (the entity's callback
+    group), a coroutine callback as a task; a publisher destroyed goes not alive and unmatched;
+    assert_liveliness keeps a manual publisher alive without publishing."""
     import threading
 
     from std_msgs.msg import String
@@ -198,12 +198,14 @@ def test_deadline_and_liveliness_callbacks_run_on_the_executor(context) -> None:
     async def on_deadline(info):
         events.append(("deadline", info, threading.current_thread().name))
 
+    def record(kind):
+        return lambda info: events.append((kind, info, threading.current_thread().name))
+
     node.create_subscription(String, "/beat", lambda m: None, manual, event_callbacks=SubscriptionEventCallbacks(
-        deadline=on_deadline,
-        liveliness=lambda info: events.append(("liveliness", info, threading.current_thread().name))))
+        deadline=on_deadline, liveliness=record("liveliness"), matched=record("sub matched")))
     lost: list[object] = []
-    publisher = node.create_publisher(String, "/beat", manual,
-                                      event_callbacks=PublisherEventCallbacks(liveliness=lost.append))
+    publisher = node.create_publisher(String, "/beat", manual, event_callbacks=PublisherEventCallbacks(
+        liveliness=lost.append, matched=record("pub matched")))
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     me = threading.current_thread().name
@@ -218,7 +220,14 @@ def test_deadline_and_liveliness_callbacks_run_on_the_executor(context) -> None:
     deadlines = [info for kind, info, _ in events if kind == "deadline"]
     assert deadlines and deadlines[-1].total_count >= 4, deadlines
     assert {thread for _, _, thread in events} == {me}
+    for kind in ("sub matched", "pub matched"):
+        matched = [info for k, info, _ in events if k == kind]
+        assert [(m.total_count, m.current_count) for m in matched] == [(1, 1)], (kind, matched)
+    assert publisher.wait_for_all_acked(Duration(seconds=1)) is True   # as rmw_zenoh: nothing to wait for
     node.destroy_publisher(publisher)
     wait_until(lambda: executor.spin_once(timeout_sec=0.05) or [
         i for k, i, _ in events if k == "liveliness" and i.alive_count == 0 and i.not_alive_count == 1],
         timeout=10, message=f"the destroyed publisher not alive: {events}")
+    wait_until(lambda: executor.spin_once(timeout_sec=0.05) or [
+        i for k, i, _ in events if k == "sub matched" and (i.total_count, i.current_count, i.current_count_change)
+        == (1, 0, -1)], timeout=10, message=f"the destroyed publisher unmatched: {events}")

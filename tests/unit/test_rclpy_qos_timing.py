@@ -107,3 +107,20 @@ def test_the_profile_on_the_ros2_wire_is_what_zenoh_ros2_sdk_reads() -> None:
     assert profile_of(Qos.parse(QosProfile().encode())).deadline == Infinite
     with pytest.raises(ValueError, match="not an rmw_zenoh QoS"):
         Qos.parse("1:2")
+
+
+def test_matched_counts_peers_now_and_ever() -> None:
+    from rclpy._qos_timing import MatchedCounter
+
+    counter = MatchedCounter()
+    assert counter.report() is None
+    counter.change("a", True)
+    counter.change("a", True)                  # the same peer seen twice (history, then live): one match
+    counter.change("b", True)
+    assert counter.report() == (2, 2, 2, 2)
+    counter.change("a", False)
+    assert counter.report() == (2, 0, 1, -1)
+    counter.change("a", True)                  # back: a new match
+    assert counter.report() == (3, 1, 2, 1)
+    counter.change("c", False)                 # never matched: nothing changes
+    assert counter.report() is None
