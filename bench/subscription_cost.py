@@ -12,6 +12,7 @@ callback (an append); the publisher side is the same code in every mode.
 - inline: ``Inline()`` (on Zenoh's thread, no lock);
 - spin: a node whose callbacks wait for its spinning thread (``callbacks_on_spin_thread``), spun by a thread;
 - rclpy: an rclpy subscription (depth 10) spun by ``rclpy``'s executor on a thread;
+- rclpy_qos: the same with a deadline (and its callback) and a lifespan: each message stamped on arrival;
 - manager: the controller manager's ``hardware/state`` (``Inline()``, ``Raw(objects=True, with_source=True)``);
 - pulled: the simulator's ``hardware/command`` (``Pulled()``, the same ``Raw``), taken by the sending thread.
 
@@ -46,7 +47,8 @@ def child(mode: str, count: int) -> None:
     from nodes.core.session import open_peer
 
     JointState = msgs.get_type("sensor_msgs/msg/JointState")
-    session = open_peer([]) if mode != "rclpy" else None
+    rclpy_mode = mode in ("rclpy", "rclpy_qos")
+    session = open_peer([]) if not rclpy_mode else None
     got = threading.Event()
     received = []
 
@@ -55,7 +57,7 @@ def child(mode: str, count: int) -> None:
         got.set()
 
     closers = []
-    if mode == "rclpy":
+    if rclpy_mode:
         import rclpy
         from bench.common import free_port
         from nodes.core.session import loopback_endpoint, open_router
@@ -69,7 +71,16 @@ def child(mode: str, count: int) -> None:
         rclpy.init(args=["bench", "--ros-args", "--log-level", "warn"], context=context)
         session = context.session
         rnode = rclpy.create_node("bench_sub", context=context)
-        sub = rnode.create_subscription(JointState, "/" + TOPIC, on_msg, 10)._core
+        qos = 10
+        events = None
+        if mode == "rclpy_qos":
+            from rclpy.duration import Duration
+            from rclpy.qos import QoSProfile
+            from rclpy.qos_event import SubscriptionEventCallbacks
+
+            qos = QoSProfile(depth=10, deadline=Duration(seconds=60), lifespan=Duration(seconds=60))
+            events = SubscriptionEventCallbacks(deadline=lambda info: None)
+        sub = rnode.create_subscription(JointState, "/" + TOPIC, on_msg, qos, event_callbacks=events)._core
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(rnode)
         if not os.environ.get("BENCH_DIRECT"):
@@ -106,7 +117,7 @@ def child(mode: str, count: int) -> None:
     threading.Event().wait(0.5)   # routes settle
     if os.environ.get("BENCH_DIRECT"):
         direct(mode, count, JointState(name=names, position=positions, velocity=positions, effort=positions),
-               sub, received, executor if mode == "rclpy" else sub_node)
+               sub, received, executor if rclpy_mode else sub_node)
         count = 0
     for seq in range(count):
         got.clear()
@@ -121,7 +132,7 @@ def child(mode: str, count: int) -> None:
     pub_node.destroy()
     for close in closers:
         close()
-    if mode == "rclpy":
+    if rclpy_mode:
         router.close()
     else:
         session.close()
@@ -155,7 +166,7 @@ def direct(mode: str, count: int, msg, sub, received, spinner) -> None:
         sub.handle_sample(sample)
         if mode == "spin":
             spinner.spin_once(0)
-        elif mode == "rclpy":
+        elif mode in ("rclpy", "rclpy_qos"):
             spinner.spin_once(timeout_sec=0)
     if len(received) != count:
         raise SystemExit(f"{mode}: {len(received)} of {count} delivered")
