@@ -54,7 +54,7 @@ class Publisher:
         self._node, self._core, self.msg_type = node, core, msg_type
         self.qos_profile, self.callback_group, self.event_callbacks = qos, callback_group, event_callbacks
         self._raw = hasattr(core, "publish_raw")   # checked once encoded: sent as those bytes
-        self._events = PublisherEvents(node, core.key, qos, event_callbacks, callback_group) \
+        self._events = PublisherEvents(node, core.key, msg_type._type, qos, event_callbacks, callback_group) \
             if PublisherEvents.needed(qos, event_callbacks) else None
 
     @property

@@ -11,9 +11,8 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from nodes.core import graph
 from nodes.core.delivery import Executed
-from nodes.core.liveliness import ManualAssertion, PublisherLiveliness, Writer
+from nodes.core.liveliness import ManualAssertion, PublisherLiveliness, TopicPeers, Writer
 from nodes.core.ros2 import names as ros2_names
 from rclpy._qos_timing import (
     DeadlineWatch,
@@ -72,7 +71,7 @@ class _Watches:
     def on_executor(self, fn: Any, where: str) -> None:
         self._node._zr.executor.put((fn, (), where, self._group))
 
-    def watch_matches(self, kind: str, key: str, callback: Any, info: Any) -> None:
+    def watch_matches(self, kind: str, key: str, type_name: str, callback: Any, info: Any) -> None:
         """``callback(info(...))`` whenever the ``kind`` endpoints (``pub``/``sub``) this one matches change."""
         counter = MatchedCounter()
         on_matched = _run(self._node, callback)
@@ -83,11 +82,11 @@ class _Watches:
                 on_matched(info(total_count=counts[0], total_count_change=counts[1], current_count=counts[2],
                                 current_count_change=counts[3]))
 
-        def changed(entry: graph.GraphEntry, present: bool) -> None:   # a Zenoh thread
-            counter.change((entry.session_id, entry.node), present)
+        def changed(peer: Writer, present: bool) -> None:   # a Zenoh thread
+            counter.change(peer, present)
             self.on_executor(report, "matched")
 
-        self._closers.append(graph.EndpointWatch(self._node._zr.session, kind, key, changed))
+        self._closers.append(TopicPeers(self._node._zr.session, kind, key, type_name, changed))
 
     def close(self) -> None:
         for timer in self._timers:
@@ -98,7 +97,7 @@ class _Watches:
 
 
 class PublisherEvents(_Watches):
-    def __init__(self, node: Any, key: str, qos: QoSProfile, callbacks: Any, group: Any) -> None:
+    def __init__(self, node: Any, key: str, type_name: str, qos: QoSProfile, callbacks: Any, group: Any) -> None:
         super().__init__(node, group)
         period, lease = seconds(qos.deadline), seconds(qos.liveliness_lease_duration)
         self._deadline: DeadlineWatch | None = None
@@ -131,7 +130,7 @@ class PublisherEvents(_Watches):
 
                 self.every(check_period(lease), poll_lease)
         if getattr(callbacks, "matched", None) is not None:
-            self.watch_matches("sub", key, callbacks.matched, QoSPublisherMatchedInfo)
+            self.watch_matches("sub", key, type_name, callbacks.matched, QoSPublisherMatchedInfo)
 
     @classmethod
     def needed(cls, qos: QoSProfile, callbacks: Any) -> bool:
@@ -156,7 +155,7 @@ class PublisherEvents(_Watches):
 
 
 class SubscriptionEvents(_Watches):
-    def __init__(self, node: Any, key: str, qos: QoSProfile, callbacks: Any, group: Any) -> None:
+    def __init__(self, node: Any, key: str, type_name: str, qos: QoSProfile, callbacks: Any, group: Any) -> None:
         super().__init__(node, group)
         self.lifespan = seconds(qos.lifespan)
         period = seconds(qos.deadline)
@@ -175,7 +174,7 @@ class SubscriptionEvents(_Watches):
             lease = seconds(qos.liveliness_lease_duration)
             self._tracker = LivelinessTracker(lease)
             self._on_changed = _run(node, callbacks.liveliness)
-            self._closers.append(PublisherLiveliness(node._zr.session, key, self._writer, self._manual,
+            self._closers.append(PublisherLiveliness(node._zr.session, key, type_name, self._writer, self._manual,
                                                      self._asserted))
             if lease is not None:
                 def expire() -> None:
@@ -184,7 +183,7 @@ class SubscriptionEvents(_Watches):
 
                 self.every(check_period(lease), expire)
         if getattr(callbacks, "matched", None) is not None:
-            self.watch_matches("pub", key, callbacks.matched, QoSSubscriptionMatchedInfo)
+            self.watch_matches("pub", key, type_name, callbacks.matched, QoSSubscriptionMatchedInfo)
 
     @classmethod
     def needed(cls, qos: QoSProfile, callbacks: Any) -> bool:

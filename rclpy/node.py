@@ -294,7 +294,7 @@ class Node:
         key = self._zr_resolve(topic)
         group = self._zr_group(callback_group)
         run = _call_maybe_async(self, callback)
-        events = SubscriptionEvents(self, key, qos, event_callbacks, group) \
+        events = SubscriptionEvents(self, key, msg_type._type, qos, event_callbacks, group) \
             if SubscriptionEvents.needed(qos, event_callbacks) else None
         delivery = Executed(depth=queue_depth(qos)) if events is None else events.delivery(queue_depth(qos))
         core = self._zr.create_subscription(msg_type, "/" + key, run if events is None else events.callback(run),

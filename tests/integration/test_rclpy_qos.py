@@ -231,3 +231,45 @@ def test_deadline_liveliness_and_matched_callbacks_run_on_the_executor(context) 
     wait_until(lambda: executor.spin_once(timeout_sec=0.05) or [
         i for k, i, _ in events if k == "sub matched" and (i.total_count, i.current_count, i.current_count_change)
         == (1, 0, -1)], timeout=10, message=f"the destroyed publisher unmatched: {events}")
+
+
+@pytest.mark.slow
+def test_a_ros2_publisher_matches_and_goes_not_alive(context, zenoh_port) -> None:
+    """A ROS 2 node's publisher (zenoh-ros2-sdk: its rmw_zenoh token, no zenroid graph token) is matched and
+    alive while it runs, not alive and unmatched once its process ends; its messages arrive."""
+    from std_msgs.msg import String
+
+    import rclpy
+    from msgs.type_hash import rihs01
+    from rclpy.event_handler import SubscriptionEventCallbacks
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import QoSProfile
+
+    node = rclpy.create_node("ros2_watcher", context=context)
+    events: list[tuple[str, object]] = []
+    heard: list[str] = []
+    node.create_subscription(String, "/ros2_chatter", lambda m: heard.append(m.data), QoSProfile(depth=10),
+                             event_callbacks=SubscriptionEventCallbacks(
+                                 liveliness=lambda i: events.append(("liveliness", i)),
+                                 matched=lambda i: events.append(("matched", i))))
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "ZENOH_CONNECT", "ROS_DOMAIN_ID")}
+    talker = subprocess.Popen([sys.executable, str(PEER), "talk", str(zenoh_port), "/ros2_chatter",
+                               "std_msgs/msg/String", "string data\n", rihs01("std_msgs/msg/String"),
+                               json.dumps({"data": "from ROS 2"}), "2"], env=env, cwd=PEER.parent,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        end = time.monotonic() + 60
+        while talker.poll() is None and time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.05)
+        assert talker.returncode == 0, talker.communicate()[1][-2000:]
+        spin_for(executor, 1.0)   # its tokens leave with its session
+    finally:
+        if talker.poll() is None:
+            talker.kill()
+    assert "from ROS 2" in heard
+    liveliness = [(i.alive_count, i.not_alive_count) for k, i in events if k == "liveliness"]
+    matched = [(i.total_count, i.current_count) for k, i in events if k == "matched"]
+    assert liveliness == [(1, 0), (0, 1)], events
+    assert matched == [(1, 1), (1, 0)], events
