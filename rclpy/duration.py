@@ -24,7 +24,7 @@ class Duration:
     def __str__(self) -> str:
         if self == Infinite:
             return "Infinite"
-        return f"{self._nanoseconds / 1e9} seconds"
+        return f"{self._nanoseconds} nanoseconds"
 
     def __eq__(self, other: object) -> bool:
         if isinstance(other, Duration):

@@ -83,8 +83,6 @@ def topic(sub: str, args: list[str]) -> list[str]:
     elif sub in ("hz", "bw"):
         args = _drop(args, {**qos, "--filter": True, "--wall-time": False})
         args = _rename(args, {"-w": "--window"})
-    elif sub == "info":
-        args = _drop(args, {"-v": False, "--verbose": False})
     elif sub == "list":
         args = _drop(args, {"-c": False, "--count-topics": False, "--include-hidden-topics": False, "-v": False,
                             "--verbose": False})

@@ -78,7 +78,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                  ("--window", {"type": float, "default": 2.0, "help": "report every S seconds"}),
                  ("--duration", {"type": float, "default": 0.0, "help": "stop after S seconds (0: until Ctrl-C)"}),
                  _WAIT_FOR_PUBLISHER)
-    add_verb(sub, "info", "type, publishers and subscribers of a topic", "key")
+    add_verb(sub, "info", "type, publishers and subscribers of a topic", "key",
+             ("-v", "--verbose", {"action": "store_true",
+                                  "help": "each endpoint's node, type hash, GID and QoS profile (ros2 topic info -v)"}))
     add_verb(sub, "type", "the message type of a topic", "key")
 
 
@@ -419,6 +421,8 @@ def _info(args: argparse.Namespace) -> int:
     if not entries:
         raise Failed(f"no publisher or subscriber on '{key}'{_hint(key, everything)}")
     types = sorted({e.type_name for e in entries if e.type_name != "*"})
+    if getattr(args, "verbose", False):
+        return _info_verbose(args, key, types)
     pubs = sorted(e.node for e in entries if e.kind == "pub")
     subs = sorted(e.node for e in entries if e.kind == "sub")
     write_line(f"Type: {', '.join(types) or '(any: raw subscribers only)'}")
@@ -429,6 +433,54 @@ def _info(args: argparse.Namespace) -> int:
     for n in subs:
         write_line(f"  {n}")
     return 0
+
+
+def _info_verbose(args: argparse.Namespace, key: str, types: list[str]) -> int:
+    """``ros2 topic info -v``'s layout: each endpoint with its node, type hash, GID and QoS profile, from the
+    ROS 2 wire's tokens (real ROS 2 nodes' too) and our graph."""
+    from nodes.core import ros2
+    from nodes.core.ros2.endpoint_info import endpoints_of
+
+    try:
+        domain = ros2.domain_id() if ros2.enabled() else None
+    except ValueError as exc:
+        raise Failed(str(exc)) from None
+    node = cli_node(args, "topic_info")
+    try:
+        found = {kind: endpoints_of(node.session, key, kind == "pub", domain=domain) for kind in ("pub", "sub")}
+    finally:
+        node.destroy()
+    write_line(f"Type: {', '.join(types) or '(any: raw subscribers only)'}\n")
+    for kind, title in (("pub", "Publisher"), ("sub", "Subscription")):
+        write_line(f"{title} count: {len(found[kind])}\n")
+        for info in found[kind]:
+            write_line(_endpoint_text(info) + "\n")
+    return 0
+
+
+def _endpoint_text(info: Any) -> str:
+    def duration(ns: int) -> str:
+        return f"{ns} nanoseconds" if ns > 0 else "Infinite"
+
+    qos = info.qos
+    lines = [f"Node name: {info.node}", f"Node namespace: {info.namespace}", f"Topic type: {info.type_name}",
+             f"Topic type hash: {info.type_hash or 'INVALID'}",
+             f"Endpoint type: {'PUBLISHER' if info.kind == 'MP' else 'SUBSCRIPTION'}",
+             f"GID: {'.'.join(format(b, '02x') for b in info.gid)}", "QoS profile:"]
+    if qos is None:   # only our graph knows it (off the ROS 2 wire)
+        return "\n".join([*lines, *(f"  {name}: UNKNOWN" for name in (
+            "Reliability", "History (Depth)", "Durability", "Lifespan", "Deadline", "Liveliness",
+            "Liveliness lease duration"))])
+    return "\n".join([
+        *lines,
+        f"  Reliability: {'RELIABLE' if qos.reliable else 'BEST_EFFORT'}",
+        f"  History (Depth): {'KEEP_ALL' if qos.keep_all else f'KEEP_LAST ({qos.depth})'}",
+        f"  Durability: {'TRANSIENT_LOCAL' if qos.transient_local else 'VOLATILE'}",
+        f"  Lifespan: {duration(qos.lifespan_ns)}",
+        f"  Deadline: {duration(qos.deadline_ns)}",
+        f"  Liveliness: {'MANUAL_BY_TOPIC' if qos.liveliness == 3 else 'AUTOMATIC'}",
+        f"  Liveliness lease duration: {duration(qos.lease_ns)}",
+    ])
 
 
 def _type(args: argparse.Namespace) -> int:

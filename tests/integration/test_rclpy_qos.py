@@ -70,7 +70,8 @@ def test_deadline_liveliness_and_lifespan_between_programs(processes, zenoh_port
     """A talker that falls silent: both sides' deadline callbacks count the missed periods; its manual
     liveliness lapses (the listener sees it not alive, the talker its liveliness lost); killed, its automatic
     publisher turns not alive. Its transient-local status reaches a late joiner only within its lifespan.
-    zenoh-ros2-sdk and ``get_publishers_info_by_topic`` see the profiles it announces."""
+    zenoh-ros2-sdk, ``get_publishers_info_by_topic`` and ``zenroid topic info -v`` see the profiles it
+    announces."""
     from std_msgs.msg import String
 
     import rclpy
@@ -135,6 +136,11 @@ def test_deadline_liveliness_and_lifespan_between_programs(processes, zenoh_port
     assert by_kind["publisher"]["qos"]["deadline"] == [0, 300_000_000], seen
     assert by_kind["publisher"]["qos"]["lease"] == [1, 0], seen
     assert by_kind["subscription"]["node"] == "qos_listener", seen
+    cli = subprocess.run([sys.executable, "-m", "nodes.tools.cli", "topic", "info", "-v", "heartbeat"],
+                         capture_output=True, text=True, env=processes.env(), cwd=ROOT, timeout=60)
+    assert cli.returncode == 0, cli.stdout + cli.stderr
+    assert "Publisher count: 1\n\nNode name: qos_talker\n" in cli.stdout, cli.stdout   # ros2 topic info -v
+    assert "  Deadline: 300000000 nanoseconds\n  Liveliness: AUTOMATIC\n" in cli.stdout, cli.stdout
 
     # past its lifespan, the status is not given to a late joiner any more
     time.sleep(max(0.0, published + 3.3 - time.monotonic()))

@@ -21,7 +21,7 @@ from nodes.tools.ros2 import Ros2UsageError, translate
     ("topic echo /joint_states sensor_msgs/msg/JointState --once", "topic echo /joint_states --once"),
     ("topic echo /joint_states --field name --no-arr", "topic echo /joint_states --field name"),
     ("topic hz /camera/rgb -w 10", "topic hz /camera/rgb --window 10"),
-    ("topic info -v /x", "topic info /x"),
+    ("topic info -v /x", "topic info -v /x"),
     ("topic list --no-daemon -t", "topic list -t"),
     ("control load_controller --set-state active jtc", "control load_controller --set-state active jtc --ns "),
     ("control load_controller --set_state start jtc", "control load_controller --set-state active jtc --ns "),

@@ -1,5 +1,6 @@
 """Who publishes and subscribes a ROS topic, with each endpoint's QoS: what ``ros2 topic info -v`` reads from
-rmw_zenoh's liveliness tokens (``@ros2_lv``), ours and those of real ROS 2 nodes alike."""
+rmw_zenoh's liveliness tokens (``@ros2_lv``), ours and those of real ROS 2 nodes alike, and zenroid's
+endpoints that are not on the ROS 2 wire (``ZENROID_ROS2=0``, internal keys) from our own graph, with no QoS."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from dataclasses import dataclass
 
 import zenoh
 
+from nodes.core import graph
 from nodes.core.ros2 import attachment, names
 
 
@@ -19,9 +21,9 @@ class EndpointInfo:
     node: str
     ros_name: str
     type_name: str
-    type_hash: str      # RIHS01_<hex>
+    type_hash: str      # RIHS01_<hex>; "" when unknown (an endpoint only our graph knows)
     gid: bytes
-    qos: names.Qos
+    qos: names.Qos | None   # None: unknown (an endpoint only our graph knows)
 
 
 def parse(key: str) -> EndpointInfo | None:
@@ -54,3 +56,26 @@ def topic_endpoints(session: zenoh.Session, domain: int, ros_name: str, timeout:
         time.sleep(0.03)
     found = [info for info in map(parse, sorted(keys)) if info is not None and info.ros_name == ros_name]
     return found
+
+
+def endpoints_of(session: zenoh.Session, key: str, publishers: bool, *, domain: int | None) -> list[EndpointInfo]:
+    """The publishers (or subscriptions) of our ``key``: every one the ROS 2 wire announces on ``domain``
+    (None: the wire is off), and zenroid's that only our graph knows, sorted by namespace and node."""
+    found: list[EndpointInfo] = []
+    on_wire: set[tuple[str, str]] = set()   # (session id, node) of those the wire told about
+    if domain is not None:
+        wanted = names.PUBLISHER if publishers else names.SUBSCRIPTION
+        for info in topic_endpoints(session, domain, "/" + key.strip("/")):
+            if info.kind == wanted:
+                on_wire.add((info.zid, "/" + "/".join(p for p in (info.namespace.strip("/"), info.node) if p)))
+                found.append(info)
+    kind = "pub" if publishers else "sub"
+    for entry in graph.snapshot(session, 0.3):
+        if entry.kind != kind or entry.name != key or (entry.session_id, entry.node) in on_wire:
+            continue
+        namespace, _, node = entry.node.rpartition("/")
+        token = graph.endpoint_key(entry.kind, entry.session_id, entry.node, entry.name, entry.type_name)
+        found.append(EndpointInfo(names.PUBLISHER if publishers else names.SUBSCRIPTION, entry.session_id,
+                                  namespace or "/", node, "/" + key.strip("/"), entry.type_name, "",
+                                  attachment.make_gid(token), None))
+    return sorted(found, key=lambda i: (i.namespace, i.node))
