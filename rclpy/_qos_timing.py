@@ -85,7 +85,10 @@ class LivelinessTracker:
     """The publishers a subscription matches, alive or not. A publisher is alive from when it appears until
     it goes away (its graph token is dropped: destroyed, or its process died), and a manual one only while
     it asserts at least once every ``lease`` s (None: no lease). One that went away stays counted as not
-    alive: Zenoh does not tell a destroyed publisher from a killed one."""
+    alive (Zenoh does not tell a destroyed publisher from a killed one), the ``MAX_GONE`` latest of them:
+    publishers that come and go for days do not grow the count, or the memory, without bound."""
+
+    MAX_GONE = 256
 
     def __init__(self, lease: float | None) -> None:
         self.lease = lease
@@ -103,6 +106,10 @@ class LivelinessTracker:
                     state.present, state.alive, state.last = True, True, now
             elif state is not None:
                 state.present = state.alive = False
+                self._writers[writer] = self._writers.pop(writer)   # the latest gone last
+                gone = [w for w, s in self._writers.items() if not s.present]
+                for old in gone[:max(0, len(gone) - self.MAX_GONE)]:
+                    del self._writers[old]
 
     def manual(self, writer: Hashable, now: float) -> None:
         """``writer`` asserts its liveliness by hand (MANUAL_BY_TOPIC)."""

@@ -124,3 +124,18 @@ def test_matched_counts_peers_now_and_ever() -> None:
     assert counter.report() == (3, 1, 2, 1)
     counter.change("c", False)                 # never matched: nothing changes
     assert counter.report() is None
+
+
+def test_liveliness_forgets_the_oldest_of_many_gone_publishers() -> None:
+    from rclpy._qos_timing import LivelinessTracker
+
+    tracker = LivelinessTracker(lease=None)
+    tracker.MAX_GONE = 3
+    for i in range(5):
+        tracker.writer(("s", f"/p{i}"), True, float(i))
+        tracker.writer(("s", f"/p{i}"), False, float(i) + 0.5)
+    tracker.writer(("s", "/alive"), True, 9.0)
+    status = tracker.report()
+    assert (status.alive_count, status.not_alive_count) == (1, 3)
+    tracker.writer(("s", "/p4"), True, 10.0)   # the latest gone, back: still known, alive again
+    assert tracker.report().not_alive_count == 2
