@@ -1,10 +1,11 @@
 """QoS event callbacks as rclpy names them (``rclpy.event_handler``; ``rclpy.qos_event`` before Iron).
 
-Enforced (docs/rclpy.md, QoS events): the deadline of subscriptions and publishers, a subscription's
-liveliness (its publishers appearing, going away or, MANUAL_BY_TOPIC, not asserting within the lease) and a
-MANUAL_BY_TOPIC publisher's lost liveliness. The callbacks run on the executor like the entity's other
-callbacks. Incompatible QoS, message lost, incompatible type and matched callbacks are accepted and never
-called (Zenoh connects every publisher with every subscription of a key).
+Called (docs/rclpy.md, QoS events; ``rclpy/_qos_events.py``): the deadline of subscriptions and publishers,
+a subscription's liveliness (its publishers appearing, going away or, MANUAL_BY_TOPIC, not asserting within
+the lease), a MANUAL_BY_TOPIC publisher's lost liveliness and both sides' matched. The callbacks run on the
+executor like the entity's other callbacks. Incompatible QoS, message lost and incompatible type callbacks
+are accepted and never called, as on rmw_zenoh (Zenoh connects every publisher with every subscription of a
+key).
 """
 
 from __future__ import annotations
