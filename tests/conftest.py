@@ -5,6 +5,7 @@ from __future__ import annotations
 import atexit
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -26,6 +27,14 @@ _zenroid_interfaces.install()   # tests import ``sensor_msgs.msg`` as ROS progra
 if "ZENROID_MESH_CACHE" not in os.environ:
     os.environ["ZENROID_MESH_CACHE"] = tempfile.mkdtemp(prefix="zenroid-mesh-cache-")
     atexit.register(shutil.rmtree, os.environ["ZENROID_MESH_CACHE"], True)
+
+# A suite started in the background (`nohup python -m pytest &`, a CI step run that way) inherits SIGINT and
+# SIGQUIT ignored, and every child would inherit that too: the Ctrl-C the tests send would then do nothing
+# (a program may honour an inherited SIG_IGN, as POSIX background jobs expect). The children start as from a
+# terminal instead.
+for _signum, _handler in ((signal.SIGINT, signal.default_int_handler), (signal.SIGQUIT, signal.SIG_DFL)):
+    if signal.getsignal(_signum) is signal.SIG_IGN:
+        signal.signal(_signum, _handler)
 
 __all__ = ["ROOT", "ProcessGroup", "free_port", "wait_until"]
 
