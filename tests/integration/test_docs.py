@@ -326,16 +326,14 @@ _REACHES_THE_JOB = re.compile(r"\b(zenoh|nodes|launch)\b|ZENOH_")
 
 
 def _read_only(e: Example) -> bool:
-    if e.streaming:
-        return False
     if e.language == "python":
-        return not _REACHES_THE_JOB.search(e.command)
+        return not e.streaming and not _REACHES_THE_JOB.search(e.command)
     return bool(_READ_ONLY.match(e.command)) and "\n" not in e.command
 
 
 def _waves(examples: list[Example]) -> list[list[Example]]:
-    """Consecutive read-only examples grouped (non-streaming bash commands that only read, and python blocks
-    that do not reach the job); every other example is a wave of its own. An exact repeat of an earlier
+    """Consecutive read-only examples grouped (bash commands that only read, streaming ones such as `topic hz`
+    included, and python blocks that do not reach the job); every other example is a wave of its own. An exact repeat of an earlier
     read-only command (the tour and the CLI page both list `node list`) is run once."""
     waves: list[list[Example]] = []
     seen: set[str] = set()

@@ -55,7 +55,7 @@ def _rightmost(image, box: tuple[int, int, int, int], *colors: tuple[int, int, i
 @pytest.mark.timeout(480)   # its own deadline is 420 s (a page opened anew per try); the suite's 300 s cut it short
 @pytest.mark.skipif(find_browser() is None, reason="no Chromium installed (Debian: apt-get install chromium)")
 def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int) -> None:
-    """A page opened 20 s into the main job (its viewer with the default settings) reaches the simulation's
+    """A page opened 10 s into the main job (its viewer with the default settings) reaches the simulation's
     present, and then what it draws is the present: paused while its time cursor is within 1 s of the
     simulation, the knee in the picture (the left-leg plot at the cursor) is bent or straight as joint_states
     had it at the cursor. Twice, each time opening the page anew.
@@ -101,7 +101,7 @@ def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int)
         subprocess.run([sys.executable, "-m", "nodes.tools", "param", "set", "/humanoid/joint_commander", "period",
                         "4.0"], env={**env, "ZENOH_CONNECT": f"tcp/127.0.0.1:{zenoh_port}"}, check=True,
                        capture_output=True, timeout=60)
-        time.sleep(20.0)  # the main job runs for a while before anyone looks
+        time.sleep(10.0)  # the main job runs for a while before anyone looks
 
         def sim_time(recording) -> float | None:
             if recording is None or recording.cursor_timeline != "sim_time" or not recording.cursor_ns:
