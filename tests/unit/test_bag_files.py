@@ -62,6 +62,8 @@ def plain_from_decoded(type_name: str, value: Any) -> dict[str, Any]:
         elif f.is_primitive:
             out[f.name] = [x.item() if isinstance(x, np.generic) else x for x in v] if f.is_array else (
                 v.item() if isinstance(v, np.generic) else v)
+            if f.base == "byte" and not f.is_array and out[f.name] < 0:
+                out[f.name] += 256   # rosbags reads ROS 2's byte (an octet, 0-255) as ROS 1's int8
         elif f.is_array:
             out[f.name] = [plain_from_decoded(f.base, x) for x in v]
         else:
