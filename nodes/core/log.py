@@ -90,18 +90,21 @@ class Logger:
     def level_name(self) -> str:
         return NAMES.get(self.level, str(self.level)).lower()
 
-    def log(self, level: int, msg: str) -> None:
+    def log(self, level: int, msg: str, *, per_site: bool = True) -> None:
+        """``per_site=False``: a line its caller already limits per key (``warn_throttle``), exempt from the
+        per-call-site budget, so that one place logging for many keys (a rejection per endpoint) still
+        shows each key's line."""
         if level < self.level:
             return
         msg = truncate(str(msg))
         now_mono = time.monotonic()
         with self._lock:
-            note = self._admit(level, msg, now_mono)
+            note = self._admit(level, msg, now_mono, per_site)
         if note is None:
             return
         self._emit(level, msg + note)
 
-    def _admit(self, level: int, msg: str, now: float) -> str | None:
+    def _admit(self, level: int, msg: str, now: float, per_site: bool = True) -> str | None:
         """None to drop the line, else a suffix reporting what was suppressed before it."""
         if len(self._repeats) > _MAX_KEYS:
             self._repeats.clear()
@@ -113,7 +116,7 @@ class Logger:
         if not bucket.take(REPEAT_BURST, 1.0 / REPEAT_PERIOD, now):
             return None
         site_bucket = None
-        if level >= 30:
+        if level >= 30 and per_site:
             site = _call_site()
             site_bucket = self._sites.get(site)
             if site_bucket is None:
@@ -172,15 +175,18 @@ class Logger:
             self._once.add(k)
         self.warn(msg)
 
-    def warn_throttle(self, period_s: float, msg: str, key: str | None = None) -> None:
-        """Log at most once per ``period_s`` for ``key`` (default: the message)."""
+    def warn_throttle(self, period_s: float, msg: str, key: str | None = None, *, per_site: bool = True) -> None:
+        """Log at most once per ``period_s`` for ``key`` (default: the message). ``per_site=False`` only where
+        the keys are bounded by the program itself (one per endpoint), never by what arrives."""
         k = key or msg
         now = time.monotonic()
         with self._lock:
+            if len(self._last) > _MAX_KEYS:
+                self._last.clear()
             if now - self._last.get(k, -1e18) < period_s:
                 return
             self._last[k] = now
-        self.warn(msg)
+        self.log(30, msg, per_site=per_site)
 
 
 def _call_site() -> tuple[str, int]:

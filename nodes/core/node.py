@@ -120,7 +120,8 @@ class Node:
         self.parameters.serve(self.create_service)
         # rcl_interfaces' six, on the ROS 2 wire only (our keys of the same names keep the two above)
         self.ros_parameters = RosParameterServices(functools.partial(Node.create_service, self),
-                                                   self.destroy_entity, CoreParameterBackend(self.parameters))
+                                                   self.destroy_entity, CoreParameterBackend(self.parameters),
+                                                   self.fully_qualified_name, self.logger)
         LoggerLevelServices(self.logger, (self.name, self.fully_qualified_name)).serve(self.create_service)
         # the launcher's liveness probe, answered here on Zenoh's thread (a flood of requests does not delay
         # it); the mark it queues shows, at the next probe, whether the spinner still takes work

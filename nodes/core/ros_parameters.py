@@ -100,9 +100,11 @@ class RosParameterServices:
     """The six services of one node, answered on its executor from ``backend`` (replaceable)."""
 
     def __init__(self, create_service: Callable[..., Any], destroy_entity: Callable[[Any], None],
-                 backend: ParameterBackend) -> None:
+                 backend: ParameterBackend, node_name: str, logger: Any) -> None:
         self.backend = backend
         self._destroy_entity = destroy_entity
+        self._node_name = node_name.rstrip("/")
+        self._logger = logger
         handlers = {
             "get_parameters": (GetParameters, self._get),
             "set_parameters": (SetParameters, self._set),
@@ -124,10 +126,23 @@ class RosParameterServices:
         return GetParameters.Response(values=self.backend.get_values(list(request.names)))
 
     def _set(self, request: Any) -> Any:
-        return SetParameters.Response(results=self.backend.set_each(list(request.parameters)))
+        results = self.backend.set_each(list(request.parameters))
+        self._log_refusals("set_parameters", results)
+        return SetParameters.Response(results=results)
 
     def _set_atomically(self, request: Any) -> Any:
-        return SetParametersAtomically.Response(result=self.backend.set_atomically(list(request.parameters)))
+        result = self.backend.set_atomically(list(request.parameters))
+        self._log_refusals("set_parameters_atomically", [result])
+        return SetParametersAtomically.Response(result=result)
+
+    def _log_refusals(self, service: str, results: list[Any]) -> None:
+        """A refused set is answered (``successful: false`` and the reason) and logged, as every refused
+        request is: at most once a second per service, so a flood of bad requests does not flood rosout."""
+        reasons = [r.reason for r in results if not r.successful]
+        if reasons:
+            where = f"{self._node_name}/{service}"
+            self._logger.warn_throttle(1.0, f"{where} refused: {'; '.join(reasons)[:300]}", key=where,
+                                       per_site=False)
 
     def _list(self, request: Any) -> Any:
         return ListParameters.Response(result=self.backend.list(list(request.prefixes), int(request.depth)))

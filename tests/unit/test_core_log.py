@@ -48,6 +48,21 @@ def test_errors_from_one_place_are_rate_limited_even_when_their_text_varies() ->
     assert "similar lines from the same place suppressed" in lines[-1][1]
 
 
+def test_throttled_lines_per_endpoint_are_each_shown_past_the_site_budget(capsys) -> None:
+    """A node with more endpoints than the site budget (the simulator's ROS 2 services under a fuzz): each
+    endpoint's throttled rejection line shows; the same lines through the site budget lose the last ones."""
+    logger, lines = _sink_logger()
+    endpoints = [f"/simulator/service_{i}" for i in range(log.SITE_BURST + 10)]
+    for name in endpoints:   # one call site, one key per endpoint
+        logger.warn_throttle(5.0, f"ROS 2 wire: bad request on {name}: garbage", key=name, per_site=False)
+    assert [text.split(": ")[1] for _, text in lines] == [f"bad request on {n}" for n in endpoints]
+    budgeted, shown = _sink_logger()
+    for name in endpoints:
+        budgeted.warn_throttle(5.0, f"ROS 2 wire: bad request on {name}: garbage", key=name)
+    assert len(shown) == log.SITE_BURST
+    capsys.readouterr()
+
+
 def test_absurdly_long_lines_are_truncated(capsys) -> None:
     logger, lines = _sink_logger()
     huge = "unknown joint '" + "x" * 10_000_000 + "'"  # a 10 MB name in a bad message

@@ -104,9 +104,11 @@ class Ros2Node:
         self._state.ids.give_back(entity_id)
 
     def warn(self, text: str) -> None:
-        # throttled per what and where ("ROS 2 wire: bad request on /humanoid/x"), not per reason, so every
-        # endpoint's rejections show up even while another endpoint is flooded
-        self.node.logger.warn_throttle(5.0, text, key="ros2:" + ": ".join(text.split(": ", 2)[:2])[:300])
+        # throttled per what and where ("ROS 2 wire: bad request on /humanoid/x"), not per reason, and outside
+        # the per-call-site budget (the keys are this node's endpoints), so every endpoint's rejections show up
+        # even while the node's other endpoints are flooded
+        self.node.logger.warn_throttle(5.0, text, key="ros2:" + ": ".join(text.split(": ", 2)[:2])[:300],
+                                       per_site=False)
 
     def mirror(self, endpoint: Any) -> Any | None:
         """The ROS 2 twin of one of our endpoints, or None (internal, wildcard, raw or not expressible)."""
