@@ -68,6 +68,19 @@ class _Watches:
         timer.group = self._group
         self._timers.append(timer)
 
+    def poll_counts(self, watch: Any, period: float, callback: Any, info: Any) -> Any:
+        """Poll ``watch`` (a deadline or a lease) on the executor; each new count reaches ``callback`` as
+        ``info(total_count=, total_count_change=)``. Returns ``watch``."""
+        on_change = _run(self._node, callback)
+
+        def poll() -> None:
+            counts = watch.poll(time.monotonic())
+            if counts is not None:
+                on_change(info(total_count=counts[0], total_count_change=counts[1]))
+
+        self.every(check_period(period), poll)
+        return watch
+
     def on_executor(self, fn: Any, where: str) -> None:
         self._node._zr.executor.put((fn, (), where, self._group))
 
@@ -102,15 +115,8 @@ class PublisherEvents(_Watches):
         period, lease = seconds(qos.deadline), seconds(qos.liveliness_lease_duration)
         self._deadline: DeadlineWatch | None = None
         if period is not None and getattr(callbacks, "deadline", None) is not None:
-            self._deadline = DeadlineWatch(period)
-            on_missed = _run(node, callbacks.deadline)
-
-            def poll_deadline() -> None:
-                missed = self._deadline.poll(time.monotonic())   # type: ignore[union-attr]
-                if missed is not None:
-                    on_missed(QoSOfferedDeadlineMissedInfo(total_count=missed[0], total_count_change=missed[1]))
-
-            self.every(check_period(period), poll_deadline)
+            self._deadline = self.poll_counts(DeadlineWatch(period), period, callbacks.deadline,
+                                              QoSOfferedDeadlineMissedInfo)
         self._manual: ManualAssertion | None = None
         self._lease: LeaseWatch | None = None
         if qos.liveliness == LivelinessPolicy.MANUAL_BY_TOPIC:
@@ -120,15 +126,8 @@ class PublisherEvents(_Watches):
                                            lease / 4.0 if lease is not None else 1.0)
             self._closers.append(self._manual)
             if lease is not None and getattr(callbacks, "liveliness", None) is not None:
-                self._lease = LeaseWatch(lease)
-                on_lost = _run(node, callbacks.liveliness)
-
-                def poll_lease() -> None:
-                    lost = self._lease.poll(time.monotonic())   # type: ignore[union-attr]
-                    if lost is not None:
-                        on_lost(QoSLivelinessLostInfo(total_count=lost[0], total_count_change=lost[1]))
-
-                self.every(check_period(lease), poll_lease)
+                self._lease = self.poll_counts(LeaseWatch(lease), lease, callbacks.liveliness,
+                                               QoSLivelinessLostInfo)
         if getattr(callbacks, "matched", None) is not None:
             self.watch_matches("sub", key, type_name, callbacks.matched, QoSPublisherMatchedInfo)
 
@@ -161,15 +160,8 @@ class SubscriptionEvents(_Watches):
         period = seconds(qos.deadline)
         self._deadline: DeadlineWatch | None = None
         if period is not None and getattr(callbacks, "deadline", None) is not None:
-            self._deadline = DeadlineWatch(period)
-            on_missed = _run(node, callbacks.deadline)
-
-            def poll_deadline() -> None:
-                missed = self._deadline.poll(time.monotonic())   # type: ignore[union-attr]
-                if missed is not None:
-                    on_missed(QoSRequestedDeadlineMissedInfo(total_count=missed[0], total_count_change=missed[1]))
-
-            self.every(check_period(period), poll_deadline)
+            self._deadline = self.poll_counts(DeadlineWatch(period), period, callbacks.deadline,
+                                              QoSRequestedDeadlineMissedInfo)
         if getattr(callbacks, "liveliness", None) is not None:
             lease = seconds(qos.liveliness_lease_duration)
             self._tracker = LivelinessTracker(lease)
