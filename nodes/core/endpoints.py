@@ -461,7 +461,22 @@ def call_raw(session: zenoh.Session, key: str, payload: bytes, timeout: float) -
     raise ServiceError(f"no response from service '{key}' within {timeout:g} s (is its server running?)")
 
 
-class Client:
+class _WaitsForService:
+    """``wait_for_service`` polling the client's own ``service_is_ready``."""
+
+    def service_is_ready(self) -> bool:
+        raise NotImplementedError
+
+    def wait_for_service(self, timeout: float = 5.0) -> bool:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if self.service_is_ready():
+                return True
+            time.sleep(0.05)
+        return False
+
+
+class Client(_WaitsForService):
     def __init__(self, node: NodeRuntime, srv_type: Any, key: str) -> None:
         self.node = node
         self.srv_type = srv_type
@@ -487,14 +502,6 @@ class Client:
                     return True
         return False
 
-    def wait_for_service(self, timeout: float = 5.0) -> bool:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if self.service_is_ready():
-                return True
-            time.sleep(0.05)
-        return False
-
     def destroy(self) -> None:
         self._token.undeclare()
         if self._mirror is not None:
@@ -502,7 +509,7 @@ class Client:
             mirror.close()
 
 
-class Ros2Client:
+class Ros2Client(_WaitsForService):
     """A client of a service on the ROS 2 wire (CDR, rmw_zenoh): ROS 2 nodes' services and the ones our
     nodes offer there only. Same calls as ``Client``."""
 
@@ -525,14 +532,6 @@ class Ros2Client:
 
     def service_is_ready(self) -> bool:
         return self._wire.server_is_ready()
-
-    def wait_for_service(self, timeout: float = 5.0) -> bool:
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if self.service_is_ready():
-                return True
-            time.sleep(0.05)
-        return False
 
     def destroy(self) -> None:
         self._wire.close()
