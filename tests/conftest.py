@@ -105,6 +105,21 @@ def processes(router: str, tmp_path: Path) -> Iterator[ProcessGroup]:
         group.stop_all()
 
 
+@pytest.fixture
+def context(router, monkeypatch):
+    """An rclpy context of this process on the test's router (no signal handlers: pytest keeps its own)."""
+    import rclpy
+    from rclpy.context import Context
+
+    monkeypatch.setenv("ZENOH_CONNECT", router)
+    ctx = Context()
+    rclpy.init(args=[], context=ctx)
+    try:
+        yield ctx
+    finally:
+        ctx.try_shutdown()
+
+
 def wait_until(predicate, timeout: float = 10.0, interval: float = 0.02, message: str = "condition"):
     """Poll ``predicate`` until it returns a truthy value; fail the test with ``message`` on timeout."""
     deadline = time.monotonic() + timeout

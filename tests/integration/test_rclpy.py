@@ -97,21 +97,6 @@ def test_keep_last_depth_keeps_the_newest_for_a_slow_callback(processes, ros_env
     assert len(taken) <= 5 + 3, f"depth 5 should keep the newest 5 behind the callback, took {taken}"
 
 
-@pytest.fixture
-def context(router, monkeypatch):
-    """An rclpy context of this process on the test's router (no signal handlers: pytest keeps its own)."""
-    import rclpy
-    from rclpy.context import Context
-
-    monkeypatch.setenv("ZENOH_CONNECT", router)
-    ctx = Context()
-    rclpy.init(args=[], context=ctx)
-    try:
-        yield ctx
-    finally:
-        ctx.try_shutdown()
-
-
 def test_transient_local_reaches_a_late_subscription(context, session) -> None:
     import msgs
     import rclpy

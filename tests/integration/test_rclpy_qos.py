@@ -28,21 +28,6 @@ def ros_env(tmp_path: Path) -> dict[str, str]:
     return shim_env(tmp_path / "shim", child_env()["PYTHONPATH"])
 
 
-@pytest.fixture
-def context(router, monkeypatch):
-    """An rclpy context of this process on the test's router (no signal handlers: pytest keeps its own)."""
-    import rclpy
-    from rclpy.context import Context
-
-    monkeypatch.setenv("ZENOH_CONNECT", router)
-    ctx = Context()
-    rclpy.init(args=[], context=ctx)
-    try:
-        yield ctx
-    finally:
-        ctx.try_shutdown()
-
-
 def peer_info(zenoh_port: int, topic: str) -> list[dict]:
     """What zenoh-ros2-sdk lists for ``topic`` (``ros2 topic info -v``), one dict per endpoint."""
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "ZENOH_CONNECT", "ROS_DOMAIN_ID")}
