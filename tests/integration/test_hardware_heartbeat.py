@@ -59,4 +59,4 @@ def test_paused_simulator_reads_paused_and_a_killed_one_lost(processes, router):
         wait_until(lambda: status()["hardware"] == "lost", timeout=20, message="the hardware reported lost")
         assert "lost the hardware: no hardware/state and no heartbeat" in processes.output(manager)
     finally:
-        node.shutdown()
+        node.destroy()

@@ -68,8 +68,10 @@ def stands(scenario: Scenario, seconds: float, ns: str = "humanoid") -> tuple[fl
     scenario.wait_for(lambda: sim_time(scenario, ns) >= start + 1.0, 120, "1 s of sim time")
     settled_at = time.monotonic()
     scenario.wait_for(lambda: sim_time(scenario, ns) >= start + 1.0 + seconds, 600, f"{seconds} s of sim time")
+    # sim/model_states is best effort: when lockstep runs flat out on a loaded machine, Zenoh may drop a
+    # stretch of it, so the stand is judged once enough samples of that stretch (or after it) have arrived.
+    scenario.wait_for(lambda: len(base(scenario, settled_at, ns)) > 10, 120, "10 model_states after settling")
     samples = base(scenario, settled_at, ns)
-    assert len(samples) > 10
     return samples[0][0], samples
 
 
