@@ -14,13 +14,15 @@ from __future__ import annotations
 
 import ipaddress
 import json
-import time
+import os
+import signal
 from pathlib import Path
 
 import psutil
 import pytest
 import zenoh
 
+from bench.common import wait_until
 from tests.conftest import ROOT
 from tests.integration.test_compose import (
     COMPOSE,
@@ -101,12 +103,16 @@ def test_stranger_reads_joint_states_but_cannot_move_the_robot(tmp_path: Path) -
         before = run_probe(network, "tools", tmp_path, "call-before", "call", "sim/get_physics_properties",
                            env=identity, secrets=operator)
         assert [r.get("ok", {}).get("success") for r in before["replies"]] == [True], f"{before}\n{run.outputs()}"
-        watcher = start_probe(network, "tools", tmp_path, "watch", "watch", "30", env=identity, secrets=operator)
-        time.sleep(3)
+        watcher = start_probe(network, "tools", tmp_path, "watch", "watch", "8", "--until-signal", env=identity,
+                              secrets=operator)
+        wait_until(lambda: "watching" in watcher.log_path.read_text(errors="replace") or watcher.poll() is not None,
+                   120, "the watcher to see joint_states")
         stranger = start_probe(network, "stranger", tmp_path, "stranger", "rogue", env=identity, secrets=guest)
-        time.sleep(8)  # the stranger offers its fake simulator service until its calls are done
+        wait_until(lambda: "spoofing" in stranger.log_path.read_text(errors="replace") or stranger.poll() is not None,
+                   120, "the stranger's fake simulator service")
         during = run_probe(network, "tools", tmp_path, "call-during", "call", "sim/get_physics_properties",
                            env=identity, secrets=operator)
+        os.killpg(stranger.pid, signal.SIGINT)
         attack = probe_result(stranger)
         # the same stranger without credentials, or guessing a password, is not let in at all
         nobody = tmp_path / "nobody.json5"
@@ -118,6 +124,7 @@ def test_stranger_reads_joint_states_but_cannot_move_the_robot(tmp_path: Path) -
                          'password: "guess"}}}}')
         guessing = run_probe(network, "stranger", tmp_path, "guessing", "rogue", env=identity,
                              secrets={"zenoh.json5": wrong})
+        os.killpg(watcher.pid, signal.SIGINT)
         seen = probe_result(watcher)
         after = run_probe(network, "tools", tmp_path, "call-after", "call", "sim/get_physics_properties",
                           env=identity, secrets=operator)

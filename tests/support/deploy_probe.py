@@ -1,13 +1,15 @@
 """Programs the deployment tests run on their hosts (network namespaces), printing one JSON line.
 
-``watch SECONDS``: waits for ``humanoid/joint_states`` (at most 120 s), then records for SECONDS what a
-user on that host sees: joint_states, the left knee's range (the joint commander bends it every 2 s), the
-pelvis height (sim/model_states), sim time, and every sample on the robot's command keys whose
-attachment marks it as the rogue's.
+``watch SECONDS [--until-signal]``: waits for ``humanoid/joint_states`` (at most 120 s), then records for
+SECONDS (with ``--until-signal``: at least SECONDS, then until SIGINT, at most 120 s) what a user on that host
+sees: joint_states, the left knee's range (the joint commander bends it every 2 s), the pelvis height
+(sim/model_states), sim time, and every sample on the robot's command keys whose attachment marks it as the
+rogue's.
 
 ``rogue``: what a stranger holding only the read-only ``guest`` account tries: read joint_states, then
 drive the robot (hardware commands, trajectories, wildcard puts), call the simulator's and the controller
-manager's services, answer a simulator service in its place.
+manager's services, answer a simulator service in its place. It prints ``spoofing`` once its fake service
+is up and keeps it up until SIGINT (at most 60 s), so a caller can show that it is never asked.
 
 ``call KEY``: one service call with an empty request; prints the replies (ok/error).
 
@@ -18,9 +20,11 @@ Zenoh refused a connection.
 from __future__ import annotations
 
 import json
+import signal
 import sys
 import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import msgpack
 
@@ -29,6 +33,7 @@ from nodes.core.session import init_zenoh_log, is_connected, open_peer
 ROGUE = b"rogue"
 COMMAND_KEYS = ("humanoid/hardware/**", "humanoid/*/joint_trajectory")
 KNEE = "left_knee"
+STOP = threading.Event()   # set by SIGINT / SIGTERM
 
 
 def _stamp(sample) -> bytes:
@@ -36,7 +41,7 @@ def _stamp(sample) -> bytes:
     return attachment.to_bytes() if attachment is not None else b""
 
 
-def watch(seconds: float) -> dict:
+def watch(seconds: float, until_signal: bool = False) -> dict:
     session = open_peer()
     lock = threading.Lock()
     knees: list[float] = []
@@ -77,7 +82,10 @@ def watch(seconds: float) -> dict:
             return {"error": "no joint_states in 120 s"}
         with lock:
             knees.clear(), pelvis.clear(), clock.clear()
+        print("watching", flush=True)
         time.sleep(seconds)
+        if until_signal:
+            STOP.wait(120 - seconds)
         with lock:
             return {"joint_states": len(knees), "knee_min": min(knees, default=None),
                     "knee_max": max(knees, default=None), "pelvis_min": min(pelvis, default=None),
@@ -132,6 +140,7 @@ def rogue() -> dict:
     spoof = session.declare_queryable("sim/get_physics_properties",
                                       lambda query: query.reply(query.key_expr, msgpack.packb({"success": True}),
                                                                 attachment=ROGUE))
+    print("spoofing", flush=True)
     puts = {"humanoid/hardware/command": frame, "humanoid/hardware/*": frame, "humanoid/**": frame, "**": frame,
             "humanoid/hardware/state": frame,
             "humanoid/joint_trajectory_controller/joint_trajectory": trajectory}
@@ -154,7 +163,10 @@ def rogue() -> dict:
             "activate_controllers": [], "deactivate_controllers": ["joint_trajectory_controller"],
             "strictness": 1, "activate_asap": False, "timeout": {"sec": 0, "nanosec": 0}},
     }
-    report["replies"] = {key: _replies(session, key, payload) for key, payload in calls.items()}
+    with ThreadPoolExecutor(len(calls)) as pool:   # each refused call waits out its timeout: all at once
+        replies = pool.map(lambda item: _replies(session, *item), calls.items())
+        report["replies"] = dict(zip(calls, replies, strict=True))
+    STOP.wait(60)
     spoof.undeclare()
     sub.undeclare()
     session.close()
@@ -182,9 +194,11 @@ def call(key: str) -> dict:
 
 def main(argv: list[str]) -> int:
     init_zenoh_log()  # zenoh's own reasons on stderr at RUST_LOG's level (why a handshake was refused)
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: STOP.set())
     verb = argv[0]
     if verb == "watch":
-        result = watch(float(argv[1]))
+        result = watch(float(argv[1]), until_signal="--until-signal" in argv[2:])
     elif verb == "rogue":
         result = rogue()
     elif verb == "call":
