@@ -166,6 +166,9 @@ class Node:
         if self._zr.use_sim_time:
             self._zr_clock._sim_source = self._zr_sim_now
         self._zr.parameters.add_on_set_callback(self._zr_on_core_set)
+        # /parameter_events: this node's own, as rclpy publishes them (not the core node's for its stores)
+        self._zr.parameters.listener = None
+        self._zr_events = self._zr.parameter_events
         if start_parameter_services:   # the ROS 2 wire's six services answer from this node (rclpy's)
             self._zr.ros_parameters.backend = ParameterService(self)
         else:
@@ -593,6 +596,7 @@ class Node:
             self._zr_parameters[name] = parameter
             self._zr_descriptors[name] = descriptor
             self._zr_store(name, value)
+            self._zr_events.publish(new=[_parameter_msg(parameter)])
         return parameter
 
     def _zr_store(self, name: str, value: Any) -> None:
@@ -746,16 +750,23 @@ class Node:
             result = self._zr_run_on_set(parameters)
             if not result.successful:
                 return result
+            event: dict[str, list[Any]] = {"new": [], "changed": [], "deleted": []}
             for p in parameters:
-                if p.type_ == Parameter.Type.NOT_SET and p.name in self._zr_parameters:
-                    del self._zr_parameters[p.name]
-                    self._zr_descriptors.pop(p.name, None)
-                    self._zr.parameters.undeclare(p.name)
+                if p.type_ == Parameter.Type.NOT_SET:   # deleted, whatever it was (rclpy's)
+                    event["deleted"].append(p.to_parameter_msg())
+                    if p.name in self._zr_parameters:
+                        del self._zr_parameters[p.name]
+                        self._zr_descriptors.pop(p.name, None)
+                        self._zr.parameters.undeclare(p.name)
                     continue
                 if p.name not in self._zr_descriptors:
                     self._zr_descriptors[p.name] = ParameterDescriptor(name=p.name)
+                old = self._zr_parameters.get(p.name)
+                kind = "new" if old is None or old.value is None else "changed"   # had no value: new
+                event[kind].append(p.to_parameter_msg())
                 self._zr_parameters[p.name] = p
                 self._zr_store(p.name, p.value)
+            self._zr_events.publish(**event)
         for callback in list(self._zr_post_set):
             callback(parameters)
         return result
@@ -810,6 +821,12 @@ class _Uninitialized:
 
     def __init__(self, name: str, type_: Parameter.Type) -> None:
         self.name, self.type_, self.value = name, type_, None
+
+
+def _parameter_msg(parameter: Any) -> Any:
+    """rcl_interfaces/msg/Parameter of a declared parameter (NOT_SET while statically typed and unset)."""
+    return Parameter(parameter.name).to_parameter_msg() if isinstance(parameter, _Uninitialized) \
+        else parameter.to_parameter_msg()
 
 
 def _type_name(parameter: Any) -> str:

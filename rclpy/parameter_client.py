@@ -10,8 +10,8 @@ from typing import Any
 import msgs
 from nodes.core.params import load_params_file
 from rclpy._entities import _calls
-from rclpy.exceptions import not_implemented
 from rclpy.parameter import Parameter
+from rclpy.qos import qos_profile_parameter_events
 from rclpy.task import Future
 
 _SERVICES = {
@@ -121,8 +121,15 @@ class AsyncParameterClient:
                                        callback: Any = None) -> Future:
         return self.set_parameters_atomically(self._file_parameters(parameter_file), callback)
 
-    def on_parameter_event(self, callback: Any) -> Any:
-        raise not_implemented("AsyncParameterClient.on_parameter_event (no /parameter_events topic)")
+    def on_parameter_event(self, callback: Any, qos_profile: Any = qos_profile_parameter_events, *,
+                           callback_group: Any = None, event_callbacks: Any = None,
+                           qos_overriding_options: Any = None, raw: bool = False) -> Any:
+        """A subscription to ``/parameter_events``: every node's events, not only the remote node's (as
+        rclpy's)."""
+        return self._node.create_subscription(
+            msgs.get_type("rcl_interfaces/msg/ParameterEvent"), "/parameter_events", callback, qos_profile,
+            callback_group=callback_group, event_callbacks=event_callbacks,
+            qos_overriding_options=qos_overriding_options, raw=raw)
 
     def destroy(self) -> None:
         for client in self._clients.values():

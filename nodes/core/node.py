@@ -36,6 +36,7 @@ from nodes.core.factory import EndpointFactory
 from nodes.core.log import Logger
 from nodes.core.log_services import LoggerLevelServices
 from nodes.core.node_parameters import NodeParameters
+from nodes.core.parameter_events import ParameterEvents
 from nodes.core.presence import GraphPresence
 from nodes.core.ros_parameters import CoreParameterBackend, RosParameterServices
 from nodes.core.session import open_peer
@@ -109,6 +110,10 @@ class Node:
         self.session_id = self.presence.session_id
         self._endpoints = EndpointFactory(self, self.resolve)
         self.parameters = NodeParameters(params)
+        self.parameter_events = ParameterEvents(functools.partial(Node.create_publisher, self),
+                                                self.fully_qualified_name, self._event_stamp)
+        self.parameters.listener = self.parameter_events.core_listener(self.parameters.descriptor,
+                                                                       self.parameters.get)
         self.use_sim_time = bool(self.declare_parameter(
             "use_sim_time", False, description="follow sim/clock instead of the wall clock",
             read_only="the clock is chosen at start-up: restart the node with --param use_sim_time:=..."))
@@ -126,6 +131,11 @@ class Node:
         # the launcher's liveness probe, answered here on Zenoh's thread (a flood of requests does not delay
         # it); the mark it queues shows, at the next probe, whether the spinner still takes work
         self._alive = self.session.declare_queryable(graph.alive_key(self.fully_qualified_name), self._on_alive)
+
+    def _event_stamp(self) -> Any:
+        """Now on the node clock (wall time while the constructor has not made the clock yet)."""
+        clock = self.__dict__.get("clock")
+        return clock.stamp(time.time()) if clock is not None else msgs.time_from_sec(time.time())
 
     def _on_alive(self, query: zenoh.Query) -> None:
         stalled = self.executor.stalled_for()

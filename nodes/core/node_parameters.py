@@ -23,6 +23,8 @@ class NodeParameters:
         self._values: dict[str, Any] = {}
         self._descriptors: dict[str, ParameterDescriptor] = {}
         self._callbacks: list[Callable[[str, Any], str | None]] = []
+        # told ("new" | "changed", names) after a declaration or a set took effect: /parameter_events
+        self.listener: Callable[[str, list[str]], None] | None = None
 
     def declare(self, name: str, default: Any, *, description: str = "", type: type | None = None,
                 min_value: float | None = None, max_value: float | None = None,
@@ -36,6 +38,7 @@ class NodeParameters:
         value = coerce(desc, self._overrides.get(name, default))
         self._descriptors[name] = desc
         self._values[name] = value
+        self._tell("new", [name])
         return value
 
     def get(self, name: str) -> Any:
@@ -52,6 +55,7 @@ class NodeParameters:
     def set(self, name: str, value: Any) -> Any:
         value = self.check(name, value)
         self._values[name] = value
+        self._tell("changed", [name])
         return value
 
     def set_all(self, values: dict[str, Any]) -> dict[str, Any]:
@@ -59,7 +63,12 @@ class NodeParameters:
         stored; the first problem raises ParameterError and nothing changes."""
         checked = {name: self.check(name, value) for name, value in values.items()}
         self._values.update(checked)
+        self._tell("changed", list(checked))
         return checked
+
+    def _tell(self, kind: str, names: list[str]) -> None:
+        if self.listener is not None and names:
+            self.listener(kind, names)
 
     def check(self, name: str, value: Any) -> Any:
         """The value ``set`` would store (coerced), or ParameterError saying why it would be refused."""
