@@ -11,7 +11,7 @@ from nodes.tools.common import add_common, graph_entries
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--dot", action="store_true", help="print Graphviz dot instead of text")
-    parser.add_argument("-a", "--all", action="store_true", help="include rosout, parameter services and CLI nodes")
+    parser.add_argument("-a", "--all", action="store_true", help="include rosout, parameter_events, parameter services and CLI nodes")
     add_common(parser)
 
 
@@ -21,7 +21,7 @@ def run(args: argparse.Namespace) -> int:
     def shown(e: graph.GraphEntry) -> bool:
         if args.all:
             return True
-        return not e.node.lstrip("/").startswith("zenroid_") and e.name != "rosout"
+        return not e.node.lstrip("/").startswith("zenroid_") and e.name not in ("rosout", "parameter_events")
 
     pubs: dict[str, set[str]] = defaultdict(set)
     subs: dict[str, set[str]] = defaultdict(set)

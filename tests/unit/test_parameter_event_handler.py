@@ -129,8 +129,9 @@ def test_an_rclpy_node_publishes_rclpys_events(context) -> None:
     """Declared: new (NOT_SET while statically typed and unset); set: changed, or new when it had no value;
     set_parameters: one event per parameter, set_parameters_atomically: one for all; NOT_SET: deleted;
     undeclare_parameter and refused sets: none (rclpy's)."""
-    import rclpy
     from rcl_interfaces.msg import SetParametersResult
+
+    import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.parameter_client import AsyncParameterClient
 
