@@ -185,3 +185,14 @@ def test_an_rclpy_node_publishes_rclpys_events(context) -> None:
     assert all(e.stamp.sec > 0 for e in events)
     node.destroy_node()
     watcher.destroy_node()
+
+
+def test_the_ros2_twin_announces_what_a_jazzy_node_announces() -> None:
+    """The QoS and type hash of a Jazzy talker's /parameter_events publisher token (rmw_zenoh, captured from
+    a real ROS 2 graph)."""
+    from msgs.type_hash import rihs01
+    from nodes.core.parameter_events import QOS
+
+    assert QOS.token() == "::,1000:,:,:,,"
+    assert rihs01("rcl_interfaces/msg/ParameterEvent") == \
+        "RIHS01_043e627780fcad87a22d225bc2a037361dba713fca6a6b9f4b869a5aa0393204"
