@@ -1,8 +1,8 @@
 """What the ROS 2 wire (rmw_zenoh mirror) costs: CDR codec speed, publish cost and one-way latency of a
 22-joint JointState (the humanoid's joint_states) with the wire off, on without a ROS 2 subscriber (idle,
 the lazy case) and on with one (CDR encoded and sent), and what a node costs to create with the wire off and
-on (its graph tokens and, on the wire, rcl_interfaces' six parameter services). Prints a table, then one JSON
-line.
+on (its graph tokens, its /parameter_events publisher and, on the wire, rcl_interfaces' six parameter
+services; wall and process CPU time). Prints a table, then one JSON line.
 
     python bench/ros2_wire.py [--rate 1000] [--seconds 3] [--runs 3]
 """
@@ -132,17 +132,18 @@ def node_cost(nodes: int = 40, rounds: int = 7) -> dict[str, float]:
         os.environ["ZENROID_ROS2"] = "0" if mode == "off" else "1"
         session = open_peer([endpoint])
         try:
-            start = time.perf_counter()
+            start, cpu = time.perf_counter(), time.process_time()
             made = [Node(f"n{i}", namespace="cost", session=session, log_level="warn") for i in range(nodes)]
-            took = time.perf_counter() - start
+            took, cpu = time.perf_counter() - start, time.process_time() - cpu
             for node in made:
                 node.destroy()
         finally:
             session.close()
-        return {"ms": took / nodes * 1000}
+        return {"ms": took / nodes * 1000, "cpu_ms": cpu / nodes * 1000}
 
     runs = interleaved_runs(("off", "on"), rounds, once)
-    return {f"node_ms_{mode}": statistics.median(r["ms"] for r in results) for mode, results in runs.items()}
+    return {f"node_{k}_{mode}": statistics.median(r[k] for r in results) for mode, results in runs.items()
+            for k in ("ms", "cpu_ms")}
 
 
 def main() -> None:
@@ -167,7 +168,8 @@ def main() -> None:
         print(f"{labels[m]:<34}{med[m]['publish_us']:>11.1f}{med[m]['p50']:>9.1f}{med[m]['p99']:>9.1f}{lost[m]:>6}")
     print(f"CDR messages received by the ROS 2 side: {cdr_sent} of {int(args.rate * args.seconds) * args.runs}")
     print(f"creating a node (40 on one session, median of 7): {node_ms['node_ms_off']:.2f} ms with the wire off, "
-          f"{node_ms['node_ms_on']:.2f} ms on")
+          f"{node_ms['node_ms_on']:.2f} ms on; process CPU {node_ms['node_cpu_ms_off']:.2f} / "
+          f"{node_ms['node_cpu_ms_on']:.2f} ms")
     summary = {f"{m}_{k}": round(med[m][k], 1) for m in MODES for k in ("publish_us", "p50", "p99")}
     summary.update({f"{m}_lost": lost[m] for m in MODES})
     summary.update({k: round(v, 1) for k, v in codec_us.items()})
