@@ -2,7 +2,8 @@
 
 The convention (docs/contributing.md, "The examples in these docs are tested"): every ```bash and ```python
 block, and the zenroid column of the table after ``<!-- examples: table -->``, run in order (the README, then
-the pages in the site's nav order) from a copy of the repository root, against ``python -m launch
+the pages in the site's nav order; the pages that act on the job's physics in one lane, the others in a
+second lane beside it) from a copy of the repository root, against ``python -m launch
 humanoid.yaml gui:=false`` (``job=FILE.yaml`` in the block's info string picks another launch file), each
 job started once for all its examples. A bash command, or a whole python block, must exit 0; one whose
 comment says ``(until Ctrl-C)`` must still be running after a few seconds and then end on SIGINT;
@@ -31,7 +32,7 @@ from tests.conftest import ROOT, free_port
 MAIN_JOB = "humanoid.yaml"
 NAMESPACES = {"humanoid.yaml": "humanoid", "controller_lab.yaml": "simple_robot"}
 RUN_LANGUAGES = ("bash", "python")
-STREAM_SECONDS = 3.0
+STREAM_SECONDS = 2.0
 _FENCE = re.compile(r"^```(\S*)[ \t]*(.*)$")
 _CODE_SPAN = re.compile(r"`([^`]+)`")
 _HEREDOC = re.compile(r"<<-?\s*['\"]?(\w+)['\"]?")
@@ -352,6 +353,34 @@ def _waves(examples: list[Example]) -> list[list[Example]]:
     return waves
 
 
+# Pages whose examples act on the job's physics (pushes, gravity, pauses, resets, spawns, bag replays into the
+# job) or read what it does (sensors): one lane, in page order. The other pages neither change what those read
+# nor depend on it: they run in a second lane beside the first, in a workspace of their own.
+_PHYSICS_PAGES = frozenset({"README.md", "docs/simulator.md", "docs/worlds.md", "docs/sensors.md", "docs/cli.md",
+                            "docs/bags.md"})
+
+
+def lanes(examples: list[Example]) -> list[list[Example]]:
+    """The examples that touch the job's physics, and the rest; each keeps the pages' order."""
+    return [[e for e in examples if e.page in _PHYSICS_PAGES], [e for e in examples if e.page not in _PHYSICS_PAGES]]
+
+
+def _run_lane(examples: list[Example], lane_dir: Path, connect: str) -> list[str]:
+    from concurrent.futures import ThreadPoolExecutor
+
+    lane_dir.mkdir()
+    work, bin_dir, env = _workspace(lane_dir)
+    env["ZENOH_CONNECT"] = connect
+    failures: list[str] = []
+    with ThreadPoolExecutor(max_workers=3) as pool:
+        for wave in _waves(examples):
+            started = time.monotonic()
+            failures += [p for p in pool.map(lambda e: _run(e, work, bin_dir, env, lane_dir), wave) if p]
+            with open(lane_dir / "waves.tsv", "a") as timings:   # where the test's time goes
+                timings.write(f"{time.monotonic() - started:.2f}\t{len(wave)}\t{wave[0].where}\n")
+    return failures
+
+
 @pytest.mark.slow
 @pytest.mark.timeout(1200)
 @pytest.mark.parametrize("job", [MAIN_JOB, "controller_lab.yaml"])
@@ -360,17 +389,18 @@ def test_docs_examples_run_as_written(job: str, tmp_path: Path) -> None:
 
     examples = [e for e in all_examples() if e.job == job and not e.skip]
     assert examples
-    work, bin_dir, env = _workspace(tmp_path)
+    _, _, env = _workspace(tmp_path)
     port = free_port()
     log = tmp_path / "job.log"
     proc = _start_job(job, port, env, log)
-    env["ZENOH_CONNECT"] = f"tcp/127.0.0.1:{port}"
+    connect = env["ZENOH_CONNECT"] = f"tcp/127.0.0.1:{port}"
     failures: list[str] = []
     try:
         _wait_ready(job, env, proc, log)
-        with ThreadPoolExecutor(max_workers=3) as pool:
-            for wave in _waves(examples):
-                failures += [p for p in pool.map(lambda e: _run(e, work, bin_dir, env, tmp_path), wave) if p]
+        with ThreadPoolExecutor(max_workers=2) as pool:
+            runs = [pool.submit(_run_lane, lane, tmp_path / f"lane{i}", connect)
+                    for i, lane in enumerate(lanes(examples)) if lane]
+            failures = [failure for run in runs for failure in run.result()]
     finally:
         _stop(proc)
     assert not failures, f"{len(failures)} of {len(examples)} docs examples failed:\n\n" + "\n\n".join(failures)
