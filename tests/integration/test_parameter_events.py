@@ -35,7 +35,9 @@ def zenroid(router: str, *args: str) -> subprocess.CompletedProcess:
 
 
 def heard(path: Path) -> list[dict]:
-    return [json.loads(line) for line in path.read_text().splitlines() if line.startswith("{")]
+    """The peer's complete JSON lines so far (the last one may still be being written)."""
+    lines = path.read_text().split("\n")[:-1]
+    return [json.loads(line) for line in lines if line.startswith("{")]
 
 
 def changed(event: dict) -> dict:
