@@ -25,8 +25,9 @@ QOS = Qos(reliable=True, transient_local=False, depth=1000)   # rclpy's qos_prof
 
 
 class ParameterEvents:
-    """The node's publisher on ``/parameter_events``; ``publish`` takes rcl_interfaces/msg/Parameter lists
-    (or callables returning them, built only when someone listens)."""
+    """The node's publisher on ``/parameter_events``; ``publish`` takes lists of rcl_interfaces/msg/Parameter
+    (an rclpy node's, built by rclpy/node.py), ``core_listener`` builds them from a ``nodes.core`` node's
+    values."""
 
     def __init__(self, create_publisher: Callable[..., Any], node_name: str, stamp: Callable[[], Any]) -> None:
         self.publisher = create_publisher(ParameterEvent, TOPIC, ros2_qos=QOS)
