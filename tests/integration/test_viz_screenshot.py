@@ -58,7 +58,7 @@ def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int)
     """A page opened 10 s into the main job (its viewer with the default settings) reaches the simulation's
     present, and then what it draws is the present: paused while its time cursor is within 1 s of the
     simulation, the knee in the picture (the left-leg plot at the cursor) is bent or straight as joint_states
-    had it at the cursor. Twice, each time opening the page anew.
+    had it at the cursor. A try whose cursor lands while the knee moves opens the page anew.
 
     How fast it gets there is the bench's business (``bench/viz.py``); the deadline here only bounds a page
     that never catches up, with room for a loaded machine."""
@@ -115,7 +115,7 @@ def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int)
         with HeadlessBrowser(timeout=120) as browser:
             # Each try opens the page anew (a late viewer), waits until it shows the present, and then pauses it:
             # the picture is of a known time (the cursor no longer moves), which the knee is compared at.
-            while len(checked) < 2 and time.monotonic() < deadline:
+            while not checked and time.monotonic() < deadline:
                 page = ViewerProbe(browser, url)
                 page.wait_ready(120)
                 lag = math.inf
@@ -154,7 +154,7 @@ def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int)
                 bent_on_screen = zero[1] - knee[1] > 25  # pixels above the zero line
                 checked.append((lag, min(window) > 0.3, bent_on_screen))
                 tries.append(f"{cursor:.2f}: checked")
-        assert len(checked) == 2, f"the page never showed the present (sim s behind, every second: {lags}; {tries})"
+        assert checked, f"the page never showed the present (sim s behind, every second: {lags}; {tries})"
         for lag, bent, bent_on_screen in checked:
             assert bent == bent_on_screen, (f"knee {'bent' if bent else 'straight'} at the cursor ({lag:.2f} s "
                                             f"behind the simulation when paused), not on screen")
