@@ -168,17 +168,17 @@ def _commands_per_second(router: str, seconds: float) -> float:
 
 def test_parameters_apply_live_or_are_refused_with_the_reason(router, commander, tmp_path) -> None:
     node = "/humanoid/joint_commander"
-    assert 1.0 <= _commands_per_second(router, 3.0) <= 3.5  # period 0.5 s
+    assert 1.0 <= _commands_per_second(router, 2.0) <= 3.5  # period 0.5 s
     changed = zenroid(router, "param", "set", node, "period", "0.1")
     assert changed.returncode == 0 and "Set parameter successful" in changed.stdout
-    assert _commands_per_second(router, 3.0) >= 6.0  # now every 0.1 s
+    assert _commands_per_second(router, 1.5) >= 6.0  # now every 0.1 s
     refused = zenroid(router, "param", "set", node, "controller", "other_controller")
     assert refused.returncode == 1
     assert "read-only (set at start-up: restart the node with --param controller:=VALUE)" in refused.stdout
     assert zenroid(router, "param", "set", node, "use_sim_time", "true").returncode == 1
     stopped = zenroid(router, "param", "set", node, "enabled", "false")
     assert stopped.returncode == 0
-    assert _commands_per_second(router, 1.5) == 0.0
+    assert _commands_per_second(router, 1.0) == 0.0
     # no stray YAML document-end lines anywhere
     listed = zenroid(router, "param", "list", node)
     got = zenroid(router, "param", "get", node, "period")
@@ -196,7 +196,7 @@ def test_parameters_apply_live_or_are_refused_with_the_reason(router, commander,
     assert loaded.returncode == 0, loaded.stdout + loaded.stderr
     assert "Set parameter knee successful" in loaded.stdout and "Set parameter enabled successful" in loaded.stdout
     assert zenroid(router, "param", "get", node, "knee").stdout.strip() == "0.5"
-    assert _commands_per_second(router, 1.5) > 0  # enabled again
+    assert _commands_per_second(router, 1.0) > 0  # enabled again
 
 
 def test_log_level_changes_at_run_time(router, commander, processes) -> None:

@@ -179,7 +179,7 @@ def test_compose_topology_runs_across_hosts(tmp_path: Path) -> None:
     try:
         run.start()
         # a user on the tools host, as the viewer and the commander there: same environment as theirs
-        seen = run_probe(network, "tools", tmp_path, "watch", "watch", "15",
+        seen = run_probe(network, "tools", tmp_path, "watch", "watch", "6",
                          env=compose.services["viewer"].environment)
         assert "error" not in seen, f"{seen}\n{run.outputs()}"
         assert seen["joint_states"] > 100, seen
