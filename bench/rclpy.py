@@ -8,9 +8,14 @@ wall time from its first message to its last, so start-up is not counted).
 - rclpy: ``rclpy`` publisher -> an ``rclpy`` subscription in a node spun by ``rclpy.spin`` (the callback on
   the spinning thread, as rclpy runs it).
 
+The subscriber also reports its system (kernel) CPU time and its context switches per message (all its
+threads): what a thread hand-off per message costs shows there, not in user-space instruction counts. A
+subscriber that misses messages (a KEEP_LAST depth of 10 drops the oldest of a burst its spinning thread
+could not keep up with) ends 2 s after the last one arrived and reports what it got.
+
 Prints a table, then one JSON line (medians over the runs; goal: rclpy within 1.2x of core on both).
 
-    python bench/rclpy.py [--rate 1000] [--seconds 3] [--runs 3]
+    python bench/rclpy.py [--rate 1000] [--seconds 3] [--runs 3] [--modes raw,core,rclpy]
 """
 
 from __future__ import annotations
@@ -22,11 +27,12 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench.common import interleaved_runs  # noqa: E402 - after the path is set (bench scripts run from anywhere)
+from bench.common import child_env, interleaved_runs  # noqa: E402 - after the path is set (bench scripts run from anywhere)
 from bench.transport import JOINTS, paced, pacing_arguments  # noqa: E402
 
 MODES = ("raw", "core", "rclpy")
@@ -45,16 +51,41 @@ def subscriber(mode: str, endpoint: str, count: int, ready_key: str) -> None:
     seqs: set[int] = set()
     done = threading.Event()
     window: list[float] = []   # wall and CPU time at the first and at the last message
+    marks: list[Any] = []      # resource usage (system time, context switches) at the first and the last
+
+    def usage() -> Any:
+        import resource
+
+        return resource.getrusage(resource.RUSAGE_SELF)
 
     def record(sec: int, nanosec: int, seq: int) -> None:
         now = time.perf_counter_ns()
+        last[0] = now
         latencies.append(now - (sec * 1_000_000_000 + nanosec))
         if not window:
             window.extend((time.perf_counter(), time.process_time()))
+            marks.append(usage())
         seqs.add(seq)
-        if len(seqs) >= count:
+        if len(seqs) >= count and not done.is_set():
             window.extend((time.perf_counter(), time.process_time()))
+            marks.append(usage())
             done.set()
+
+    last = [0]
+
+    def watch() -> None:
+        """Messages lost: end the run 2 s after the last one arrived, reporting what did."""
+        while not done.wait(0.5):
+            if last[0] and time.perf_counter_ns() - last[0] > 2e9 and not done.is_set():
+                window.extend((last[0] / 1e9, time.process_time()))
+                marks.append(usage())
+                done.set()
+                if mode == "rclpy":
+                    import rclpy
+
+                    rclpy.try_shutdown()
+
+    threading.Thread(target=watch, daemon=True).start()
 
     if mode == "raw":
         from nodes.core.session import open_peer
@@ -109,7 +140,12 @@ def subscriber(mode: str, endpoint: str, count: int, ready_key: str) -> None:
         node.destroy_node()
         rclpy.try_shutdown()
     cpu = (window[3] - window[1]) / (window[2] - window[0]) if len(window) == 4 and window[2] > window[0] else None
-    print(json.dumps({"latencies_ns": latencies, "received": len(seqs), "cpu": cpu}), flush=True)
+    extra = {}
+    if len(marks) == 2 and len(seqs) > 1:
+        start, end = marks
+        extra = {"sys": (end.ru_stime - start.ru_stime) / (window[2] - window[0]),
+                 "switches": (end.ru_nvcsw + end.ru_nivcsw - start.ru_nvcsw - start.ru_nivcsw) / (len(seqs) - 1)}
+    print(json.dumps({"latencies_ns": latencies, "received": len(seqs), "cpu": cpu, **extra}), flush=True)
 
 
 # ------------------------------------------------------------------ publisher side (this process)
@@ -126,8 +162,10 @@ def run_once(mode: str, endpoint: str, rate: float, seconds: float) -> dict:
     session = open_peer([endpoint])
     ready = []
     ready_sub = session.declare_subscriber(ready_key, lambda s: ready.append(1))
+    # child_env: this checkout first on the child's path from its start (an import before this script's own
+    # sys.path line may already pull in the installed tree's ``nodes``)
     child = subprocess.Popen([sys.executable, __file__, "--child", mode, endpoint, str(count), ready_key],
-                             stdout=subprocess.PIPE, text=True, cwd=ROOT)
+                             stdout=subprocess.PIPE, text=True, cwd=ROOT, env=child_env())
     JointState = msgs.get_type("sensor_msgs/msg/JointState")
     positions = [0.1 * i for i in range(30)]
     close = []
@@ -186,32 +224,37 @@ def run_once(mode: str, endpoint: str, rate: float, seconds: float) -> dict:
         return lat[min(len(lat) - 1, int(p * len(lat)))] if lat else float("nan")
 
     return {"p50": pct(0.5), "p99": pct(0.99), "lost": count - data["received"],
-            "cpu": 100.0 * data["cpu"] if data["cpu"] is not None else float("nan")}
+            "cpu": 100.0 * data["cpu"] if data["cpu"] is not None else float("nan"),
+            "sys": 100.0 * data["sys"] if "sys" in data else float("nan"),
+            "switches": data.get("switches", float("nan"))}
 
 
 def main() -> None:
-    args = pacing_arguments(__doc__.splitlines()[0])
+    args = pacing_arguments(__doc__.splitlines()[0], MODES)
+    modes = [m for m in MODES if m in args.modes]
     load_before = os.getloadavg()[0]
-    results = interleaved_runs(MODES, args.runs, lambda mode, endpoint: run_once(mode, endpoint, args.rate,
+    results = interleaved_runs(modes, args.runs, lambda mode, endpoint: run_once(mode, endpoint, args.rate,
                                                                                  args.seconds))
     def median(values: list[float]) -> float:
         finite = [v for v in values if v == v]   # a run that received nothing has no figures
         return statistics.median(finite) if finite else float("nan")
 
-    med = {m: {k: median([r[k] for r in runs]) for k in ("p50", "p99", "cpu")} for m, runs in results.items()}
+    figures = ("p50", "p99", "cpu", "sys", "switches")
+    med = {m: {k: median([r[k] for r in runs]) for k in figures} for m, runs in results.items()}
     lost = {m: sum(r["lost"] for r in runs) for m, runs in results.items()}
     print(f"30-joint JointState at {args.rate:g} Hz, {args.seconds:g} s x {args.runs} runs (medians)")
-    print(f"{'path':<34}{'p50 µs':>10}{'p99 µs':>10}{'CPU %':>8}{'lost':>8}")
+    print(f"{'path':<34}{'p50 µs':>10}{'p99 µs':>10}{'CPU %':>8}{'sys %':>8}{'cs/msg':>8}{'lost':>8}")
     labels = {"raw": "raw zenoh + msgpack", "core": "nodes.core pair (spin)", "rclpy": "rclpy pair (rclpy.spin)"}
-    for mode in MODES:
+    for mode in modes:
         print(f"{labels[mode]:<34}{med[mode]['p50']:>10.1f}{med[mode]['p99']:>10.1f}{med[mode]['cpu']:>8.1f}"
-              f"{lost[mode]:>8}")
+              f"{med[mode]['sys']:>8.1f}{med[mode]['switches']:>8.2f}{lost[mode]:>8}")
     print(f"load average (1 min) before / after: {load_before:.1f} / {os.getloadavg()[0]:.1f} "
           f"({os.cpu_count()} cores shared with other jobs)")
-    summary = {f"{m}_{k}": round(med[m][k], 1) for m in MODES for k in ("p50", "p99", "cpu")}
-    summary.update({f"{m}_lost": lost[m] for m in MODES})
-    summary["rclpy_to_core_p50"] = round(med["rclpy"]["p50"] / med["core"]["p50"], 3)
-    summary["rclpy_to_core_cpu"] = round(med["rclpy"]["cpu"] / med["core"]["cpu"], 3)
+    summary = {f"{m}_{k}": round(med[m][k], 2 if k == "switches" else 1) for m in modes for k in figures}
+    summary.update({f"{m}_lost": lost[m] for m in modes})
+    if "rclpy" in med and "core" in med:
+        summary["rclpy_to_core_p50"] = round(med["rclpy"]["p50"] / med["core"]["p50"], 3)
+        summary["rclpy_to_core_cpu"] = round(med["rclpy"]["cpu"] / med["core"]["cpu"], 3)
     summary.update({"messages_per_run": int(args.rate * args.seconds), "runs": args.runs})
     print(json.dumps(summary))
 

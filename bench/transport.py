@@ -14,7 +14,7 @@ import statistics
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -149,13 +149,20 @@ def run_once(mode: str, endpoint: str, rate: float, seconds: float) -> dict:
     return {"p50": pct(0.5), "p99": pct(0.99), "lost": count - received, "sent": count}
 
 
-def pacing_arguments(description: str) -> argparse.Namespace:
-    """``--rate`` (Hz), ``--seconds`` per run, ``--runs``: the options of the paced-publisher benches."""
+def pacing_arguments(description: str, modes: Sequence[str] = ()) -> argparse.Namespace:
+    """``--rate`` (Hz), ``--seconds`` per run, ``--runs``: the options of the paced-publisher benches; with
+    ``modes``, ``--modes`` picks some of them (comma-separated)."""
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--rate", type=float, default=1000.0)
     parser.add_argument("--seconds", type=float, default=3.0)
     parser.add_argument("--runs", type=int, default=3)
-    return parser.parse_args()
+    if modes:
+        parser.add_argument("--modes", type=lambda text: [m for m in text.split(",") if m],
+                            default=list(modes), help=f"comma-separated, of {','.join(modes)}")
+    args = parser.parse_args()
+    if modes and (unknown := [m for m in args.modes if m not in modes]):
+        parser.error(f"--modes: unknown {','.join(unknown)} (known: {','.join(modes)})")
+    return args
 
 
 def main() -> None:

@@ -140,7 +140,7 @@ class Executor:
         if not self._context.ok():
             raise ExternalShutdownException()
         timeout = None if timeout_sec is None or timeout_sec < 0 else timeout_sec
-        self._spinner.spin_once(timeout, stop=lambda: self._stop(condition))
+        self._spinner.spin_once(timeout, stop=self._stop if condition is None else lambda: self._stop(condition))
         if not self._is_shutdown and not self._context.ok():
             raise ExternalShutdownException()
 

@@ -209,7 +209,10 @@ class Executor:
         if not group.enter(self, item):
             return False
         try:
-            self._call(fn, args, where)
+            if self.propagate_errors:   # rclpy's: the exception ends the spin (one call less per callback)
+                fn(*args)
+            else:
+                self.run_callback(fn, *args, where=where)
         finally:
             group.leave()
         return True

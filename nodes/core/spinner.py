@@ -53,6 +53,7 @@ class Spinner:
         """Run due timers and at most one queued callback, waiting up to ``timeout`` s (None: until there is
         work) or until ``stop()`` is true after a ``wake()``. True if a callback ran."""
         end = None if timeout is None else time.monotonic() + max(0.0, timeout)
+        tokens = self._tokens
         while True:
             self._pending = False   # before looking: a wake-up after the look is not lost
             if self._run_one():
@@ -69,30 +70,45 @@ class Spinner:
                     return self._run_one()
                 continue
             try:
-                self._tokens.get(timeout=wait)
+                tokens.get(timeout=wait)
             except queue.Empty:
                 pass
             if end is not None and time.monotonic() >= end:
                 return self._run_one()
 
     def _next_deadline(self) -> float | None:
-        deadlines = [d for e in self._executors if (d := e.next_wall_deadline()) is not None]
+        # a peek at each heap first: most executors have no wall timers (the common rclpy subscriber)
+        deadlines = [d for e in self._executors if e._wall_timers and (d := e.next_wall_deadline()) is not None]
         return min(deadlines) if deadlines else None
 
     def _run_one(self) -> bool:
+        # the hot path of every message an rclpy node takes: the executors' queues and timer heaps are
+        # peeked here rather than through a call each (what ``Executor.take`` and ``due_wall_timers`` do)
         executors = self._executors
         ran = False
+        now = time.monotonic()
         for executor in executors:
-            for timer in executor.due_wall_timers():
-                ran = executor.run_item((timer.callback, (), "timer", timer.group)) or ran
+            timers = executor._wall_timers
+            if timers and timers[0][0] <= now:
+                for timer in executor.due_wall_timers():
+                    ran = executor.run_item((timer.callback, (), "timer", timer.group)) or ran
         count = len(executors)
+        turn = self._turn
         for i in range(count):
-            executor = executors[(self._turn + i) % count]
-            while (item := executor.take()) is not None:
-                if not executor.idle:
+            executor = executors[(turn + i) % count] if count > 1 else executors[0]
+            waiting = executor._queue
+            while True:
+                executor._took()
+                if waiting.empty():
+                    break
+                try:
+                    item = waiting.get_nowait()
+                except queue.Empty:
+                    break
+                if not waiting.empty():
                     self.wake()   # more is queued: another spinning thread may take it meanwhile
                 if executor.run_item(item):
-                    self._turn = (self._turn + i + 1) % max(1, count)
+                    self._turn = (turn + i + 1) % count
                     return True
                 # its group was busy: parked until the group's running callback ends
         return ran
