@@ -105,8 +105,8 @@ class Executor:
         # the group of callbacks dispatched without one (None: the node's lock)
         self.default_group: CallbackGroup | None = None
         self.wake: Callable[[], None] | None = None   # set by a Spinner that serves this executor
-        self._queue: queue.SimpleQueue = queue.SimpleQueue()
-        self._wall_timers: list[tuple[float, int, Timer]] = []
+        self.waiting: queue.SimpleQueue = queue.SimpleQueue()
+        self.wall_timers: list[tuple[float, int, Timer]] = []
         self._sim_timers: list[Timer] = []
         self._timer_seq = itertools.count()
         self._timer_lock = threading.Lock()
@@ -120,7 +120,7 @@ class Executor:
         0 while it keeps up (idle, or busy in a long callback), growing while it is blocked. A node never
         spun is not stalled. (A spinner that loops for ever computing is busy, not blocked: not seen here.)"""
         taken = self._taken_at
-        if taken is None or self._queue.empty():
+        if taken is None or self.waiting.empty():
             return 0.0
         now = time.monotonic()
         cpu = self._spinner_cpu()
@@ -132,7 +132,8 @@ class Executor:
             taken = max(taken, self._working[0])
         return max(0.0, now - taken)
 
-    def _took(self) -> None:
+    def took(self) -> None:
+        """A spinner is at this executor now (what the stall watch reads)."""
         self._taken_at, self._spinner, self._working = time.monotonic(), threading.get_ident(), None
 
     def _spinner_cpu(self) -> float | None:
@@ -161,7 +162,7 @@ class Executor:
 
     def put(self, item: tuple[Any, ...]) -> None:
         """Queue ``(fn, args, where, group)`` for the spinning thread and wake whoever spins this executor."""
-        self._queue.put(item)
+        self.waiting.put(item)
         wake = self.wake
         if wake is not None:
             wake()
@@ -225,17 +226,17 @@ class Executor:
 
     def take(self) -> tuple[Any, ...] | None:
         """The next queued callback without waiting (None: nothing queued)."""
-        self._took()
-        if self._queue.empty():   # cheaper than the exception get_nowait raises on an empty queue
+        self.took()
+        if self.waiting.empty():   # cheaper than the exception get_nowait raises on an empty queue
             return None
         try:
-            return self._queue.get_nowait()
+            return self.waiting.get_nowait()
         except queue.Empty:
             return None
 
     @property
     def idle(self) -> bool:
-        return self._queue.empty()
+        return self.waiting.empty()
 
     # ---------------------------------------------------------------- timers
     def add_timer(self, timer: Timer) -> None:
@@ -243,7 +244,7 @@ class Executor:
             if timer.sim_time:
                 self._sim_timers.append(timer)
             else:
-                heapq.heappush(self._wall_timers, (timer.next_due, next(self._timer_seq), timer))
+                heapq.heappush(self.wall_timers, (timer.next_due, next(self._timer_seq), timer))
         self.call_soon(_nothing, where="wake")   # so a waiting spin sees the new deadline
 
     def restart_sim_timers(self, now: float) -> None:
@@ -263,12 +264,12 @@ class Executor:
             self._call(timer.callback, (), "timer")
 
     def _next_wall_deadline(self) -> float | None:
-        if not self._wall_timers:   # a peek without the lock: no timers at all
+        if not self.wall_timers:   # a peek without the lock: no timers at all
             return None
         with self._timer_lock:
-            while self._wall_timers and self._wall_timers[0][2].cancelled:
-                heapq.heappop(self._wall_timers)
-            return self._wall_timers[0][0] if self._wall_timers else None
+            while self.wall_timers and self.wall_timers[0][2].cancelled:
+                heapq.heappop(self.wall_timers)
+            return self.wall_timers[0][0] if self.wall_timers else None
 
     def next_wall_deadline(self) -> float | None:
         return self._next_wall_deadline()
@@ -277,12 +278,12 @@ class Executor:
         """The wall timers due now, each moved to its next deadline (the caller runs them)."""
         now = time.monotonic()
         due: list[Timer] = []
-        timers = self._wall_timers
+        timers = self.wall_timers
         if not timers or timers[0][0] > now:   # a peek without the lock: the common case, nothing due
             return due
         with self._timer_lock:
-            while self._wall_timers and self._wall_timers[0][0] <= now:
-                _, _, timer = heapq.heappop(self._wall_timers)
+            while self.wall_timers and self.wall_timers[0][0] <= now:
+                _, _, timer = heapq.heappop(self.wall_timers)
                 if timer.cancelled:
                     continue
                 due.append(timer)
@@ -290,7 +291,7 @@ class Executor:
                 timer.next_due += timer.period
                 if timer.next_due < now:  # fell behind: skip missed ticks instead of bursting
                     timer.next_due = now + timer.period
-                heapq.heappush(self._wall_timers, (timer.next_due, next(self._timer_seq), timer))
+                heapq.heappush(self.wall_timers, (timer.next_due, next(self._timer_seq), timer))
         return due
 
     def _run_wall_timers(self) -> None:
@@ -310,12 +311,12 @@ class Executor:
             until_timer = max(0.0, deadline - time.monotonic())
             wait = until_timer if wait is None else min(wait, until_timer)
         try:
-            item = self._queue.get(timeout=wait) if wait is None or wait > 0 else self._queue.get_nowait()
+            item = self.waiting.get(timeout=wait) if wait is None or wait > 0 else self.waiting.get_nowait()
         except queue.Empty:
-            self._took()
+            self.took()
             self._run_wall_timers()
             return False
-        self._took()
+        self.took()
         fn, args, where, group = item
         if group is None and self.default_group is None:
             with self.lock:

@@ -78,7 +78,7 @@ class Spinner:
 
     def _next_deadline(self) -> float | None:
         # a peek at each heap first: most executors have no wall timers (the common rclpy subscriber)
-        deadlines = [d for e in self._executors if e._wall_timers and (d := e.next_wall_deadline()) is not None]
+        deadlines = [d for e in self._executors if e.wall_timers and (d := e.next_wall_deadline()) is not None]
         return min(deadlines) if deadlines else None
 
     def _run_one(self) -> bool:
@@ -88,7 +88,7 @@ class Spinner:
         ran = False
         now = time.monotonic()
         for executor in executors:
-            timers = executor._wall_timers
+            timers = executor.wall_timers
             if timers and timers[0][0] <= now:
                 for timer in executor.due_wall_timers():
                     ran = executor.run_item((timer.callback, (), "timer", timer.group)) or ran
@@ -96,9 +96,9 @@ class Spinner:
         turn = self._turn
         for i in range(count):
             executor = executors[(turn + i) % count] if count > 1 else executors[0]
-            waiting = executor._queue
+            waiting = executor.waiting
             while True:
-                executor._took()
+                executor.took()
                 if waiting.empty():
                     break
                 try:
