@@ -4,7 +4,7 @@
 SECONDS (with ``--until-signal``: at least SECONDS, then until SIGINT, at most 120 s) what a user on that host
 sees: joint_states, the left knee's range (the joint commander bends it every 2 s), the pelvis height
 (sim/model_states), sim time, and every sample on the robot's command keys whose attachment marks it as the
-rogue's.
+rogue's. It prints ``watching`` when it starts recording.
 
 ``rogue``: what a stranger holding only the read-only ``guest`` account tries: read joint_states, then
 drive the robot (hardware commands, trajectories, wildcard puts), call the simulator's and the controller
