@@ -224,16 +224,6 @@ class Executor:
         else:
             self.run_callback(fn, *args, where=where)
 
-    def take(self) -> tuple[Any, ...] | None:
-        """The next queued callback without waiting (None: nothing queued)."""
-        self.took()
-        if self.waiting.empty():   # cheaper than the exception get_nowait raises on an empty queue
-            return None
-        try:
-            return self.waiting.get_nowait()
-        except queue.Empty:
-            return None
-
     @property
     def idle(self) -> bool:
         return self.waiting.empty()
