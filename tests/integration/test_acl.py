@@ -22,7 +22,6 @@ import psutil
 import pytest
 import zenoh
 
-from bench.common import wait_until
 from tests.conftest import ROOT
 from tests.integration.test_compose import (
     COMPOSE,
@@ -32,6 +31,7 @@ from tests.integration.test_compose import (
     probe_result,
     run_probe,
     start_probe,
+    wait_for_probe_line,
 )
 from tests.integration.test_launch_scenarios import Scenario
 from tests.support import compose as replay
@@ -105,11 +105,9 @@ def test_stranger_reads_joint_states_but_cannot_move_the_robot(tmp_path: Path) -
         assert [r.get("ok", {}).get("success") for r in before["replies"]] == [True], f"{before}\n{run.outputs()}"
         watcher = start_probe(network, "tools", tmp_path, "watch", "watch", "8", "--until-signal", env=identity,
                               secrets=operator)
-        wait_until(lambda: "watching" in watcher.log_path.read_text(errors="replace") or watcher.poll() is not None,
-                   120, "the watcher to see joint_states")
+        wait_for_probe_line(watcher, "watching", "the watcher to see joint_states")
         stranger = start_probe(network, "stranger", tmp_path, "stranger", "rogue", env=identity, secrets=guest)
-        wait_until(lambda: "spoofing" in stranger.log_path.read_text(errors="replace") or stranger.poll() is not None,
-                   120, "the stranger's fake simulator service")
+        wait_for_probe_line(stranger, "spoofing", "the stranger's fake simulator service")
         during = run_probe(network, "tools", tmp_path, "call-during", "call", "sim/get_physics_properties",
                            env=identity, secrets=operator)
         os.killpg(stranger.pid, signal.SIGINT)

@@ -17,6 +17,7 @@ from typing import Any
 
 import pytest
 
+from bench.common import wait_until
 from launch.resolve import LaunchPlan, find_launch_file, resolve
 from nodes.core.params import load_params_file, parse_value
 from tests.conftest import ROOT
@@ -149,6 +150,12 @@ def start_probe(network: replay.Network, host: str, log_dir: Path, name: str, *a
                          log_dir / f"{name}.log", secrets)
     proc.log_path = log_dir / f"{name}.log"  # type: ignore[attr-defined]
     return proc
+
+
+def wait_for_probe_line(proc: subprocess.Popen, line: str, what: str, timeout: float = 120) -> None:
+    """Until a started probe printed ``line`` (or ended: ``probe_result`` then says why)."""
+    wait_until(lambda: line in proc.log_path.read_text(errors="replace") or proc.poll() is not None,  # type: ignore[attr-defined]
+               timeout, what)
 
 
 def probe_result(proc: subprocess.Popen, timeout: float = 240) -> dict:
