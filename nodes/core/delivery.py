@@ -201,9 +201,10 @@ class Raw(Decoded):
 # ------------------------------------------------------------------ where and when the callback runs
 
 class Delivery:
-    """Base of the ways a callback runs. ``open`` declares the Zenoh subscriber; ``run`` takes the arguments
-    of a message from Zenoh (or the ROS 2 wire), ``run_in_process`` those of a message a node of the same
-    process published (on the publishing thread)."""
+    """Base of the ways a callback runs. ``open`` binds it to its subscription and picks ``run``; ``declare``
+    then makes the Zenoh subscriber, whose first sample may arrive at once. ``run`` takes the arguments of a
+    message from Zenoh (or the ROS 2 wire), ``run_in_process`` those of a message a node of the same process
+    published (on the publishing thread)."""
 
     def __init__(self) -> None:
         self.subscription: Subscription | None = None
@@ -219,7 +220,6 @@ class Delivery:
         self.executor = sub.node.executor
         self.callback = sub.callback
         self.where = f"subscription '{sub.key}'"   # what an error report says (built once, not per message)
-        self.declare(sub)
 
     def declare(self, sub: Subscription) -> None:
         """The Zenoh subscriber: a callback by default (Zenoh's thread delivers)."""
@@ -398,11 +398,14 @@ class Pulled(Delivery):
     def __repr__(self) -> str:
         return f"Pulled(backlog={self.backlog})"
 
-    def declare(self, sub: Subscription) -> None:
-        self._sub = sub.node.session.declare_subscriber(sub.key, zenoh.handlers.RingChannel(self.backlog))
+    def open(self, sub: Subscription) -> None:
+        super().open(sub)
         # the taking thread (the one the owner chose) runs the callback
         run = functools.partial(self.executor.run_callback, self.callback, where=self.where)
         self.run = run   # type: ignore[method-assign]
+
+    def declare(self, sub: Subscription) -> None:
+        self._sub = sub.node.session.declare_subscriber(sub.key, zenoh.handlers.RingChannel(self.backlog))
 
     def run(self, *args: Any) -> None:
         self.executor.run_callback(self.callback, *args, where=self.where)

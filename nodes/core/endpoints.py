@@ -227,6 +227,7 @@ class Subscription:
         self._arguments = message.sample_arguments
         delivery.open(self)
         self._run = delivery.run
+        delivery.declare(self)   # last: Zenoh may hand over a sample before this call returns
         self._token = node.presence.token("sub", key, msg_type._type if msg_type else "*")
         self._mirror = node.presence.mirror(self)  # ROS 2 wire twin (nodes/core/ros2) or None
         # In a container: messages of this session's publishers, handed over in-process (intraprocess.py)
