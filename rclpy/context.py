@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import atexit
 import os
+import signal
 import sys
 import threading
 import time
@@ -29,6 +30,7 @@ class Context:
         self._executors: weakref.WeakSet = weakref.WeakSet()
         self._nodes: weakref.WeakSet = weakref.WeakSet()
         self._shut_by_signal = False
+        self.signalled: int | None = None   # the last SIGINT or SIGTERM rclpy's handler took
         self.domain_id = int(os.environ.get("ROS_DOMAIN_ID", "0") or 0)
 
     # ---------------------------------------------------------------- lifecycle
@@ -70,6 +72,8 @@ class Context:
                     logger.warn(f"waiting for a Zenoh router on {where}: start one with `zenroid router` or run a "
                                 "launch file (`python -m launch humanoid.yaml`); Ctrl-C to give up")
                     told = True
+                if self.signalled == signal.SIGTERM:   # as before a real rclpy installs its handlers: the end
+                    raise SystemExit(128 + signal.SIGTERM)
                 time.sleep(0.05)
         except BaseException:
             session.close()

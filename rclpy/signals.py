@@ -24,6 +24,7 @@ def _handler(signum: int, frame: Any) -> None:
     from rclpy.context import get_default_context
 
     context = get_default_context()
+    context.signalled = signum   # also seen by an init still waiting for its router
     if context.ok():
         context._shut_by_signal = True
     context.try_shutdown()

@@ -3,6 +3,7 @@ by zenoh-ros2-sdk (an independent rmw_zenoh client) to show a ROS 2 node would s
 
 from __future__ import annotations
 
+import signal
 import subprocess
 import sys
 import time
@@ -47,7 +48,9 @@ def test_zenroid_run_passes_ros_args(processes, ros_env) -> None:
     assert "Publishing" not in processes.output(talker)   # --log-level warn
 
 
-def test_no_router_says_so_once_and_ctrl_c_ends_it(tmp_path, ros_env) -> None:
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["ctrl_c", "sigterm"])
+def test_no_router_says_so_once_and_a_signal_ends_it(tmp_path, ros_env, signum) -> None:
+    """Waiting for its router, a program ends on Ctrl-C and on SIGTERM (what a launcher or `kill` sends)."""
     from bench.common import child_env, free_port
 
     env = child_env({**ros_env, "ZENOH_CONNECT": f"tcp/127.0.0.1:{free_port()}"})
@@ -58,17 +61,17 @@ def test_no_router_says_so_once_and_ctrl_c_ends_it(tmp_path, ros_env) -> None:
     try:
         wait_until(lambda: "waiting for a Zenoh router" in log.read_text(), timeout=60,
                    message="the waiting line")
-        import time
-
         time.sleep(2.0)   # still waiting: said once only
-        proc.send_signal(2)
-        proc.wait(timeout=15)
+        proc.send_signal(signum)
+        status = proc.wait(timeout=15)
     finally:
         if proc.poll() is None:
             proc.kill()
     text = log.read_text()
     assert text.count("waiting for a Zenoh router") == 1, text
     assert "zenroid router" in text, text
+    if signum == signal.SIGTERM:
+        assert status == 128 + signal.SIGTERM and "Traceback" not in text, (status, text)
 
 
 def test_keep_last_depth_keeps_the_newest_for_a_slow_callback(processes, ros_env, session) -> None:
