@@ -30,7 +30,7 @@ import rclpy.timer  # noqa: E402, F401
 import rclpy.utilities  # noqa: E402, F401
 from nodes.core import graph
 from nodes.core.delivery import Executed, Inline, Raw
-from nodes.core.latched import fetch_latched
+from nodes.core.latched import fetch_latched_history
 from nodes.core.names import NameError_
 from nodes.core.node import Node as CoreNode
 from nodes.core.parameter_values import list_parameters as list_parameter_names
@@ -68,6 +68,7 @@ from rclpy.qos import (
     DurabilityPolicy,
     QoSProfile,
     ReliabilityPolicy,
+    latched_depth,
     qos_profile_from_depth,
     qos_profile_services_default,
     queue_depth,
@@ -279,8 +280,8 @@ class Node:
         key = self._zr_resolve(topic)
         core = self._zr.create_publisher(
             msg_type, "/" + key, reliable=qos.reliability != ReliabilityPolicy.BEST_EFFORT,
-            latched=qos.durability == DurabilityPolicy.TRANSIENT_LOCAL, lifespan=seconds(qos.lifespan),
-            ros2_qos=wire_qos(qos))
+            latched=qos.durability == DurabilityPolicy.TRANSIENT_LOCAL, depth=latched_depth(qos),
+            lifespan=seconds(qos.lifespan), ros2_qos=wire_qos(qos))
         cls = publisher_class or Publisher
         publisher = cls(self, core, msg_type, qos, self._zr_group(callback_group), event_callbacks)
         self._zr_entities["publishers"].append(publisher)
@@ -307,17 +308,20 @@ class Node:
         subscription = Subscription(self, core, msg_type, callback, qos, group, event_callbacks, raw, events)
         self._zr_entities["subscriptions"].append(subscription)
         if qos.durability == DurabilityPolicy.TRANSIENT_LOCAL:
-            threading.Thread(target=self._zr_fetch_latched, args=(core, msg_type, key, raw),
+            threading.Thread(target=self._zr_fetch_latched, args=(core, msg_type, key, raw, latched_depth(qos)),
                              daemon=True, name=f"latched:{key}").start()
         return subscription
 
-    def _zr_fetch_latched(self, core: Any, msg_type: Any, key: str, raw: bool) -> None:
-        """TRANSIENT_LOCAL: the last message a latched publisher keeps, delivered like any other."""
+    def _zr_fetch_latched(self, core: Any, msg_type: Any, key: str, raw: bool, depth: int) -> None:
+        """TRANSIENT_LOCAL: the last messages a latched publisher keeps (at most this subscription's depth),
+        oldest first, delivered like any other."""
         try:
-            msg = fetch_latched(self._zr.session, msg_type, key, timeout=2.0)
+            history = fetch_latched_history(self._zr.session, msg_type, key, timeout=2.0)
         except Exception:  # noqa: BLE001 - nobody latched anything decodable: only live messages then
             return
-        if msg is not None and not core.closed:
+        for msg in history[-depth:]:
+            if core.closed:
+                return
             core.delivery.run(msgs.encode(msg) if raw else msg)
 
     # ------------------------------------------------------------------ services

@@ -11,7 +11,7 @@ import zenoh
 from nodes.core.action import ActionClient, ActionServer
 from nodes.core.delivery import Decoded, Delivery
 from nodes.core.endpoints import Client, Publisher, Ros2Client, ServiceServer, Subscription
-from nodes.core.latched import LatchedPublisher, fetch_latched
+from nodes.core.latched import LatchedPublisher, fetch_latched, fetch_latched_history
 from nodes.core.runtime import NodeRuntime
 
 
@@ -27,15 +27,18 @@ class EndpointFactory:
 
     def publisher(self, msg_type: Any, topic: str, *, reliable: bool = True,
                   priority: zenoh.Priority | None = None, express: bool = False, latched: bool = False,
-                  lifespan: float | None = None, ros2_qos: Any = None) -> Any:
+                  depth: int = 1, lifespan: float | None = None, ros2_qos: Any = None) -> Any:
         if latched:
-            return self._keep(LatchedPublisher(self._runtime, msg_type, self._resolve(topic), lifespan=lifespan,
-                                               ros2_qos=ros2_qos))
+            return self._keep(LatchedPublisher(self._runtime, msg_type, self._resolve(topic), depth=depth,
+                                               lifespan=lifespan, ros2_qos=ros2_qos))
         return self._keep(Publisher(self._runtime, msg_type, self._resolve(topic), reliable=reliable,
                                     priority=priority, express=express, ros2_qos=ros2_qos))
 
     def fetch_latched(self, msg_type: Any, topic: str, timeout: float) -> Any | None:
         return fetch_latched(self._runtime.session, msg_type, self._resolve(topic), timeout)
+
+    def fetch_latched_history(self, msg_type: Any, topic: str, timeout: float) -> list[Any]:
+        return fetch_latched_history(self._runtime.session, msg_type, self._resolve(topic), timeout)
 
     def subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *,
                      delivery: Delivery | None = None, message: Decoded | None = None,

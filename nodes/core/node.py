@@ -194,17 +194,22 @@ class Node:
     # ------------------------------------------------------------ endpoints (nodes/core/factory.py)
     def create_publisher(self, msg_type: Any, topic: str, *, reliable: bool = True,
                          priority: zenoh.Priority | None = None, express: bool = False,
-                         latched: bool = False, lifespan: float | None = None, ros2_qos: Any = None) -> Any:
-        """``latched=True``: the last message is also answered as a queryable on the key, so late joiners
-        get it with ``fetch_latched`` (ROS "transient local", as for robot_description and tf_static), for
-        ``lifespan`` s after it was published (None: for ever). ``ros2_qos`` (``ros2.names.Qos``): the QoS
-        its ROS 2 twin announces."""
+                         latched: bool = False, depth: int = 1, lifespan: float | None = None,
+                         ros2_qos: Any = None) -> Any:
+        """``latched=True``: the last ``depth`` messages are also answered as a queryable on the key, so late
+        joiners get them with ``fetch_latched`` (the newest) or ``fetch_latched_history`` (ROS "transient
+        local", as for robot_description and tf_static), each for ``lifespan`` s after it was published (None:
+        for ever). ``ros2_qos`` (``ros2.names.Qos``): the QoS its ROS 2 twin announces."""
         return self._endpoints.publisher(msg_type, topic, reliable=reliable, priority=priority, express=express,
-                                         latched=latched, lifespan=lifespan, ros2_qos=ros2_qos)
+                                         latched=latched, depth=depth, lifespan=lifespan, ros2_qos=ros2_qos)
 
     def fetch_latched(self, msg_type: Any, topic: str, timeout: float = 2.0) -> Any | None:
-        """The last message of a latched topic (None when nobody answers within ``timeout`` s)."""
+        """The newest message of a latched topic (None when nobody answers within ``timeout`` s)."""
         return self._endpoints.fetch_latched(msg_type, topic, timeout)
+
+    def fetch_latched_history(self, msg_type: Any, topic: str, timeout: float = 2.0) -> list[Any]:
+        """Every message a latched topic's publisher keeps, oldest first ([]: nobody answered in time)."""
+        return self._endpoints.fetch_latched_history(msg_type, topic, timeout)
 
     def create_subscription(self, msg_type: Any, topic: str, callback: Callable[..., None], *,
                             delivery: Delivery | None = None, message: Decoded | None = None,

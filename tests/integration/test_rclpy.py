@@ -121,6 +121,50 @@ def test_transient_local_reaches_a_late_subscription(context, session) -> None:
     assert [m.data for m in got] == ["set once"]
 
 
+def test_transient_local_keeps_its_depth_for_late_joiners_here_and_on_the_ros2_wire(context, session) -> None:
+    """A TRANSIENT_LOCAL publisher of depth 3 keeps its last 3 messages: a late subscription of depth 3 gets
+    them oldest first, one of depth 1 the newest, and rmw_zenoh's way of joining late (zenoh-ext's advanced
+    subscriber querying the publisher's cache) gets the same 3 as CDR that rosbags decodes."""
+    import zenoh.ext
+    from rosbags.typesys import Stores, get_typestore
+
+    import msgs
+    import rclpy
+    from nodes.core.ros2 import names
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+
+    String = msgs.get_type("std_msgs/msg/String")
+    talker = rclpy.create_node("history_talker", context=context)
+    publisher = talker.create_publisher(String, "/plan", QoSProfile(depth=3, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    for step in range(5):
+        publisher.publish(String(data=f"step {step}"))
+    listener = rclpy.create_node("late_planner", context=context)
+    got: dict[int, list[str]] = {3: [], 1: []}
+    for depth, into in got.items():
+        listener.create_subscription(String, "/plan", lambda m, into=into: into.append(m.data),
+                                     QoSProfile(depth=depth, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(listener)
+    deadline = time.monotonic() + 10
+    while (len(got[3]) < 3 or not got[1]) and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.2)
+    executor.spin_once(timeout_sec=0.3)   # nothing more is on its way
+    assert got == {3: ["step 2", "step 3", "step 4"], 1: ["step 4"]}, got
+
+    cdr: list[bytes] = []
+    ros_sub = zenoh.ext.declare_advanced_subscriber(
+        session, names.data_key(0, "/plan", "std_msgs/msg/String"), lambda s: cdr.append(s.payload.to_bytes()),
+        history=zenoh.ext.HistoryConfig(detect_late_publishers=True))
+    try:
+        wait_until(lambda: len(cdr) >= 3, timeout=20, message="the 3 cached messages on the ROS 2 wire")
+        time.sleep(0.3)
+    finally:
+        ros_sub.undeclare()
+    jazzy = get_typestore(Stores.ROS2_JAZZY)
+    assert [jazzy.deserialize_cdr(data, "std_msgs/msg/String").data for data in cdr] == ["step 2", "step 3", "step 4"]
+
+
 def test_a_raising_callback_ends_spin_and_bad_messages_are_refused_here(context) -> None:
     import msgs
     import rclpy

@@ -94,10 +94,11 @@ class TopicMirror:
         self.entity = Entity(owner, names.PUBLISHER, names.ros_topic_name(key, type_name), type_name, qos)
         session = owner.session
         if latched:
-            # rmw_zenoh's transient local: zenoh-ext's advanced publisher with a one-sample cache that late
-            # joiners' advanced subscribers query (sequence numbers, so no timestamping is needed).
+            # rmw_zenoh's transient local: zenoh-ext's advanced publisher with a cache of the history depth
+            # that late joiners' advanced subscribers query (sequence numbers, so no timestamping is needed).
             self._pub = zenoh.ext.declare_advanced_publisher(
-                session, self.entity.data_key, encoding=_CDR, cache=zenoh.ext.CacheConfig(max_samples=1),
+                session, self.entity.data_key, encoding=_CDR,
+                cache=zenoh.ext.CacheConfig(max_samples=max(1, qos.depth)),
                 publisher_detection=True, sample_miss_detection=zenoh.ext.MissDetectionConfig())
         else:
             self._pub = session.declare_publisher(
