@@ -38,6 +38,70 @@ for _signum, _handler in ((signal.SIGINT, signal.default_int_handler), (signal.S
 
 __all__ = ["ROOT", "ProcessGroup", "free_port", "wait_until"]
 
+# ------------------------------------------------------------------ the suite on every CPU (pytest-xdist)
+
+#: Files started first, in this order (xdist hands each worker two at the start, alternately, then the next
+#: file to whichever is free). The files with ``alone`` tests come first, beside files of quick unit tests, so
+#: each gets the machine within a short test's time; then the longest files, each beside many short ones
+#: instead of alone at the end (longest first). A stale list only balances the workers worse.
+FIRST_FILES = ("test_viz_screenshot.py", "test_msgs_properties.py", "test_acl.py", "test_launch_supervisor.py",
+               "test_hostile.py", "test_bag_files.py", "test_docs.py", "test_lockstep_main_job.py",
+               "test_faults.py", "test_rclpy_compat.py", "test_your_robot.py", "test_cli_verbs.py")
+#: More workers than this would start more simulated robots at once than the timing of a scenario test
+#: (a robot must stand within its timeout) was written for.
+MAX_WORKERS = 4
+
+
+def _cgroup_cpu_limit() -> int | None:
+    """The CPUs a cgroup v2 quota allows (``cpu.max``), None when there is none."""
+    try:
+        quota, period = Path("/sys/fs/cgroup/cpu.max").read_text().split()[:2]
+    except (OSError, ValueError):
+        return None
+    return None if quota == "max" else max(1, int(quota) // int(period))
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    """``-n auto`` (the default, pyproject.toml): a worker per CPU this process may use, whatever the machine
+    has beyond its affinity or cgroup quota, at most MAX_WORKERS."""
+    from nodes.core.cpu import allowed_cpus
+
+    cpus = len(allowed_cpus())
+    limit = _cgroup_cpu_limit()
+    return max(1, min(cpus, limit or cpus, MAX_WORKERS))
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    rank = {name: i for i, name in enumerate(FIRST_FILES)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))   # stable: files stay whole, in order
+
+
+@pytest.fixture(autouse=True)
+def _share_the_machine(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """Under xdist, a test marked ``alone`` waits until the other workers' tests end and keeps theirs waiting
+    until it ends: what it measures (a web viewer catching up with a realtime job) needs the CPUs to itself.
+    Every other test shares the machine. A file lock in the run's temporary directory, which every worker
+    sees; an ``alone`` test in the queue lets no new shared test start (no starving it)."""
+    if "PYTEST_XDIST_WORKER" not in os.environ:
+        yield
+        return
+    import fcntl
+
+    run_dir = tmp_path_factory.getbasetemp().parent   # <basetemp>/popen-gwN: the parent is the run's
+    alone = request.node.get_closest_marker("alone") is not None
+    with open(run_dir / "machine.lock", "a") as machine, open(run_dir / "gate.lock", "a") as gate:
+        fcntl.flock(gate, fcntl.LOCK_EX)
+        if alone:
+            fcntl.flock(machine, fcntl.LOCK_EX)   # holding the gate: no shared test starts meanwhile
+            fcntl.flock(gate, fcntl.LOCK_UN)
+        else:
+            fcntl.flock(gate, fcntl.LOCK_UN)
+            fcntl.flock(machine, fcntl.LOCK_SH)
+        try:
+            yield
+        finally:
+            fcntl.flock(machine, fcntl.LOCK_UN)
+
 
 @pytest.fixture
 def zenoh_port() -> int:

@@ -88,6 +88,7 @@ def test_every_identity_file_is_a_client_known_to_the_router() -> None:
 
 # --- a stranger on the network ----------------------------------------------------------------------------
 @pytest.mark.slow
+@pytest.mark.alone   # seven realtime processes on namespaced hosts: judged on a few seconds of the robot's motion
 def test_stranger_reads_joint_states_but_cannot_move_the_robot(tmp_path: Path) -> None:
     if not replay.netns_available():
         pytest.skip("network namespaces need root, iproute2 (ip netns) and mount")

@@ -52,6 +52,7 @@ def _rightmost(image, box: tuple[int, int, int, int], *colors: tuple[int, int, i
 
 
 @pytest.mark.slow
+@pytest.mark.alone   # a software-rendered page catching up with a realtime job: CPU-bound, as a user's is not
 @pytest.mark.timeout(480)   # its own deadline is 420 s (a page opened anew per try); the suite's 300 s cut it short
 @pytest.mark.skipif(find_browser() is None, reason="no Chromium installed (Debian: apt-get install chromium)")
 def test_main_job_viewer_shows_the_present_pose(tmp_path: Path, zenoh_port: int) -> None:
