@@ -165,6 +165,50 @@ def test_transient_local_keeps_its_depth_for_late_joiners_here_and_on_the_ros2_w
     assert [jazzy.deserialize_cdr(data, "std_msgs/msg/String").data for data in cdr] == ["step 2", "step 3", "step 4"]
 
 
+def test_a_late_transient_local_subscription_gets_a_ros2_publishers_cache(context, session) -> None:
+    """The other way: a ROS 2 publisher on rmw_zenoh (zenoh-ext's advanced publisher with a cache of its depth,
+    its MP liveliness token) published 4 messages before our rclpy subscription existed; a TRANSIENT_LOCAL
+    subscription of depth 2 gets the newest 2, as it would from a DDS publisher's history."""
+    import zenoh
+    import zenoh.ext
+    from rosbags.typesys import Stores, get_typestore
+
+    import msgs
+    import rclpy
+    from nodes.core.ros2 import attachment, names
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.qos import DurabilityPolicy, QoSProfile
+
+    type_name = "std_msgs/msg/String"
+    jazzy = get_typestore(Stores.ROS2_JAZZY)
+    qos = names.Qos(transient_local=True, depth=3)
+    token = session.liveliness().declare_token(names.endpoint_token(
+        0, str(session.info.zid()), 0, 1, names.PUBLISHER, "/", "ros_talker", "/ros_plan", type_name, qos))
+    ros_pub = zenoh.ext.declare_advanced_publisher(
+        session, names.data_key(0, "/ros_plan", type_name), encoding=zenoh.Encoding("application/cdr"),
+        cache=zenoh.ext.CacheConfig(max_samples=3), publisher_detection=True,
+        sample_miss_detection=zenoh.ext.MissDetectionConfig())
+    try:
+        String = jazzy.types[type_name]
+        for step in range(4):
+            ros_pub.put(bytes(jazzy.serialize_cdr(String(data=f"ros {step}"), type_name)),
+                        attachment=attachment.pack(step + 1, bytes(range(16))))
+        listener = rclpy.create_node("late_ros_listener", context=context)
+        got: list[str] = []
+        listener.create_subscription(msgs.get_type(type_name), "/ros_plan", lambda m: got.append(m.data),
+                                     QoSProfile(depth=2, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+        executor = SingleThreadedExecutor(context=context)
+        executor.add_node(listener)
+        deadline = time.monotonic() + 15
+        while len(got) < 2 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.2)
+        executor.spin_once(timeout_sec=0.3)   # nothing more is on its way
+        assert got == ["ros 2", "ros 3"], got
+    finally:
+        ros_pub.undeclare()
+        token.undeclare()
+
+
 def test_a_raising_callback_ends_spin_and_bad_messages_are_refused_here(context) -> None:
     import msgs
     import rclpy

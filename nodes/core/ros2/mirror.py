@@ -186,10 +186,11 @@ class SubscriptionMirror:
         self.owner = owner
         self.target = subscription
         self.type_name = subscription.msg_type._type
+        self.qos: names.Qos = getattr(subscription, "ros2_qos", None) or names.DEFAULT_QOS
         self.entity = Entity(owner, names.SUBSCRIPTION, names.ros_topic_name(subscription.key, self.type_name),
-                             self.type_name, getattr(subscription, "ros2_qos", None) or names.DEFAULT_QOS)
+                             self.type_name, self.qos)
         self._lock = threading.Lock()
-        self._sub: zenoh.Subscriber | None = None
+        self._sub: Any = None   # a zenoh Subscriber, or an advanced one for transient local
         self._closed = False
         owner.graph.watch(names.PUBLISHER, self.entity.data_key, self._listen)
 
@@ -203,12 +204,22 @@ class SubscriptionMirror:
                 return
             try:
                 if publishers:
-                    self._sub = self.owner.session.declare_subscriber(self.entity.data_key, weak_callback(self._on_sample))
+                    self._sub = self._declare()
                 else:
                     sub, self._sub = self._sub, None
                     sub.undeclare()
             except zenoh.ZError:
                 pass  # the session is closing
+
+    def _declare(self) -> Any:
+        key, callback = self.entity.data_key, weak_callback(self._on_sample)
+        if self.qos.transient_local:
+            # rmw_zenoh's transient local: an advanced subscriber, which also takes what the ROS 2 publishers'
+            # caches hold (theirs are advanced publishers), those found later included
+            return zenoh.ext.declare_advanced_subscriber(
+                self.owner.session, key, callback,
+                history=zenoh.ext.HistoryConfig(detect_late_publishers=True, max_samples=max(1, self.qos.depth)))
+        return self.owner.session.declare_subscriber(key, callback)
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         att = attachment.unpack(sample.attachment.to_bytes() if sample.attachment is not None else None)
