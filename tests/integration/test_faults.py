@@ -104,10 +104,15 @@ def test_kill_9_of_each_node_heals_without_a_fall(tmp_path: Path, zenoh_port: in
                                   "the controllers restored")
                 # resumes from the measured state: the new manager's first knee command is where the knee is
                 # The new manager's first command ends the outage: find it by the step (1 kHz physics), not
-                # by arrival time (this test process may lag behind a 1 kHz stream on a loaded machine).
-                commands = [m for m in scenario.snapshot("humanoid/hardware/command") if KNEE in m["name"]]
-                first = next((b for a, b in zip(commands, commands[1:]) if b["step"] - a["step"] > 300), None)
-                assert first is not None, "the respawned manager sends commands after an outage"
+                # by arrival time (this test process may lag seconds behind a 1 kHz stream on a loaded machine,
+                # so it waits until the new manager's commands have reached it).
+                def first_after_outage() -> dict | None:
+                    commands = [m for m in scenario.snapshot("humanoid/hardware/command") if KNEE in m["name"]]
+                    return next((b for a, b in zip(commands, commands[1:]) if b["step"] - a["step"] > 300), None)
+
+                scenario.wait_for(lambda: first_after_outage() is not None, 30,
+                                  "the respawned manager's commands after an outage")
+                first = first_after_outage()
                 commanded = first["value"][first["name"].index(KNEE)]
                 at = first["step"] / 1000.0  # sim time of the state it answers
 
