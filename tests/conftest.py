@@ -79,7 +79,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 @pytest.fixture(autouse=True)
 def _share_the_machine(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
     """Under xdist, a test marked ``alone`` waits until the other workers' tests end and keeps theirs waiting
-    until it ends: what it measures (a web viewer catching up with a realtime job) needs the CPUs to itself.
+    until it ends: what it is judged on (timing or memory under a realtime job) needs the CPUs to itself.
     Every other test shares the machine. A file lock in the run's temporary directory, which every worker
     sees; an ``alone`` test in the queue lets no new shared test start (no starving it)."""
     if "PYTEST_XDIST_WORKER" not in os.environ:
