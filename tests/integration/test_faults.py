@@ -330,6 +330,7 @@ def partition(net: Hosts, ns: str, seconds: float) -> tuple[float, float]:
     return down, time.monotonic()
 
 
+@pytest.mark.alone   # two realtime launches over a partitioned link, judged on the robot never falling
 def test_network_partition_of_the_controller_host_heals(hosts: Hosts) -> None:  # noqa: F811 - fixture
     """The controller manager's host drops off for 3 s in the middle of a slow knee bend. The simulator
     keeps running and holds position; when the link returns, neither the states and commands buffered in
