@@ -222,9 +222,6 @@ class Viewer(Node):
             self.logger.info(note)
         if plan.save:
             self.logger.info(f"saving the recording to {plan.save}")
-        if self.output.viewer_url:
-            self.logger.info(f"web viewer: open {self.output.viewer_url}")
-            print(f"Rerun web viewer: {self.output.viewer_url}", flush=True)
         self.scene_time = SceneTime(self.recording)
 
         self.markers = MarkerLayer(self.recording, self.marker_frame)
@@ -248,6 +245,9 @@ class Viewer(Node):
         self.discovery_stop = threading.Event()
         self.discovery = threading.Thread(target=self.discovery_loop, name="viz-discovery", daemon=True)
         self.discovery.start()
+        if self.output.viewer_url:   # last: whoever acts on the URL (Ctrl-C included) finds the viewer ready
+            self.logger.info(f"web viewer: open {self.output.viewer_url}")
+            print(f"Rerun web viewer: {self.output.viewer_url}", flush=True)
 
     def subscribe(self, msg_type: Any, key: str, handler, limiter: RateLimiter | None = None,
                   on_arrival=None) -> Subscription:
