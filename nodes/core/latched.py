@@ -30,11 +30,11 @@ class LatchedPublisher:
         self.node = node
         self.msg_type = msg_type
         self.key = key
-        self.depth = depth         # how many of the last messages a late joiner gets
         self.lifespan = lifespan   # s a message is answered for after it was published (None: for ever)
         self._publisher = Publisher(node, msg_type, self.key, latched=True, ros2_qos=ros2_qos)
         self._encoding = encoding_for(msg_type._type)
-        self._kept: deque[tuple[bytes, float]] = deque(maxlen=depth)   # (payload, monotonic time published)
+        # the last ``depth`` (payload, monotonic time published): what a late joiner gets
+        self._kept: deque[tuple[bytes, float]] = deque(maxlen=depth)
         self._lock = threading.Lock()
         self._queryable = node.session.declare_queryable(self.key, weak_callback(self._on_query), complete=True)
 

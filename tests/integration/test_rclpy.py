@@ -100,6 +100,14 @@ def test_keep_last_depth_keeps_the_newest_for_a_slow_callback(processes, ros_env
     assert len(taken) <= 5 + 3, f"depth 5 should keep the newest 5 behind the callback, took {taken}"
 
 
+def spin_until(executor, done, timeout: float) -> None:
+    """Spin until ``done()`` or ``timeout`` s, then a moment more: whatever else was on its way arrives too."""
+    deadline = time.monotonic() + timeout
+    while not done() and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.2)
+    executor.spin_once(timeout_sec=0.3)
+
+
 def test_transient_local_reaches_a_late_subscription(context, session) -> None:
     import msgs
     import rclpy
@@ -115,9 +123,7 @@ def test_transient_local_reaches_a_late_subscription(context, session) -> None:
     listener.create_subscription(String, "/config", got.append, latched)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(listener)
-    deadline = time.monotonic() + 10
-    while not got and time.monotonic() < deadline:
-        executor.spin_once(timeout_sec=0.2)
+    spin_until(executor, lambda: got, 10)
     assert [m.data for m in got] == ["set once"]
 
 
@@ -146,10 +152,7 @@ def test_transient_local_keeps_its_depth_for_late_joiners_here_and_on_the_ros2_w
                                      QoSProfile(depth=depth, durability=DurabilityPolicy.TRANSIENT_LOCAL))
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(listener)
-    deadline = time.monotonic() + 10
-    while (len(got[3]) < 3 or not got[1]) and time.monotonic() < deadline:
-        executor.spin_once(timeout_sec=0.2)
-    executor.spin_once(timeout_sec=0.3)   # nothing more is on its way
+    spin_until(executor, lambda: len(got[3]) >= 3 and got[1], 10)
     assert got == {3: ["step 2", "step 3", "step 4"], 1: ["step 4"]}, got
 
     cdr: list[bytes] = []
@@ -199,10 +202,7 @@ def test_a_late_transient_local_subscription_gets_a_ros2_publishers_cache(contex
                                      QoSProfile(depth=2, durability=DurabilityPolicy.TRANSIENT_LOCAL))
         executor = SingleThreadedExecutor(context=context)
         executor.add_node(listener)
-        deadline = time.monotonic() + 15
-        while len(got) < 2 and time.monotonic() < deadline:
-            executor.spin_once(timeout_sec=0.2)
-        executor.spin_once(timeout_sec=0.3)   # nothing more is on its way
+        spin_until(executor, lambda: len(got) >= 2, 15)
         assert got == ["ros 2", "ros 3"], got
     finally:
         ros_pub.undeclare()
