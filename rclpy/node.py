@@ -29,7 +29,7 @@ import rclpy.subscription  # noqa: E402, F401
 import rclpy.timer  # noqa: E402, F401
 import rclpy.utilities  # noqa: E402, F401
 from nodes.core import graph
-from nodes.core.delivery import Executed, Inline, Raw
+from nodes.core.delivery import Executed, Inline, Raw, Spun
 from nodes.core.latched import fetch_latched_history
 from nodes.core.names import NameError_
 from nodes.core.node import Node as CoreNode
@@ -300,7 +300,11 @@ class Node:
         run = _call_maybe_async(self, callback)
         events = SubscriptionEvents(self, key, msg_type._type, qos, event_callbacks, group) \
             if SubscriptionEvents.needed(qos, event_callbacks) else None
-        delivery = Executed(depth=queue_depth(qos)) if events is None else events.delivery(queue_depth(qos))
+        depth = queue_depth(qos)
+        if events is not None:
+            delivery: Executed = events.delivery(depth)
+        else:   # KEEP_LAST waits in Zenoh's ring for the spinning thread; KEEP_ALL in an unbounded queue
+            delivery = Executed() if depth is None else Spun(depth)
         core = self._zr.create_subscription(msg_type, "/" + key, run if events is None else events.callback(run),
                                             delivery=delivery, message=Raw() if raw else None,
                                             ros2_qos=wire_qos(qos))

@@ -12,6 +12,9 @@ zenoh-python's ``declare_subscriber`` takes a callback or a ``RingChannel``.
 - ``Batched(max_rate, backlog=256)``: a thread wakes at most ``max_rate`` times a second and runs every
   message that arrived meanwhile in one go; Zenoh keeps them (the newest ``backlog``) in its ring buffer. A
   1 kHz ``joint_states`` then costs a consumer that needs 50 updates a second 50 wake-ups, not 1000.
+- ``Spun(depth)``: for nodes whose callbacks run on the spinning thread (rclpy's): messages wait in Zenoh's
+  ring of ``depth`` until a spinning thread takes them; one that spins this subscription alone receives
+  from the ring itself, so a message costs one thread hand-off, not two.
 - ``Pulled(backlog=256)``: no thread delivers anything. Messages wait (the newest ``backlog``) until the
   owner's thread takes them with ``take_pending()`` or ``wait(timeout)``, and the callback runs there. For a
   thread that holds the GIL for long stretches (the simulator's physics, in C++): a delivering thread would
@@ -47,7 +50,7 @@ import msgs
 from msgs import DecodeError
 from nodes.core.session import max_payload_bytes
 
-__all__ = ["Batched", "Decoded", "Delivery", "Executed", "Inline", "Pulled", "Raw"]
+__all__ = ["Batched", "Decoded", "Delivery", "Executed", "Inline", "Pulled", "Raw", "Spun"]
 
 # Elements per array in a message from the network (every list: points, names, positions ...; a
 # JointTrajectory controller takes up to 100,000 points). msgpack refuses a longer array before building any
@@ -367,6 +370,133 @@ class Batched(Delivery):
                 time.sleep(period)
         except Exception:  # noqa: BLE001 - the subscriber was undeclared: the channel is closed
             return
+
+
+class Spun(Executed):
+    """For a node whose callbacks run on the thread that spins (rclpy's): messages wait in Zenoh's ring of
+    ``depth`` (KEEP_LAST, the newest kept) until a spinning thread takes them.
+
+    A thread that spins this subscription alone (one spinning thread, no other subscription of this kind,
+    no timer or timeout to wait for: ``rclpy.spin`` of a plain subscriber) blocks in the ring's receive
+    itself and runs the callback on waking: one thread hand-off a message, as ``nodes.core``'s default path
+    pays, instead of two (Zenoh's thread, then the spinning thread). Otherwise a pump thread hands each
+    message to the executor's queue, as ``Executed`` does. Other work for the spinning thread (a service
+    request, a timer being added, a shutdown) ends a blocked receive with a wake-up only this session sees."""
+
+    def __init__(self, depth: int) -> None:
+        super().__init__(depth)
+        self.closed = False
+        self.pumping = False
+        # whoever receives from Zenoh's ring holds this (the ring refuses a second concurrent receiver)
+        self._receiving = threading.Lock()
+        self._pump: threading.Thread | None = None
+        self._wake_pub: Any = None
+
+    def __repr__(self) -> str:
+        return f"Spun(depth={self.depth})"
+
+    def open(self, sub: Subscription) -> None:
+        super().open(sub)
+        if not self.executor.on_spin_thread:
+            raise ValueError(f"{self.where}: Spun() is for nodes whose callbacks run on the spinning thread")
+        self.executor.add_channel(self)
+
+    def declare(self, sub: Subscription) -> None:
+        # exactly the depth, as KEEP_LAST keeps: a wake-up that crossed a message in the receive stays in the
+        # ring as its oldest entry until the next take, and gives way first
+        self._sub = sub.node.session.declare_subscriber(sub.key, zenoh.handlers.RingChannel(self.depth))
+
+    def take_one(self) -> bool | None:
+        """Run the callback of one waiting message on this thread: True if it ran, False if its group was
+        busy (it waits for the group), None if nothing was waiting (or a pump thread takes them)."""
+        if self.pumping or not self._receiving.acquire(blocking=False):
+            return None
+        try:
+            while (sample := self._sub.try_recv()) is not None and is_wake(sample):
+                pass
+        except zenoh.ZError:
+            return None   # undeclared meanwhile: the node is closing
+        finally:
+            self._receiving.release()
+        return None if sample is None else self._run_here(sample)
+
+    def hold(self) -> bool:
+        """Take the ring for this thread's ``wait_held`` (a pump thread stops first); False if another
+        thread holds it or the subscription is closed."""
+        if self.closed:
+            return False
+        if self.pumping:
+            self._stop_pump()
+        return self._receiving.acquire(blocking=False)
+
+    def wait_held(self, is_woken: Any) -> bool | None:
+        """After ``hold()``: block in the ring's receive on this thread until a message arrives or
+        ``interrupt()``, let the ring go, then run the message's callback as ``take_one`` does. ``is_woken(self)``
+        is asked first: True means a wake-up came before, and it returns at once. None: woken without a
+        message."""
+        try:
+            if is_woken(self):
+                return None
+            sample = self._sub.recv()   # without the GIL; Ctrl-C still raises here (zenoh checks signals)
+        except zenoh.ZError:
+            return None   # undeclared meanwhile: the node is closing
+        finally:
+            self._receiving.release()
+        if self.closed or is_wake(sample):
+            return None
+        return self._run_here(sample)
+
+    def interrupt(self) -> None:
+        """End a receive in progress with a wake-up that only this session sees."""
+        try:
+            if self._wake_pub is None:
+                self._wake_pub = self.subscription.node.session.declare_publisher(
+                    self.subscription.key, allowed_destination=zenoh.Locality.SESSION_LOCAL)
+            self._wake_pub.put(b"", attachment=WAKE)
+        except zenoh.ZError:
+            pass   # the session closed: the receive has ended with it
+
+    def _run_here(self, sample: zenoh.Sample) -> bool:
+        sub = self.subscription
+        args = sub.arguments_of(sample)
+        if args is None:
+            return True   # refused (and logged): it was taken all the same
+        return self.executor.run_item((self.callback, args, self.where, sub.group))
+
+    def start_pump(self) -> None:
+        """From now on a thread of its own hands each message to the executor's queue (several threads spin,
+        or the spinning thread also waits for something else)."""
+        if self.pumping or self.closed:
+            return
+        self.pumping = True
+        self._pump = threading.Thread(target=self._pump_messages, daemon=True, name=f"sub:{self.subscription.key}")
+        self._pump.start()
+
+    def _pump_messages(self) -> None:
+        handle = self.subscription.handle_sample   # Executed's queue of ``depth``; wake-ups are skipped
+        with self._receiving:
+            while self.pumping and not self.closed:
+                try:
+                    sample = self._sub.recv()
+                except zenoh.ZError:
+                    return
+                handle(sample)
+
+    def _stop_pump(self) -> None:
+        self.pumping = False
+        self.interrupt()
+        pump = self._pump
+        if pump is not None and pump is not threading.current_thread():
+            pump.join(timeout=5.0)
+
+    def close(self) -> None:
+        self.closed = True
+        self.executor.remove_channel(self)
+        self.pumping = False
+        self.interrupt()   # ends a receive in progress: it holds the ring
+        _undeclare_when_free(self._sub)
+        if self._wake_pub is not None:
+            self._wake_pub.undeclare()
 
 
 # A pulled subscription's wake-up: an empty message with this attachment (ours are 24 bytes).

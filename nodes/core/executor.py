@@ -106,6 +106,9 @@ class Executor:
         self.default_group: CallbackGroup | None = None
         self.wake: Callable[[], None] | None = None   # set by a Spinner that serves this executor
         self.waiting: queue.SimpleQueue = queue.SimpleQueue()
+        # subscriptions whose messages wait in Zenoh's ring for a spinning thread (delivery.Spun); a new
+        # list on each change: spinning threads read it without a lock
+        self.channels: list[Any] = []
         self.wall_timers: list[tuple[float, int, Timer]] = []
         self._sim_timers: list[Timer] = []
         self._timer_seq = itertools.count()
@@ -227,6 +230,13 @@ class Executor:
     @property
     def idle(self) -> bool:
         return self.waiting.empty()
+
+    def add_channel(self, channel: Any) -> None:
+        self.channels = [*self.channels, channel]
+        self.call_soon(_nothing, where="wake")   # a spinner waiting on another channel looks again
+
+    def remove_channel(self, channel: Any) -> None:
+        self.channels = [c for c in self.channels if c is not channel]
 
     # ---------------------------------------------------------------- timers
     def add_timer(self, timer: Timer) -> None:

@@ -12,6 +12,7 @@ import queue
 import threading
 import time
 from collections.abc import Callable
+from typing import Any
 
 from nodes.core.executor import Executor
 
@@ -25,6 +26,9 @@ class Spinner:
         self._tokens: queue.SimpleQueue = queue.SimpleQueue()
         self._pending = False
         self._turn = 0
+        self._threads = 0   # threads in spin_once now
+        # the channel (delivery.Spun) the only spinning thread receives from itself, while it waits there
+        self._receiving_on: Any = None
 
     @property
     def executors(self) -> list[Executor]:
@@ -43,15 +47,31 @@ class Spinner:
                 self._executors = [e for e in self._executors if e is not executor]
         if executor.wake == self.wake:
             executor.wake = None
+        self.wake()   # a spinning thread may be receiving on one of its channels
 
     def wake(self) -> None:
         if not self._pending:
             self._pending = True
-            self._tokens.put(None)
+            # set before _receiving_on is read: the spinning thread sets _receiving_on before it reads
+            # _pending, so one of the two sees the other and the wake-up is never lost
+            channel = self._receiving_on
+            if channel is not None:
+                channel.interrupt()
+            else:
+                self._tokens.put(None)
 
     def spin_once(self, timeout: float | None = None, stop: Callable[[], bool] | None = None) -> bool:
         """Run due timers and at most one queued callback, waiting up to ``timeout`` s (None: until there is
         work) or until ``stop()`` is true after a ``wake()``. True if a callback ran."""
+        with self._lock:
+            self._threads += 1
+        try:
+            return self._spin_once(timeout, stop)
+        finally:
+            with self._lock:
+                self._threads -= 1
+
+    def _spin_once(self, timeout: float | None, stop: Callable[[], bool] | None) -> bool:
         end = None if timeout is None else time.monotonic() + max(0.0, timeout)
         tokens = self._tokens
         while True:
@@ -69,12 +89,26 @@ class Spinner:
                 if end is not None and time.monotonic() >= end:
                     return self._run_one()
                 continue
+            channels = [c for e in self._executors for c in e.channels]
+            if wait is None and len(channels) == 1 and self._threads == 1 and channels[0].hold():
+                ran = channels[0].wait_held(self._receive_on)
+                self._receiving_on = None
+                if ran is not None:
+                    return ran
+                continue
+            for channel in channels:   # something else to wait for as well: their messages come queued
+                channel.start_pump()
             try:
                 tokens.get(timeout=wait)
             except queue.Empty:
                 pass
             if end is not None and time.monotonic() >= end:
                 return self._run_one()
+
+    def _receive_on(self, channel: Any) -> bool:
+        """The spinning thread is about to receive on ``channel``: True if a wake-up came before."""
+        self._receiving_on = channel
+        return self._pending
 
     def _next_deadline(self) -> float | None:
         # a peek at each heap first: most executors have no wall timers (the common rclpy subscriber)
@@ -112,4 +146,9 @@ class Spinner:
                     self._turn = (turn + i + 1) % count
                     return True
                 # its group was busy: parked until the group's running callback ends
+            for channel in executor.channels:   # messages still in Zenoh's ring (no pump takes them)
+                took = channel.take_one()
+                if took:
+                    self._turn = (turn + i + 1) % count
+                    return True
         return ran
