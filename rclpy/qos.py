@@ -147,14 +147,11 @@ def queue_depth(qos: QoSProfile) -> int | None:
     return qos.depth if qos.depth > 0 else RMW_ZENOH_DEFAULT_HISTORY_DEPTH
 
 
-# what a KEEP_ALL transient-local publisher keeps for late joiners (DDS bounds it by its resource limits)
-KEEP_ALL_LATCHED_DEPTH = 1000
-
-
 def latched_depth(qos: QoSProfile) -> int:
     """How many of its last messages a TRANSIENT_LOCAL publisher keeps for late joiners, and how many of
-    them a late-joining subscription takes: the history depth (KEEP_ALL: ``KEEP_ALL_LATCHED_DEPTH``)."""
-    return queue_depth(qos) or KEEP_ALL_LATCHED_DEPTH
+    them a late-joining subscription takes: the depth, KEEP_ALL too (0: rmw_zenoh's 42), as rmw_zenoh sizes
+    its publisher cache and its subscriber's history, so our key and the ROS 2 twin keep the same."""
+    return qos.depth if qos.depth > 0 else RMW_ZENOH_DEFAULT_HISTORY_DEPTH
 
 
 qos_profile_system_default = QoSProfile(history=HistoryPolicy.SYSTEM_DEFAULT,

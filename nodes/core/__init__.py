@@ -1,7 +1,7 @@
 """The node runtime: the only code in zenroid that touches Zenoh."""
 
 from nodes.core.action import ActionClient, ActionServer, ClientGoalHandle, ServerGoalHandle
-from nodes.core.delivery import Batched, Decoded, Executed, Inline, Pulled, Raw
+from nodes.core.delivery import Batched, Decoded, Executed, Inline, Pulled, Raw, Spun
 from nodes.core.endpoints import Client, Deferred, Publisher, ServiceError, ServiceServer, Subscription
 from nodes.core.executor import CallbackGroup
 from nodes.core.lifecycle import LifecycleNode
@@ -14,6 +14,6 @@ from nodes.core.spinner import Spinner
 __all__ = [
     "ActionClient", "ActionServer", "Batched", "CallbackGroup", "Client", "ClientGoalHandle", "Decoded",
     "Deferred", "Executed", "Inline", "LifecycleNode", "Logger", "Node", "ParameterError", "Publisher", "Pulled", "Raw",
-    "ServerGoalHandle", "ServiceError", "ServiceServer", "Spinner", "Subscription", "Timer",
+    "ServerGoalHandle", "ServiceError", "ServiceServer", "Spinner", "Spun", "Subscription", "Timer",
     "add_connection_arguments", "add_node_arguments", "connect_from_args", "run_node",
 ]

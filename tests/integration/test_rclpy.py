@@ -127,10 +127,12 @@ def test_transient_local_reaches_a_late_subscription(context, session) -> None:
     assert [m.data for m in got] == ["set once"]
 
 
-def test_transient_local_keeps_its_depth_for_late_joiners_here_and_on_the_ros2_wire(context, session) -> None:
+@pytest.mark.parametrize("history", ["keep_last", "keep_all"])
+def test_transient_local_keeps_its_depth_for_late_joiners_here_and_on_the_ros2_wire(context, session, history) -> None:
     """A TRANSIENT_LOCAL publisher of depth 3 keeps its last 3 messages: a late subscription of depth 3 gets
     them oldest first, one of depth 1 the newest, and rmw_zenoh's way of joining late (zenoh-ext's advanced
-    subscriber querying the publisher's cache) gets the same 3 as CDR that rosbags decodes."""
+    subscriber querying the publisher's cache) gets the same 3 as CDR that rosbags decodes. KEEP_ALL keeps
+    the depth too, as rmw_zenoh sizes its publisher cache and its subscriber's history."""
     import zenoh.ext
     from rosbags.typesys import Stores, get_typestore
 
@@ -138,18 +140,20 @@ def test_transient_local_keeps_its_depth_for_late_joiners_here_and_on_the_ros2_w
     import rclpy
     from nodes.core.ros2 import names
     from rclpy.executors import SingleThreadedExecutor
-    from rclpy.qos import DurabilityPolicy, QoSProfile
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile
 
+    kept = HistoryPolicy.KEEP_ALL if history == "keep_all" else HistoryPolicy.KEEP_LAST
     String = msgs.get_type("std_msgs/msg/String")
     talker = rclpy.create_node("history_talker", context=context)
-    publisher = talker.create_publisher(String, "/plan", QoSProfile(depth=3, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    publisher = talker.create_publisher(String, "/plan", QoSProfile(depth=3, history=kept,
+                                                                    durability=DurabilityPolicy.TRANSIENT_LOCAL))
     for step in range(5):
         publisher.publish(String(data=f"step {step}"))
     listener = rclpy.create_node("late_planner", context=context)
     got: dict[int, list[str]] = {3: [], 1: []}
     for depth, into in got.items():
         listener.create_subscription(String, "/plan", lambda m, into=into: into.append(m.data),
-                                     QoSProfile(depth=depth, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+                                     QoSProfile(depth=depth, history=kept, durability=DurabilityPolicy.TRANSIENT_LOCAL))
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(listener)
     spin_until(executor, lambda: len(got[3]) >= 3 and got[1], 10)
