@@ -45,7 +45,7 @@ class Executor:
     def __init__(self, *, context: Context | None = None) -> None:
         self._context = context or get_default_context()
         self._context._add_executor(self)
-        self._spinner = Spinner()
+        self._spinner = Spinner(single_thread=isinstance(self, SingleThreadedExecutor))
         self._nodes: list[Any] = []
         self._nodes_lock = threading.RLock()
         self._is_shutdown = False

@@ -262,7 +262,15 @@ class Subscription:
         return self.delivery.wait(timeout)
 
     def handle_sample(self, sample: zenoh.Sample) -> None:
-        args = self.arguments_of(sample)
+        # every subscription's hot path: the checks of arguments_of, inline rather than one call more
+        size = len(sample.payload)
+        if size == 0 and is_wake(sample):
+            return   # a pulled subscription's wake-up on the same key of a shared (container) session
+        memory.after_payload(size)
+        if size > self.max_payload:   # before copying or decoding anything
+            self._refuse_oversized(sample, size)
+            return
+        args = self._arguments(self, sample)
         if args is not None:
             self._run(*args)
 
@@ -270,14 +278,17 @@ class Subscription:
         """What the callback gets for ``sample``; None for a wake-up or a refused message (logged)."""
         size = len(sample.payload)
         if size == 0 and is_wake(sample):
-            return None   # a pulled subscription's wake-up on the same key of a shared (container) session
+            return None
         memory.after_payload(size)
-        if size > self.max_payload:   # before copying or decoding anything
-            self.node.logger.warn_throttle(
-                1.0, f"dropped a message on '{sample.key_expr}': payload: {size} bytes, over the "
-                f"{self.max_payload}-byte limit", key=f"size:{self.key}")
+        if size > self.max_payload:
+            self._refuse_oversized(sample, size)
             return None
         return self._arguments(self, sample)
+
+    def _refuse_oversized(self, sample: zenoh.Sample, size: int) -> None:
+        self.node.logger.warn_throttle(
+            1.0, f"dropped a message on '{sample.key_expr}': payload: {size} bytes, over the "
+            f"{self.max_payload}-byte limit", key=f"size:{self.key}")
 
     def destroy(self) -> None:
         if self._bus is not None:

@@ -18,7 +18,11 @@ from nodes.core.executor import Executor
 
 
 class Spinner:
-    def __init__(self) -> None:
+    """``single_thread``: only one thread ever spins it (rclpy's ``SingleThreadedExecutor``), which may then
+    receive a lone subscription's messages from Zenoh's ring itself (``delivery.Spun``)."""
+
+    def __init__(self, *, single_thread: bool = False) -> None:
+        self.single_thread = single_thread
         self._executors: list[Executor] = []
         self._lock = threading.Lock()
         # wake-ups: a token in a C queue (a threading.Event costs a Python-level Condition per message);
@@ -26,7 +30,6 @@ class Spinner:
         self._tokens: queue.SimpleQueue = queue.SimpleQueue()
         self._pending = False
         self._turn = 0
-        self._threads = 0   # threads in spin_once now
         # the channel (delivery.Spun) the only spinning thread receives from itself, while it waits there
         self._receiving_on: Any = None
 
@@ -63,15 +66,6 @@ class Spinner:
     def spin_once(self, timeout: float | None = None, stop: Callable[[], bool] | None = None) -> bool:
         """Run due timers and at most one queued callback, waiting up to ``timeout`` s (None: until there is
         work) or until ``stop()`` is true after a ``wake()``. True if a callback ran."""
-        with self._lock:
-            self._threads += 1
-        try:
-            return self._spin_once(timeout, stop)
-        finally:
-            with self._lock:
-                self._threads -= 1
-
-    def _spin_once(self, timeout: float | None, stop: Callable[[], bool] | None) -> bool:
         end = None if timeout is None else time.monotonic() + max(0.0, timeout)
         tokens = self._tokens
         while True:
@@ -90,7 +84,7 @@ class Spinner:
                     return self._run_one()
                 continue
             channels = [c for e in self._executors for c in e.channels]
-            if wait is None and len(channels) == 1 and self._threads == 1 and channels[0].hold():
+            if wait is None and len(channels) == 1 and self.single_thread and channels[0].hold():
                 ran = channels[0].wait_held(self._receive_on)
                 self._receiving_on = None
                 if ran is not None:
