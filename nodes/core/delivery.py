@@ -468,9 +468,13 @@ class Spun(Executed):
         or the spinning thread also waits for something else)."""
         if self.pumping or self.closed:
             return
-        self.pumping = True
-        self._pump = threading.Thread(target=self._pump_messages, daemon=True, name=f"sub:{self.subscription.key}")
-        self._pump.start()
+        with self._lock:   # several spinning threads may ask at once: one pump
+            if self.pumping:
+                return
+            self.pumping = True
+            self._pump = threading.Thread(target=self._pump_messages, daemon=True,
+                                          name=f"sub:{self.subscription.key}")
+            self._pump.start()
 
     def _pump_messages(self) -> None:
         handle = self.subscription.handle_sample   # Executed's queue of ``depth``; wake-ups are skipped
