@@ -391,6 +391,8 @@ class Spun(Executed):
         self._receiving = threading.Lock()
         self._pump: threading.Thread | None = None
         self._wake_pub: Any = None
+        self._receiver: int | None = None   # the thread blocked in wait_held's receive
+        self._close_deferred = False
 
     def __repr__(self) -> str:
         return f"Spun(depth={self.depth})"
@@ -437,11 +439,15 @@ class Spun(Executed):
         try:
             if is_woken(self):
                 return None
+            self._receiver = threading.get_ident()
             sample = self._sub.recv()   # without the GIL; Ctrl-C still raises here (zenoh checks signals)
         except zenoh.ZError:
             return None   # undeclared meanwhile: the node is closing
         finally:
+            self._receiver = None
             self._receiving.release()
+            if self._close_deferred:
+                self._undeclare()
         if self.closed or is_wake(sample):
             return None
         return self._run_here(sample)
@@ -498,9 +504,21 @@ class Spun(Executed):
         self.executor.remove_channel(self)
         self.pumping = False
         self.interrupt()   # ends a receive in progress: it holds the ring
-        _undeclare_when_free(self._sub)
-        if self._wake_pub is not None:
-            self._wake_pub.undeclare()
+        if self._receiver == threading.get_ident():
+            # a signal handler (SIGTERM's shutdown) runs inside this thread's own receive, which holds the
+            # ring until the handler returns: wait_held lets go of it after that
+            self._close_deferred = True
+            return
+        self._undeclare()
+
+    def _undeclare(self) -> None:
+        self._close_deferred = False
+        try:
+            _undeclare_when_free(self._sub)
+            if self._wake_pub is not None:
+                self._wake_pub.undeclare()
+        except zenoh.ZError:
+            pass   # the session closed first: it took them with it
 
 
 # A pulled subscription's wake-up: an empty message with this attachment (ours are 24 bytes).

@@ -25,15 +25,21 @@ def ros_env(tmp_path: Path) -> dict[str, str]:
     return shim_env(tmp_path / "shim", child_env()["PYTHONPATH"])
 
 
-def test_talker_and_listener_as_written(processes, ros_env) -> None:
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["ctrl_c", "sigterm"])
+def test_talker_and_listener_as_written(processes, ros_env, signum) -> None:
+    """The listener spins its one subscription (its spinning thread waits in Zenoh's receive itself) and
+    ends cleanly on Ctrl-C and on SIGTERM, at once: a shutdown from the signal handler, which runs inside
+    that receive, once waited 5 s for the receive to let go of the subscription."""
     talker = processes.start(str(PROGRAMS / "talker.py"), name="talker", env=ros_env)
     listener = processes.start(str(PROGRAMS / "listener.py"), name="listener", env=ros_env)
     wait_until(lambda: 'I heard: "Hello World: ' in processes.output(listener), timeout=30,
                message="the listener hearing the talker\n" + processes.output(talker)[-2000:])
     first = processes.output(talker).splitlines()[0]
     assert "rclpy (zenroid, no ROS) connected to tcp/127.0.0.1:" in first, first
-    listener.send_signal(2)   # Ctrl-C: the program ends itself, cleanly
+    sent = time.monotonic()
+    listener.send_signal(signum)   # the program ends itself, cleanly
     assert listener.wait(timeout=15) == 0, processes.output(listener)
+    assert time.monotonic() - sent < 4.0, f"the listener took {time.monotonic() - sent:.1f} s to end"
     assert "Traceback" not in processes.output(listener), processes.output(listener)
 
 
