@@ -431,19 +431,20 @@ class Spun(Executed):
             self._stop_pump()
         return self._receiving.acquire(blocking=False)
 
-    def wait_held(self, is_woken: Any) -> bool | None:
+    def wait_held(self, receiving_on: Any) -> bool | None:
         """After ``hold()``: block in the ring's receive on this thread until a message arrives or
-        ``interrupt()``, let the ring go, then run the message's callback as ``take_one`` does. ``is_woken(self)``
-        is asked first: True means a wake-up came before, and it returns at once. None: woken without a
-        message."""
+        ``interrupt()``, let the ring go, then run the message's callback as ``take_one`` does.
+        ``receiving_on(self)`` is called first (True: a wake-up came before, return at once) and
+        ``receiving_on(None)`` once the receive has returned. None: woken without a message."""
         try:
-            if is_woken(self):
+            if receiving_on(self):
                 return None
             self._receiver = threading.get_ident()
             sample = self._sub.recv()   # without the GIL; Ctrl-C still raises here (zenoh checks signals)
         except zenoh.ZError:
             return None   # undeclared meanwhile: the node is closing
         finally:
+            receiving_on(None)   # wake-ups from now on (the callback's own included) need no interrupt
             self._receiver = None
             self._receiving.release()
             if self._close_deferred:

@@ -85,8 +85,9 @@ class Spinner:
                 continue
             channels = [c for e in self._executors for c in e.channels]
             if wait is None and len(channels) == 1 and self.single_thread and channels[0].hold():
+                while not tokens.empty():   # meant for a wait on tokens; this wait reads _pending instead
+                    tokens.get_nowait()
                 ran = channels[0].wait_held(self._receive_on)
-                self._receiving_on = None
                 if ran is not None:
                     return ran
                 continue
@@ -100,7 +101,8 @@ class Spinner:
                 return self._run_one()
 
     def _receive_on(self, channel: Any) -> bool:
-        """The spinning thread is about to receive on ``channel``: True if a wake-up came before."""
+        """The spinning thread is about to receive on ``channel`` (None: it has received): True if a wake-up
+        came before."""
         self._receiving_on = channel
         return self._pending
 

@@ -38,7 +38,9 @@ def test_a_lone_subscription_is_received_by_the_spinning_thread(context, session
     Int32 = msgs.get_type("std_msgs/msg/Int32")
     node = rclpy.create_node("lone_listener", context=context)
     got: list[tuple[int, int]] = []
-    subscription = node.create_subscription(Int32, "/numbers", lambda m: got.append((m.data, threading.get_ident())), 10)
+    # a depth that a loaded machine's stalls never fill: this test is about the switches, not KEEP_LAST
+    subscription = node.create_subscription(Int32, "/numbers", lambda m: got.append((m.data, threading.get_ident())),
+                                            1000)
     delivery = subscription._core.delivery
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
@@ -136,3 +138,37 @@ def test_several_spinning_threads_share_one_subscription(context, session) -> No
         spinner.join(timeout=10)
     assert sorted(n for n, _ in got) == list(range(100))
     assert {name for _, name in got} <= {"main-spinner"} | {f"rclpy-mt_{i}" for i in range(3)}
+
+
+def test_wake_ups_while_receiving_itself_do_not_pile_up(context, session) -> None:
+    """Work queued while the callback runs (here: a wake-up per message) is looked for once; the tokens a
+    wait on the queue would take are not left behind while the spinning thread receives from the ring."""
+    import msgs
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    Int32 = msgs.get_type("std_msgs/msg/Int32")
+    node = rclpy.create_node("waking_listener", context=context)
+    executor = SingleThreadedExecutor(context=context)
+    got: list[int] = []
+
+    def on_number(msg) -> None:
+        got.append(msg.data)
+        executor.wake()
+
+    subscription = node.create_subscription(Int32, "/waking_numbers", on_number, 1000)
+    executor.add_node(node)
+    spinner = threading.Thread(target=executor.spin, daemon=True)
+    spinner.start()
+    talker, pub = _publisher(session, "/waking_numbers")
+    try:
+        wait_until(lambda: pub.has_subscribers, timeout=15, message="the listener matched")
+        time.sleep(0.3)
+        _publish(pub, range(100))
+        wait_until(lambda: len(got) == 100, timeout=15, message=f"100 messages, got {len(got)}")
+        assert not subscription._core.delivery.pumping
+        assert executor._spinner._tokens.qsize() <= 1
+    finally:
+        talker.destroy()
+        executor.shutdown()
+        spinner.join(timeout=10)
