@@ -4,6 +4,8 @@ Each executor it serves wakes it when work is queued (``Executor.wake``); one ``
 timers of every executor and then at most one queued callback, taking the executors in turn so that a busy
 node cannot starve a quiet one. Callbacks run under their callback group (``executor.CallbackGroup``):
 several threads may call ``spin_once`` at once and an exclusive group still runs one callback at a time.
+A single-threaded spinner whose only waitable is one ``delivery.Spun`` subscription (no timer, no timeout)
+receives from that subscription's Zenoh ring itself instead of waiting for a token.
 """
 
 from __future__ import annotations
