@@ -496,9 +496,8 @@ class Spun(Executed):
     def _stop_pump(self) -> None:
         self.pumping = False
         self.interrupt()
-        pump = self._pump
-        if pump is not None and pump is not threading.current_thread():
-            pump.join(timeout=5.0)
+        if self._pump is not None:   # only a spinning thread stops it, never the pump itself
+            self._pump.join(timeout=5.0)
 
     def close(self) -> None:
         self.closed = True

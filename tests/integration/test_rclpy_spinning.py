@@ -13,12 +13,25 @@ from tests.conftest import wait_until
 
 
 def _publisher(session, key: str):
+    """A ``nodes.core`` talker on ``key``, once the listener's subscription has matched it."""
     import msgs
     from nodes.core import Node
 
     node = Node("spin_test_talker", session=session, log_level="warn")
     pub = node.create_publisher(msgs.get_type("std_msgs/msg/Int32"), key)
+    try:
+        wait_until(lambda: pub.has_subscribers, timeout=15, message="the listener matched")
+    except BaseException:
+        node.destroy()
+        raise
+    time.sleep(0.3)   # its routes settle
     return node, pub
+
+
+def _spinning(executor, name: str) -> threading.Thread:
+    spinner = threading.Thread(target=executor.spin, name=name, daemon=True)
+    spinner.start()
+    return spinner
 
 
 def _publish(pub, numbers) -> None:
@@ -44,12 +57,9 @@ def test_a_lone_subscription_is_received_by_the_spinning_thread(context, session
     delivery = subscription._core.delivery
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, name="spinner", daemon=True)
-    spinner.start()
+    spinner = _spinning(executor, "spinner")
     talker, pub = _publisher(session, "/numbers")
     try:
-        wait_until(lambda: pub.has_subscribers, timeout=15, message="the listener matched")
-        time.sleep(0.3)
         _publish(pub, range(0, 50))
         wait_until(lambda: len(got) == 50, timeout=15, message=f"50 messages, got {len(got)}")
         assert not delivery.pumping, "a lone subscription is received by the spinning thread itself"
@@ -99,8 +109,6 @@ def test_keep_last_keeps_exactly_its_depth_while_nobody_spins(context, session) 
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     try:
-        wait_until(lambda: pub.has_subscribers, timeout=15, message="the listener matched")
-        time.sleep(0.3)
         _publish(pub, range(10))
         time.sleep(0.5)   # all ten have arrived; nobody spins
         for _ in range(6):
@@ -124,12 +132,9 @@ def test_several_spinning_threads_share_one_subscription(context, session) -> No
                              100, callback_group=ReentrantCallbackGroup())
     executor = MultiThreadedExecutor(num_threads=3, context=context)
     executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, name="main-spinner", daemon=True)
-    spinner.start()
+    spinner = _spinning(executor, "main-spinner")
     talker, pub = _publisher(session, "/shared_numbers")
     try:
-        wait_until(lambda: pub.has_subscribers, timeout=15, message="the listener matched")
-        time.sleep(0.3)
         _publish(pub, range(100))
         wait_until(lambda: len(got) == 100, timeout=15, message=f"100 messages, got {len(got)}")
     finally:
@@ -158,12 +163,9 @@ def test_wake_ups_while_receiving_itself_do_not_pile_up(context, session) -> Non
 
     subscription = node.create_subscription(Int32, "/waking_numbers", on_number, 1000)
     executor.add_node(node)
-    spinner = threading.Thread(target=executor.spin, daemon=True)
-    spinner.start()
+    spinner = _spinning(executor, "spinner")
     talker, pub = _publisher(session, "/waking_numbers")
     try:
-        wait_until(lambda: pub.has_subscribers, timeout=15, message="the listener matched")
-        time.sleep(0.3)
         _publish(pub, range(100))
         wait_until(lambda: len(got) == 100, timeout=15, message=f"100 messages, got {len(got)}")
         assert not subscription._core.delivery.pumping
