@@ -125,14 +125,8 @@ def _record(args: argparse.Namespace) -> int:
 
     def store_arrived() -> None:
         """Write what arrived, from this thread: rosbags' sqlite3 storage is bound to the thread that opened it."""
-        while not (args.max_messages and writer.count >= args.max_messages):
-            try:
-                key, msg, stamp = arrived.get_nowait()
-            except queue.Empty:
-                return
-            if not writer.write(key, msg, stamp):
-                skipped.setdefault(key, f"{msg._type} has no ROS 2 definition a bag can hold")
-        done.set()  # --max-messages reached
+        if _store(arrived, writer, skipped, args.max_messages):
+            done.set()
 
     # SIGTERM (a launcher or `kill` stopping us) ends the recording cleanly, like Ctrl-C: the bag is
     # only complete (MCAP summary, metadata.yaml) once the writer is closed.
@@ -155,6 +149,19 @@ def _record(args: argparse.Namespace) -> int:
         print(f"  not recorded: /{key} ({reason})", file=sys.stderr)
     print(f"Recorded {writer.count} messages to {writer.path}")
     return 0
+
+
+def _store(arrived: queue.SimpleQueue[tuple[str, Any, int]], writer: BagWriter, skipped: dict[str, str],
+           max_messages: int) -> bool:
+    """Write the messages queued at the call, no more: when topics arrive faster than the disk takes them,
+    the caller still gets back to its duration and Ctrl-C checks. True once ``max_messages`` are written."""
+    for _ in range(arrived.qsize()):
+        if max_messages and writer.count >= max_messages:
+            return True
+        key, msg, stamp = arrived.get_nowait()
+        if not writer.write(key, msg, stamp):
+            skipped.setdefault(key, f"{msg._type} has no ROS 2 definition a bag can hold")
+    return bool(max_messages and writer.count >= max_messages)
 
 
 def _wait_recording(args: argparse.Namespace, writer: BagWriter, store_arrived: Callable[[], None],

@@ -369,3 +369,29 @@ def test_a_bags_own_definition_decodes_its_payloads(tmp_path: Path) -> None:
     assert (got.msg.name, got.msg.position, got.msg.velocity, got.msg.effort) == (["a"], [1.0], [2.0], [3.0])
     with pytest.raises(BagError, match="topic /j: the bag's sensor_msgs/msg/JointState lacks a field.*effort"):
         list(open_bag(tmp_path / "narrower").messages())
+
+
+def test_storing_takes_only_what_was_queued_so_a_fast_stream_cannot_hold_the_recorder(tmp_path: Path) -> None:
+    """Messages arriving while the recorder writes wait for its next round: otherwise a stream faster
+    than the disk keeps it writing forever and past its duration and Ctrl-C checks."""
+    import queue
+
+    from nodes.tools.bag import _store
+
+    arrived: queue.SimpleQueue[tuple[str, Any, int]] = queue.SimpleQueue()
+    msg = sample_message("std_msgs/msg/String")
+    for stamp in range(5):
+        arrived.put(("chatter", msg, stamp))
+    writer = BagWriter(tmp_path / "bag")
+    write = writer.write
+
+    def write_while_more_arrive(key: str, message: Any, stamp: int) -> bool:
+        arrived.put((key, message, stamp + 100))
+        return write(key, message, stamp)
+
+    writer.write = write_while_more_arrive  # type: ignore[method-assign]
+    assert not _store(arrived, writer, {}, max_messages=0)
+    assert writer.count == 5 and arrived.qsize() == 5
+    assert _store(arrived, writer, {}, max_messages=8)
+    assert writer.count == 8
+    writer.close()
