@@ -172,7 +172,7 @@ def test_second_goal_preempts_the_first_and_cancel_holds_position(lab):
     assert status == ABORTED and "preempted" in result.error_string
     lab.wait_sim(1.0)
     response = second.cancel()
-    assert response.return_code == 0
+    assert response.return_code == 0, f"{response}; the second goal ended: {second.get_result(timeout=1)}\n{lab.log()}"
     status, _ = second.get_result(timeout=30)
     assert status == CANCELED
     lab.wait_sim(0.3)

@@ -128,6 +128,9 @@ def test_kill_9_of_each_node_heals_without_a_fall(tmp_path: Path, zenoh_port: in
                 scenario.wait_for(lambda: "sim time went back" in scenario.output(), 30, "the controller restart")
             scenario.wait_for(knee_moves_since(time.monotonic()), 60,
                               f"trajectories followed again after kill -9 of '{node}'")
+            lowest = min(pelvis_heights(scenario, killed), default=None)
+            assert lowest is not None and lowest > 0.75, (
+                f"the robot fell after kill -9 of '{node}': lowest pelvis {lowest} m\n{scenario.output()[-4000:]}")
         heights = pelvis_heights(scenario)
         assert heights and min(heights) > 0.75, f"the robot fell: lowest pelvis {min(heights):.3f} m"
         for node in ("controller_manager", "robot_state_publisher", "joint_commander", "simulator"):

@@ -91,7 +91,7 @@ def test_tls_router_carries_the_robot_across_hosts_and_refuses_whoever_does_not_
         procs.append(network.popen("robot", [sys.executable, "-m", "launch", "humanoid.yaml", "gui:=false",
                                              "mode:=lockstep", "commander:=none", "--log-dir", str(tmp_path / "logs")],
                                    {**env, "ZENOH_CONFIG": str(client)}, launch_log))
-        seen = run_probe(network, "viewer", tmp_path, "watch", "watch", "3", env={"ZENOH_CONFIG": str(client)})
+        seen = run_probe(network, "viewer", tmp_path, "watch", "watch", "1", env={"ZENOH_CONFIG": str(client)})
         launched = launch_log.read_text(errors="replace")
         assert "error" not in seen, f"{seen}\n{launched[-3000:]}"
         assert seen["joint_states"] > 10 and seen["pelvis_min"] > 0.75, seen

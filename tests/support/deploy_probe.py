@@ -1,7 +1,8 @@
 """Programs the deployment tests run on their hosts (network namespaces), printing one JSON line.
 
 ``watch SECONDS [--until-signal]``: waits for ``humanoid/joint_states`` (at most 120 s), then records for
-SECONDS (with ``--until-signal``: at least SECONDS, then until SIGINT, at most 120 s) what a user on that host
+SECONDS of sim time, so a loaded machine running the simulation slower than real time still shows the same
+motion (at most 120 s of wall time; with ``--until-signal``: then until SIGINT) what a user on that host
 sees: joint_states, the left knee's range (the joint commander bends it every 2 s), the pelvis height
 (sim/model_states), sim time, and every sample on the robot's command keys whose attachment marks it as the
 rogue's. It prints ``watching`` when it starts recording.
@@ -83,9 +84,16 @@ def watch(seconds: float, until_signal: bool = False) -> dict:
         with lock:
             knees.clear(), pelvis.clear(), clock.clear()
         print("watching", flush=True)
-        time.sleep(seconds)
+        deadline = time.monotonic() + 120
+
+        def sim_seconds_watched() -> float:
+            with lock:
+                return clock[-1] - clock[0] if clock else 0.0
+
+        while sim_seconds_watched() < seconds and time.monotonic() < deadline:
+            time.sleep(0.1)
         if until_signal:
-            STOP.wait(120 - seconds)
+            STOP.wait(max(0.0, deadline - time.monotonic()))
         with lock:
             return {"joint_states": len(knees), "knee_min": min(knees, default=None),
                     "knee_max": max(knees, default=None), "pelvis_min": min(pelvis, default=None),
