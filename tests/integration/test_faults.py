@@ -23,6 +23,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import msgpack
 import psutil
 import pytest
 
@@ -39,6 +40,15 @@ KNEE = "left_knee"
 def pelvis_heights(scenario: Scenario, since: float = 0.0) -> list[float]:
     return [m["pose"][m["name"].index("humanoid")]["position"]["z"] for m in scenario.snapshot("sim/model_states")
             if "humanoid" in m["name"] and m["_received"] >= since]
+
+
+def sim_step(scenario: Scenario) -> int:
+    """The simulator's step now, asked (``sim/get_physics_properties``) rather than read from a stream that
+    may lag behind."""
+    for reply in scenario.session.get("sim/get_physics_properties", payload=msgpack.packb({}), timeout=10):
+        if reply.ok is not None:
+            return msgpack.unpackb(reply.ok.payload.to_bytes())["step"]
+    raise AssertionError("no answer from sim/get_physics_properties")
 
 
 def our_processes(port: int) -> list[psutil.Process]:
@@ -96,32 +106,42 @@ def test_kill_9_of_each_node_heals_without_a_fall(tmp_path: Path, zenoh_port: in
             pid = started_pids(scenario.output(), node)[-1]
             killed = time.monotonic()
             os.kill(pid, signal.SIGKILL)
+            if node == "controller_manager":   # the new manager starts, then restores, then commands
+                step_after_kill = sim_step(scenario)
             scenario.wait_for(lambda n=node: len(started_pids(scenario.output(), n)) >= 2, 30, f"'{node}' respawned")
             scenario.wait_for(flowing_since("humanoid/joint_states", killed, 50), 30,
                               f"joint_states flowing again after kill -9 of '{node}'")
             if node == "controller_manager":
                 scenario.wait_for(lambda: "respawned: restored 5 controller(s)" in scenario.output(), 30,
                                   "the controllers restored")
-                # resumes from the measured state: the new manager's first knee command is where the knee is
-                # The new manager's first command ends the outage: find it by the step (1 kHz physics), not
-                # by arrival time (this test process may lag seconds behind a 1 kHz stream on a loaded machine,
-                # so it waits until the new manager's commands have reached it).
-                def first_after_outage() -> dict | None:
-                    commands = [m for m in scenario.snapshot("humanoid/hardware/command") if KNEE in m["name"]]
-                    return next((b for a, b in zip(commands, commands[1:]) if b["step"] - a["step"] > 300), None)
-
-                scenario.wait_for(lambda: first_after_outage() is not None, 30,
-                                  "the respawned manager's commands after an outage")
-                first = first_after_outage()
-                commanded = first["value"][first["name"].index(KNEE)]
-                at = first["step"] / 1000.0  # sim time of the state it answers
+                # Resumes from the measured state: the new manager's first knee command is where the knee is.
+                # Its commands answer states after the step the simulator had reached just after the kill;
+                # the old manager's all answer earlier ones. (Neither arrival time nor a gap in the steps
+                # tells them apart: this test may lag seconds behind a 1 kHz stream on a loaded machine,
+                # and such a stream loses samples under congestion.)
+                def first_of_new_manager(after: int = step_after_kill) -> dict | None:
+                    commands = [m for m in scenario.snapshot("humanoid/hardware/command")
+                                if KNEE in m["name"] and m["step"] > after]
+                    return min(commands, key=lambda m: m["step"], default=None)
 
                 def stamp(m: dict) -> float:
                     return m["header"]["stamp"]["sec"] + m["header"]["stamp"]["nanosec"] * 1e-9
 
-                measured = [m for m in scenario.snapshot("humanoid/joint_states") if stamp(m) <= at + 1e-6]
-                knee_now = positions(measured[-1:], KNEE)[0]
-                assert abs(commanded - knee_now) < 0.05, (commanded, knee_now)
+                def measured_at(at: float) -> list[dict]:
+                    """The new manager's first joint_states, from the state the command answers (or, should
+                    that sample be lost, one a few steps on: the knee is held)."""
+                    states = [m for m in scenario.snapshot("humanoid/joint_states") if at - 1e-6 <= stamp(m) <= at + 0.01]
+                    return sorted(states, key=stamp)[:1]
+
+                scenario.wait_for(lambda: (first := first_of_new_manager()) is not None
+                                  and measured_at(first["step"] / 1000.0), 30,
+                                  "the respawned manager's first command and the state it answers")
+                first = first_of_new_manager()
+                old = [m["step"] for m in scenario.snapshot("humanoid/hardware/command") if m["step"] <= step_after_kill]
+                assert old and first["step"] - max(old) > 100, (max(old, default=None), step_after_kill, first["step"])
+                commanded = first["value"][first["name"].index(KNEE)]
+                knee_now = positions(measured_at(first["step"] / 1000.0), KNEE)[0]
+                assert abs(commanded - knee_now) < 0.05, (commanded, knee_now, first["step"], step_after_kill)
             if node == "robot_state_publisher":
                 scenario.wait_for(flowing_since("humanoid/tf", time.monotonic()), 30, "tf flowing again")
             if node == "simulator":  # the manager restarts its controllers on the new simulator
