@@ -50,7 +50,10 @@ class Lab:
         self.processes = processes
         self.sim = processes.start(
             "-m", "nodes.sim", "--params-file", "config/sim.yaml",
-            "--param", f"entities:=[{{name: {NS}, file: simple_robot, fixed: true}}]", *sim_params, name="sim")
+            "--param", f"entities:=[{{name: {NS}, file: simple_robot, fixed: true}}]",
+            # these tests judge tracking: a manager stalled over a second by a loaded machine must not
+            # make the simulator hold position (the fallback has its own test in test_sim_humanoid.py)
+            "--param", "lockstep_timeout:=10.0", *sim_params, name="sim")
         self.manager = processes.start(
             "-m", "nodes.control", "--ns", NS, "--params-file", "config/controller_lab_controllers.yaml",
             "--param", f"activate:=[{', '.join(activate)}]", *manager_args, name="controller_manager",
