@@ -1,11 +1,11 @@
 """Programs the deployment tests run on their hosts (network namespaces), printing one JSON line.
 
-``watch SECONDS [--until-signal]``: waits for ``humanoid/joint_states`` (at most 120 s), then records for
-SECONDS of sim time, so a loaded machine running the simulation slower than real time still shows the same
-motion (at most 120 s of wall time; with ``--until-signal``: then until SIGINT) what a user on that host
-sees: joint_states, the left knee's range (the joint commander bends it every 2 s), the pelvis height
-(sim/model_states), sim time, and every sample on the robot's command keys whose attachment marks it as the
-rogue's. It prints ``watching`` when it starts recording.
+``watch SECONDS [--until-signal]``: waits for ``humanoid/joint_states`` (at most 120 s), then records, for
+SECONDS of sim time (at most 120 s of wall time; with ``--until-signal``: then until SIGINT), what a user on
+that host sees. Sim time, not wall time: a loaded machine that runs the simulation slower than real time
+still shows the same motion. Recorded: joint_states, the left knee's range (the joint commander bends it
+every 2 s), the pelvis height (sim/model_states), sim time, and every sample on the robot's command keys
+whose attachment marks it as the rogue's. It prints ``watching`` when it starts recording.
 
 ``rogue``: what a stranger holding only the read-only ``guest`` account tries: read joint_states, then
 drive the robot (hardware commands, trajectories, wildcard puts), call the simulator's and the controller

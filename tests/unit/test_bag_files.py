@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import os
+import queue
 import sqlite3
 import tempfile
 from pathlib import Path
@@ -32,6 +33,7 @@ from msgs.schema_text import full_definition
 from msgs.type_hash import rihs01
 from nodes.bag.reader import BagError, open_bag, read_bag
 from nodes.bag.writer import BagWriter
+from nodes.tools.bag import _store
 from tests.support.samples import UNDEFINED_TYPE, sample_message, undefined_type_cdr
 from tests.unit.test_msgs_properties import ALL, message_strategy
 
@@ -374,10 +376,6 @@ def test_a_bags_own_definition_decodes_its_payloads(tmp_path: Path) -> None:
 def test_storing_takes_only_what_was_queued_so_a_fast_stream_cannot_hold_the_recorder(tmp_path: Path) -> None:
     """Messages arriving while the recorder writes wait for its next round: otherwise a stream faster
     than the disk keeps it writing forever and past its duration and Ctrl-C checks."""
-    import queue
-
-    from nodes.tools.bag import _store
-
     arrived: queue.SimpleQueue[tuple[str, Any, int]] = queue.SimpleQueue()
     msg = sample_message("std_msgs/msg/String")
     for stamp in range(5):
