@@ -23,11 +23,13 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-import msgpack
 import psutil
 import pytest
 
+import msgs
 from bench.common import alive
+from nodes.core.endpoints import call_raw
+from nodes.sim.interfaces import GetPhysicsProperties
 from tests.conftest import ROOT
 from tests.integration.test_launch_scenarios import Scenario, positions
 from tests.integration.test_multihost import Hosts, _ip, hosts  # noqa: F401 - the fixture is used by name
@@ -45,10 +47,9 @@ def pelvis_heights(scenario: Scenario, since: float = 0.0) -> list[float]:
 def sim_step(scenario: Scenario) -> int:
     """The simulator's step now, asked (``sim/get_physics_properties``) rather than read from a stream that
     may lag behind."""
-    for reply in scenario.session.get("sim/get_physics_properties", payload=msgpack.packb({}), timeout=10):
-        if reply.ok is not None:
-            return msgpack.unpackb(reply.ok.payload.to_bytes())["step"]
-    raise AssertionError("no answer from sim/get_physics_properties")
+    answer = call_raw(scenario.session, "sim/get_physics_properties", msgs.encode(GetPhysicsProperties.Request()),
+                      timeout=10)
+    return msgs.decode(GetPhysicsProperties.Response, answer).step
 
 
 def our_processes(port: int) -> list[psutil.Process]:
